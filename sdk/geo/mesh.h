@@ -3,6 +3,7 @@
 // Coordinates follow glTF: x = east, y = up, z = south (= -north), metres in
 // the package's local frame. So an extracted GLB stands upright in any viewer.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# The whole test suite, as CI runs it: install dependencies, build with
+# warnings as errors, run the parser/corruption tests under ASan+UBSan, then
+# every test. The last line printed is CTest's summary.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+bash packaging/scripts/deps.sh
+jobs=$(nproc)
+
+# 1. Sanitizers on the code that reads untrusted bytes (packages, GLB, graph).
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DBLVD_SANITIZE=ON -DBLVD_WERROR=ON > /dev/null
+cmake --build build-asan -j"$jobs" --target test_package test_graph_serialize
+(cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" -L asan)
+
+# 2. Everything, warnings as errors.
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBLVD_WERROR=ON > /dev/null
+cmake --build build -j"$jobs"
+cd build && ctest --output-on-failure -j"$jobs" --timeout 900

@@ -1,0 +1,154 @@
+// The only code implementing include/blvd/blvd.h: argument checks, status
+// mapping, and a catch-all so no exception crosses the C boundary.
+#include <cmath>
+#include <cstring>
+#include <new>
+#include <string>
+
+#include "blvd/blvd.h"
+#include "capi/runtime.h"
+#include "core/status.h"
+
+struct blvd_runtime {
+  blvd::capi::Runtime* impl;
+};
+
+namespace {
+thread_local std::string t_create_error;  // blvd_last_error(NULL)
+
+blvd_status toStatus(blvd::core::Status s) { return static_cast<blvd_status>(static_cast<int>(s)); }
+
+// Runs f, converting exceptions into a status and rt's last error.
+template <typename F>
+blvd_status guarded(blvd_runtime* rt, F&& f) {
+  std::string* err = rt ? &rt->impl->last_error : &t_create_error;
+  try {
+    f();
+    return BLVD_OK;
+  } catch (const blvd::core::Error& e) {
+    *err = e.what();
+    return toStatus(e.status());
+  } catch (const std::bad_alloc&) {
+    *err = "out of memory";
+    return BLVD_ERR_NOMEM;
+  } catch (const std::exception& e) {
+    *err = std::string("internal error: ") + e.what();
+    return BLVD_ERR_INTERNAL;
+  } catch (...) {
+    *err = "internal error: unknown exception";
+    return BLVD_ERR_INTERNAL;
+  }
+}
+
+blvd_status misuse(blvd_runtime* rt, const char* what) {
+  (rt ? rt->impl->last_error : t_create_error) = what;
+  return BLVD_ERR_MISUSE;
+}
+}  // namespace
+
+extern "C" {
+
+uint32_t blvd_version_number(void) { return BLVD_VERSION_NUMBER; }
+
+const char* blvd_version_string(void) {
+#define BLVD_STR2(x) #x
+#define BLVD_STR(x) BLVD_STR2(x)
+  return BLVD_STR(BLVD_VERSION_MAJOR) "." BLVD_STR(BLVD_VERSION_MINOR) "." BLVD_STR(BLVD_VERSION_PATCH);
+}
+
+const char* blvd_status_string(blvd_status s) {
+  if (s < 0 || s > BLVD_ERR_NOT_FOUND) return "unknown status";
+  return blvd::core::statusString(static_cast<blvd::core::Status>(s));
+}
+
+blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* in) {
+  blvd_runtime_desc d{};
+  if (in) {
+    const size_t n = in->struct_size && in->struct_size < sizeof d ? in->struct_size : sizeof d;
+    std::memcpy(&d, in, n);
+  }
+  d.struct_size = sizeof d;
+  if (!d.width) d.width = 800;
+  if (!d.height) d.height = 480;
+  if (d.fov_y_deg == 0) d.fov_y_deg = 45.f;
+  if (d.eye_height_m == 0) d.eye_height_m = 1.5f;
+  if (d.far_m == 0) d.far_m = 3000.f;
+  return d;
+}
+
+blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** out) {
+  if (!out) return misuse(nullptr, "blvd_runtime_create: out is NULL");
+  *out = nullptr;
+  if (!desc) return misuse(nullptr, "blvd_runtime_create: desc is NULL");
+  t_create_error.clear();
+  const blvd_runtime_desc d = blvd_runtime_desc_defaults(desc);
+  if (!d.package_path || !*d.package_path) {
+    t_create_error = "blvd_runtime_create: desc.package_path is required";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  if (d.width > 16384 || d.height > 16384) {
+    t_create_error = "blvd_runtime_create: width and height must be at most 16384";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  if (!(d.fov_y_deg > 1 && d.fov_y_deg < 179) || !(d.eye_height_m > 0 && d.eye_height_m < 1000) ||
+      !(d.far_m > 10 && d.far_m < 1e6)) {
+    t_create_error = "blvd_runtime_create: fov_y_deg, eye_height_m or far_m out of range";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  if (static_cast<int>(d.backend) < 0 || d.backend > BLVD_CONTEXT_SHARED) {
+    t_create_error = "blvd_runtime_create: unknown backend";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  blvd::capi::Runtime* impl = nullptr;
+  const blvd_status st = guarded(nullptr, [&] { impl = new blvd::capi::Runtime(d); });
+  if (st != BLVD_OK) return st;
+  *out = new (std::nothrow) blvd_runtime{impl};
+  if (!*out) {
+    delete impl;
+    t_create_error = "out of memory";
+    return BLVD_ERR_NOMEM;
+  }
+  return BLVD_OK;
+}
+
+void blvd_runtime_destroy(blvd_runtime* rt) {
+  if (!rt) return;
+  try {
+    delete rt->impl;
+  } catch (...) {
+  }
+  delete rt;
+}
+
+const char* blvd_last_error(const blvd_runtime* rt) {
+  return rt ? rt->impl->last_error.c_str() : t_create_error.c_str();
+}
+
+blvd_status blvd_runtime_get_info(blvd_runtime* rt, blvd_runtime_info* info) {
+  if (!rt) return misuse(nullptr, "blvd_runtime_get_info: rt is NULL");
+  if (!info) return misuse(rt, "blvd_runtime_get_info: info is NULL");
+  return guarded(rt, [&] { rt->impl->info(info); });
+}
+
+blvd_status blvd_set_pose_geo(blvd_runtime* rt, double lat, double lon, float heading_deg, float pitch_deg) {
+  if (!rt) return misuse(nullptr, "blvd_set_pose_geo: rt is NULL");
+  return guarded(rt, [&] { rt->impl->setPoseGeo(lat, lon, heading_deg, pitch_deg); });
+}
+
+blvd_status blvd_set_pose_local(blvd_runtime* rt, double x, double y, float heading_deg, float pitch_deg) {
+  if (!rt) return misuse(nullptr, "blvd_set_pose_local: rt is NULL");
+  return guarded(rt, [&] { rt->impl->setPoseLocal(x, y, heading_deg, pitch_deg); });
+}
+
+blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats) {
+  if (!rt) return misuse(nullptr, "blvd_render: rt is NULL");
+  return guarded(rt, [&] { rt->impl->render(stats); });
+}
+
+blvd_status blvd_read_pixels(blvd_runtime* rt, void* rgba, size_t rgba_bytes) {
+  if (!rt) return misuse(nullptr, "blvd_read_pixels: rt is NULL");
+  if (!rgba) return misuse(rt, "blvd_read_pixels: rgba is NULL");
+  return guarded(rt, [&] { rt->impl->readPixels(rgba, rgba_bytes); });
+}
+
+}  // extern "C"

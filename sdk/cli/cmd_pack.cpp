@@ -1,0 +1,141 @@
+#include <cstdio>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/commands.h"
+#include "package/glb.h"
+#include "stream/city.h"
+
+namespace blvd::cli {
+namespace {
+
+stream::City openCity(const std::string& path) {
+  stream::City city;
+  std::string err;
+  const core::Status st = city.open(path, err);
+  if (st != core::Status::Ok) throw core::Error(st, err);
+  return city;
+}
+
+int info(const std::string& path, bool json) {
+  const stream::City city = openCity(path);
+  const auto& h = city.header();
+  const auto& g = city.graph();
+  nlohmann::json j = {
+      {"file", path},
+      {"bytes", city.package().fileSize()},
+      {"version", std::to_string(h.version_major) + "." + std::to_string(h.version_minor)},
+      {"origin", {{"lat", h.origin_lat}, {"lon", h.origin_lon}}},
+      {"bounds_m", {{"min", {h.bounds_min[0], h.bounds_min[1]}}, {"max", {h.bounds_max[0], h.bounds_max[1]}}}},
+      {"counts",
+       {{"junctions", h.junction_count}, {"graph_vertices", g.vertices.size()}, {"cells", h.cell_count},
+        {"blocks", h.block_count}, {"buildings", h.building_count}, {"triangles", h.triangle_count},
+        {"blobs", city.package().blobCount()}}},
+      {"max_block_blob_bytes", h.max_block_blob_bytes},
+      {"source_bytes", h.source_bytes},
+  };
+  nlohmann::json sections = nlohmann::json::object();
+  for (const auto& s : city.package().sections())
+    sections[package::tagToString(s.tag)] = {{"offset", s.offset}, {"bytes", s.size}};
+  j["sections"] = sections;
+  if (json) {
+    std::printf("%s\n", j.dump(2).c_str());
+    return 0;
+  }
+  std::printf("%s: blvd package %s, %llu bytes\n", path.c_str(), j["version"].get<std::string>().c_str(),
+              static_cast<unsigned long long>(city.package().fileSize()));
+  std::printf("  origin %.7f, %.7f; bounds %.0f x %.0f m\n", h.origin_lat, h.origin_lon,
+              double(h.bounds_max[0] - h.bounds_min[0]), double(h.bounds_max[1] - h.bounds_min[1]));
+  std::printf("  junctions %u, cells %u, blocks %u, buildings %u, triangles %llu\n", h.junction_count, h.cell_count,
+              h.block_count, h.building_count, static_cast<unsigned long long>(h.triangle_count));
+  std::printf("  sections:\n");
+  for (const auto& s : city.package().sections())
+    std::printf("    %-4s  offset %10llu  %10llu bytes\n", package::tagToString(s.tag).c_str(),
+                static_cast<unsigned long long>(s.offset), static_cast<unsigned long long>(s.size));
+  return 0;
+}
+
+int verify(const std::string& path) {
+  package::PackageReader r;
+  std::string err;
+  core::Status st = package::PackageReader::open(path, r, err);
+  if (st == core::Status::Ok) st = r.verify(err);
+  if (st == core::Status::Ok) {
+    // The sections must also parse (bounds and index checks), not only match their CRCs.
+    stream::City city;
+    st = city.open(path, err);
+  }
+  if (st != core::Status::Ok) {
+    std::fprintf(stderr, "blvd pack verify: %s\n", err.c_str());
+    return 1;
+  }
+  std::printf("%s: ok (%u blobs, every checksum matches)\n", path.c_str(), r.blobCount());
+  return 0;
+}
+
+int extract(const std::string& path, int block, int cell, const std::string& out) {
+  const stream::City city = openCity(path);
+  std::vector<uint8_t> glb;
+  std::string err;
+  if (block >= 0) {
+    if (static_cast<size_t>(block) >= city.blocks().size())
+      throw core::Error(core::Status::NotFound, "block " + std::to_string(block) + " does not exist (" +
+                                                    std::to_string(city.blocks().size()) + " blocks)");
+    const uint32_t blob = city.blocks()[block].blob;
+    if (blob == 0xffffffffu) throw core::Error(core::Status::NotFound, "block " + std::to_string(block) + " is empty");
+    package::Span s;
+    const core::Status st = city.package().blob(blob, s, err);
+    if (st != core::Status::Ok) throw core::Error(st, err);
+    glb.assign(s.data, s.data + s.size);  // already a GLB: extract it byte for byte
+  } else {
+    const auto& g = city.graph();
+    if (cell < 0 || static_cast<size_t>(cell) >= g.cellCount())
+      throw core::Error(core::Status::NotFound, "cell " + std::to_string(cell) + " does not exist (" +
+                                                    std::to_string(g.cellCount()) + " cells)");
+    geo::MeshData all, one;
+    for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) {
+      const core::Status st = city.decodeBlock(*b, one, err);
+      if (st != core::Status::Ok) throw core::Error(st, err);
+      all.append(one);
+    }
+    glb = package::encodeGlb(all);
+  }
+  std::ofstream f(out, std::ios::binary);
+  if (!f.write(reinterpret_cast<const char*>(glb.data()), static_cast<std::streamsize>(glb.size())))
+    throw core::Error(core::Status::Io, out + ": cannot write");
+  std::printf("wrote %s (%zu bytes)\n", out.c_str(), glb.size());
+  return 0;
+}
+
+}  // namespace
+
+void addPack(CLI::App& app, Runner& run) {
+  auto* pack = app.add_subcommand("pack", "inspect, verify or extract from a package");
+  pack->require_subcommand(1);
+  auto path = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  auto* info_cmd = pack->add_subcommand("info", "counts and bytes per section");
+  info_cmd->add_option("package", *path)->required();
+  info_cmd->add_flag("--json", *json, "machine-readable output");
+  info_cmd->callback([&run, path, json] { run = [path, json] { return info(*path, *json); }; });
+
+  auto* verify_cmd = pack->add_subcommand("verify", "check every checksum; exit 1 naming the bad section and offset");
+  verify_cmd->add_option("package", *path)->required();
+  verify_cmd->callback([&run, path] { run = [path] { return verify(*path); }; });
+
+  auto block = std::make_shared<int>(-1), cell = std::make_shared<int>(-1);
+  auto out = std::make_shared<std::string>();
+  auto* ex = pack->add_subcommand("extract", "write one block's or one cell's local model as a GLB");
+  ex->add_option("package", *path)->required();
+  auto* ob = ex->add_option("--block", *block, "block index");
+  auto* oc = ex->add_option("--cell", *cell, "cell index (writes its local blocks)");
+  ob->excludes(oc);
+  ex->add_option("-o,--output", *out, "GLB file to write")->required();
+  ex->callback([&run, path, block, cell, out] {
+    if (*block < 0 && *cell < 0) throw CLI::ValidationError("extract", "give --block N or --cell N");
+    run = [path, block, cell, out] { return extract(*path, *block, *cell, *out); };
+  });
+}
+
+}  // namespace blvd::cli

@@ -1,0 +1,144 @@
+// `blvd view`: one frame at a pose, or a drive along a street path (frames +
+// index.html). Goes through the public C API, like a host would.
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <vector>
+
+#include "blvd/blvd.h"
+#include "cli/commands.h"
+#include "cli/route.h"
+#include "core/status.h"
+#include "render/image.h"
+#include "stream/city.h"
+
+namespace blvd::cli {
+namespace {
+
+struct ViewOpts {
+  std::string package, out, size = "800x480", backend = "auto", path;
+  double lat = NAN, lon = NAN, heading = 0, pitch = 0, fov = 45, step = 8;
+  uint64_t seed = 1;
+};
+
+void check(blvd_status st, blvd_runtime* rt, const char* what) {
+  if (st != BLVD_OK)
+    throw core::Error(static_cast<core::Status>(st), std::string(what) + ": " + blvd_last_error(rt));
+}
+
+blvd_backend parseBackendName(const std::string& s) {
+  if (s == "auto") return BLVD_BACKEND_AUTO;
+  if (s == "egl-surfaceless") return BLVD_BACKEND_EGL_SURFACELESS;
+  if (s == "egl-device") return BLVD_BACKEND_EGL_DEVICE;
+  if (s == "osmesa") return BLVD_BACKEND_OSMESA;
+  throw core::Error(core::Status::InvalidArg, "unknown backend '" + s + "' (auto, egl-surfaceless, egl-device, osmesa)");
+}
+
+void writeFrame(blvd_runtime* rt, int w, int h, const std::string& path, std::vector<uint8_t>& rgba) {
+  check(blvd_read_pixels(rt, rgba.data(), rgba.size()), rt, "read pixels");
+  std::string err;
+  if (!render::writePng(path, w, h, rgba.data(), err)) throw core::Error(core::Status::Io, err);
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+int run(const ViewOpts& o) {
+  int w = 0, h = 0;
+  if (std::sscanf(o.size.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
+    throw core::Error(core::Status::InvalidArg, "--size must be WIDTHxHEIGHT, e.g. 800x480");
+  blvd_runtime_desc desc{};
+  desc.struct_size = sizeof desc;
+  desc.package_path = o.package.c_str();
+  desc.width = static_cast<uint32_t>(w);
+  desc.height = static_cast<uint32_t>(h);
+  desc.fov_y_deg = static_cast<float>(o.fov);
+  desc.backend = parseBackendName(o.backend);
+  blvd_runtime* rt = nullptr;
+  check(blvd_runtime_create(&desc, &rt), nullptr, "create runtime");
+  std::unique_ptr<blvd_runtime, void (*)(blvd_runtime*)> guard(rt, blvd_runtime_destroy);
+  blvd_runtime_info info{};
+  info.struct_size = sizeof info;
+  check(blvd_runtime_get_info(rt, &info), rt, "info");
+  std::fprintf(stderr, "blvd view: %s on %s (%s), %u blocks, %llu triangles\n", o.package.c_str(), info.backend,
+               info.gl_renderer, info.block_count, static_cast<unsigned long long>(info.triangle_count));
+  std::vector<uint8_t> rgba(static_cast<size_t>(w) * h * 4);
+  blvd_frame_stats fs{};
+  fs.struct_size = sizeof fs;
+
+  if (o.path.empty()) {
+    if (std::isnan(o.lat) || std::isnan(o.lon)) throw core::Error(core::Status::InvalidArg, "give --lat and --lon, or --path");
+    check(blvd_set_pose_geo(rt, o.lat, o.lon, static_cast<float>(o.heading), static_cast<float>(o.pitch)), rt, "pose");
+    check(blvd_render(rt, &fs), rt, "render");
+    writeFrame(rt, w, h, o.out, rgba);
+    std::printf("wrote %s (%.1f ms, %llu triangles, %u draw calls)\n", o.out.c_str(), fs.frame_ms,
+                static_cast<unsigned long long>(fs.triangles), fs.draw_calls);
+    return 0;
+  }
+
+  // A drive: --path auto:N picks N connected cells from --seed.
+  unsigned n = 0;
+  if (std::sscanf(o.path.c_str(), "auto:%u", &n) != 1 || n == 0 || n > 10000)
+    throw core::Error(core::Status::InvalidArg, "--path must be auto:N (N cells)");
+  stream::City city;
+  std::string err;
+  const core::Status st = city.open(o.package, err);
+  if (st != core::Status::Ok) throw core::Error(st, err);
+  const auto route = autoRoute(city.graph(), n, o.seed);
+  const auto poses = samplePoses(city.graph(), route, o.step);
+  ::mkdir(o.out.c_str(), 0755);
+  std::vector<double> ms;
+  std::ofstream html(o.out + "/index.html");
+  html << "<!doctype html><meta charset=utf-8><title>blvd drive: " << o.package << "</title>\n"
+       << "<style>body{font:14px sans-serif;background:#222;color:#ddd;margin:1em}figure{display:inline-block;"
+          "margin:4px}img{width:400px;display:block}figcaption{font-size:12px}</style>\n"
+       << "<h1>blvd drive</h1><p>" << o.package << " &middot; " << route.size() << " cells, " << poses.size()
+       << " frames, " << w << "&times;" << h << " on " << info.backend << " (" << info.gl_renderer
+       << ")</p>\n<p>Map data &copy; OpenStreetMap contributors (ODbL)</p>\n";
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const Pose& p = poses[i];
+    check(blvd_set_pose_local(rt, p.x, p.y, static_cast<float>(p.heading_deg), static_cast<float>(o.pitch)), rt, "pose");
+    check(blvd_render(rt, &fs), rt, "render");
+    ms.push_back(fs.frame_ms);
+    char name[64];
+    std::snprintf(name, sizeof name, "frame_%04zu.png", i);
+    writeFrame(rt, w, h, o.out + "/" + name, rgba);
+    html << "<figure><img src=\"" << name << "\"><figcaption>#" << i << " cell " << p.cell << ", heading "
+         << static_cast<int>(p.heading_deg) << "&deg;, " << fs.frame_ms << " ms, " << fs.triangles
+         << " triangles</figcaption></figure>\n";
+    std::fprintf(stderr, "\r  frame %zu/%zu", i + 1, poses.size());
+  }
+  std::fprintf(stderr, "\n");
+  html << "<p>median frame time " << median(ms) << " ms (full model)</p>\n";
+  std::printf("wrote %zu frames and %s/index.html; median frame %.1f ms (full model)\n", poses.size(), o.out.c_str(),
+              median(ms));
+  return 0;
+}
+
+}  // namespace
+
+void addView(CLI::App& app, Runner& runner) {
+  auto o = std::make_shared<ViewOpts>();
+  auto* cmd = app.add_subcommand("view", "render the full model headless to PNG (one pose, or a drive with --path)");
+  cmd->add_option("package", o->package, "package (.blvd)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--lat", o->lat, "eye latitude, degrees");
+  cmd->add_option("--lon", o->lon, "eye longitude, degrees");
+  cmd->add_option("--heading", o->heading, "view heading, degrees clockwise from north")->capture_default_str();
+  cmd->add_option("--pitch", o->pitch, "view pitch, degrees (up positive)")->capture_default_str()->check(CLI::Range(-89.0, 89.0));
+  cmd->add_option("--fov", o->fov, "vertical field of view, degrees")->capture_default_str()->check(CLI::Range(5.0, 150.0));
+  cmd->add_option("--size", o->size, "frame size WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_option("--backend", o->backend, "auto, egl-surfaceless, egl-device or osmesa")->capture_default_str();
+  cmd->add_option("--path", o->path, "drive auto:N connected cells instead of one pose; -o is then a folder");
+  cmd->add_option("--seed", o->seed, "seed of the auto path")->capture_default_str();
+  cmd->add_option("--step", o->step, "metres between frames of a drive")->capture_default_str()->check(CLI::Range(0.5, 500.0));
+  cmd->add_option("-o,--output", o->out, "PNG to write (or folder, with --path)")->required();
+  cmd->callback([o, &runner] { runner = [o] { return run(*o); }; });
+}
+
+}  // namespace blvd::cli

@@ -1,0 +1,17 @@
+// Subcommands of the `blvd` tool. Each registers its options on the CLI11 app
+// and returns the process exit code when run.
+#pragma once
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace blvd::cli {
+
+using Runner = std::function<int()>;
+
+// Each adds its subcommand to `app` and sets `run` when it is selected.
+void addBake(CLI::App& app, Runner& run);
+void addPack(CLI::App& app, Runner& run);
+void addView(CLI::App& app, Runner& run);
+
+}  // namespace blvd::cli

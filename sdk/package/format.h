@@ -1,0 +1,126 @@
+// The blvd package format, version 1.0: constants, the header the bake fills,
+// and the pure parsers shared by the mmap reader and any range-request client.
+//
+// docs/package-format.md is the spec; this file and format.cpp implement it.
+// Everything on disk is little-endian. Layout in one line:
+//   [header 256 B][directory: 32 B per section][sections..., each 8-aligned]
+// Blobs (GLB per block/cell) live in the BDAT section, located by the BIDX
+// section, so one blob costs three small reads: header, directory, blob index
+// entry (or one read when the first 16 KiB hold all three), then its range.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+
+namespace blvd::package {
+
+// Section tags are four ASCII bytes; on disk the bytes read left to right
+// ("GRPH"), which is the value fourcc('G','R','P','H') stored little-endian.
+// (Multi-character literals like 'GRPH' are implementation-defined and pack the
+// other way round on GCC, so they are not used.)
+constexpr uint32_t fourcc(char a, char b, char c, char d) {
+  return static_cast<uint32_t>(static_cast<uint8_t>(a)) |
+         (static_cast<uint32_t>(static_cast<uint8_t>(b)) << 8) |
+         (static_cast<uint32_t>(static_cast<uint8_t>(c)) << 16) |
+         (static_cast<uint32_t>(static_cast<uint8_t>(d)) << 24);
+}
+
+inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
+inline constexpr uint16_t kVersionMajor = 1;  // a reader opens only its own major
+inline constexpr uint16_t kVersionMinor = 0;  // minors add, never change (see spec)
+
+inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
+inline constexpr uint32_t kSectionSpatialIndex = fourcc('S', 'I', 'D', 'X');  // graph spatial index
+inline constexpr uint32_t kSectionCells = fourcc('C', 'E', 'L', 'L');         // cells directory
+inline constexpr uint32_t kSectionBlocks = fourcc('B', 'L', 'C', 'K');        // blocks directory
+inline constexpr uint32_t kSectionMeta = fourcc('M', 'E', 'T', 'A');          // bake metadata (JSON)
+// Written by PackageWriter itself; addSection() refuses these two tags.
+inline constexpr uint32_t kSectionBlobIndex = fourcc('B', 'I', 'D', 'X');  // blob offset/size/crc table
+inline constexpr uint32_t kSectionBlobData = fourcc('B', 'D', 'A', 'T');   // the blobs themselves
+
+inline constexpr size_t kHeaderSize = 256;     // v1.0 header bytes; later minors may grow it
+inline constexpr size_t kDirEntrySize = 32;    // one directory entry
+inline constexpr size_t kBlobIndexPrefix = 8;  // BIDX: u32 count, u32 entry size
+inline constexpr size_t kBlobEntrySize = 24;   // v1.0 BIDX entry; later minors may grow it
+inline constexpr size_t kAlignment = 8;        // every section and blob starts 8-aligned
+
+// What the bake knows about the city and the runtime needs before it reads
+// anything else. Plain data: PackageWriter::setHeader() copies it and
+// PackageReader::header() returns what was read. The writer always stores
+// kVersionMajor/kVersionMinor, whatever version_* say here.
+struct PackageHeader {
+  uint16_t version_major = kVersionMajor, version_minor = kVersionMinor;
+  double origin_lat = 0, origin_lon = 0, origin_h = 0;  // geodetic origin of the local ENU frame
+  float bounds_min[2] = {0, 0}, bounds_max[2] = {0, 0};  // local east/north metres
+  uint32_t junction_count = 0, cell_count = 0, block_count = 0, building_count = 0;
+  uint64_t triangle_count = 0;
+  uint32_t max_block_blob_bytes = 0, max_cell_blob_bytes = 0;  // sizes the runtime plans pools from
+  uint64_t source_bytes = 0;  // bytes of the source .osm.pbf
+};
+
+// One directory entry (for `blvd pack info` and range clients).
+struct SectionInfo {
+  uint32_t tag = 0;
+  uint64_t offset = 0;  // from the start of the file
+  uint64_t size = 0;    // bytes, without the alignment padding after it
+  uint32_t crc = 0;     // CRC32C of those bytes
+};
+
+// One BIDX entry. `offset` is from the start of the file, so a remote client
+// turns it straight into an HTTP Range header.
+struct BlobInfo {
+  uint64_t offset = 0;
+  uint64_t size = 0;
+  uint32_t crc = 0;  // CRC32C of the blob's bytes
+};
+
+// The header fields the reader needs to find everything else.
+struct HeaderLayout {
+  PackageHeader header;
+  uint32_t header_size = kHeaderSize;
+  uint64_t file_size = 0;
+  uint64_t directory_offset = 0;
+  uint32_t directory_count = 0;
+  uint32_t directory_crc = 0;
+};
+
+// "GRPH", or "0x12345678" when the tag is not four printable characters.
+std::string tagToString(uint32_t tag);
+
+// CRC32C (Castagnoli, reflected polynomial 0x82F63B78), our own slice-by-8
+// table implementation rather than zlib's crc32: CRC32C detects more error
+// patterns at these lengths, is the checksum object stores use for range reads
+// (so a CDN-side check can reuse it), and has CPU instructions on x86 (SSE4.2)
+// and ARMv8 that a later fast path can use without changing the format.
+// Chain calls by passing the previous result: crc32c(b, n, crc32c(a, m)).
+uint32_t crc32c(const void* data, size_t size, uint32_t crc = 0);
+
+// Parsers. They never read outside [data, data + size) and never throw; on
+// failure they return Corrupt (or Unsupported for a newer major version) and
+// set `err` to "<name>: <what> at offset <n>: <why>".
+
+// `data` holds the first `size` bytes of the file; `file_size` is the whole
+// file's size. Needs size >= header_size (256 for v1.0). Checks magic, header
+// CRC, version, the recorded file size and that the directory fits.
+core::Status parseHeader(const uint8_t* data, size_t size, uint64_t file_size,
+                         const std::string& name, HeaderLayout& out, std::string& err);
+
+// `data`/`size` are exactly the directory bytes (directory_count * 32 at
+// directory_offset). Checks the directory CRC, then that every section is
+// 8-aligned, inside the file, clear of header/directory/other sections, and
+// that no tag repeats.
+core::Status parseDirectory(const uint8_t* data, size_t size, const HeaderLayout& layout,
+                            const std::string& name, std::vector<SectionInfo>& out,
+                            std::string& err);
+
+// `data`/`size` are the BIDX section's bytes (located by `index`); every blob
+// must be 8-aligned and inside `blob_data` (the BDAT entry). Does not check
+// the BIDX section's own CRC (verify does that).
+core::Status parseBlobIndex(const uint8_t* data, size_t size, const SectionInfo& index,
+                            const SectionInfo& blob_data, const std::string& name,
+                            std::vector<BlobInfo>& out, std::string& err);
+
+}  // namespace blvd::package

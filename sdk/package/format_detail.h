@@ -1,0 +1,72 @@
+// Byte offsets of the on-disk structures (docs/package-format.md has the same
+// tables) and little-endian load/store helpers. Private to sdk/package: the
+// reader and writer must agree on these, nobody else should need them.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <type_traits>
+
+namespace blvd::package::detail {
+
+template <typename T>
+T get(const uint8_t* p) {
+  static_assert(std::is_arithmetic_v<T>, "plain numbers only");
+  T v;
+  std::memcpy(&v, p, sizeof v);  // memcpy: fields need not be aligned in a fuzzed buffer
+  return v;
+}
+
+template <typename T>
+void put(uint8_t* p, T v) {
+  static_assert(std::is_arithmetic_v<T>, "plain numbers only");
+  std::memcpy(p, &v, sizeof v);
+}
+
+// CRC32C over header[0, header_size) with the CRC field read as zero.
+uint32_t headerCrc(const uint8_t* header, size_t header_size);
+
+namespace hdr {  // header, 256 bytes in v1.0
+constexpr size_t kMagic = 0;          // char[8] "BLVDPKG\0"
+constexpr size_t kVersionMajor = 8;   // u16
+constexpr size_t kVersionMinor = 10;  // u16
+constexpr size_t kHeaderSize = 12;    // u32, bytes covered by the header CRC
+constexpr size_t kReserved0 = 16;     // u32, zero
+constexpr size_t kCrc = 20;           // u32, CRC32C of the header with this field as 0
+constexpr size_t kFileSize = 24;      // u64
+constexpr size_t kDirOffset = 32;     // u64
+constexpr size_t kDirCount = 40;      // u32
+constexpr size_t kDirCrc = 44;        // u32
+constexpr size_t kOriginLat = 48;     // f64
+constexpr size_t kOriginLon = 56;     // f64
+constexpr size_t kOriginH = 64;       // f64
+constexpr size_t kBoundsMin = 72;     // f32[2]
+constexpr size_t kBoundsMax = 80;     // f32[2]
+constexpr size_t kJunctionCount = 88; // u32
+constexpr size_t kCellCount = 92;     // u32
+constexpr size_t kBlockCount = 96;    // u32
+constexpr size_t kBuildingCount = 100;// u32
+constexpr size_t kTriangleCount = 104;// u64
+constexpr size_t kMaxBlockBlob = 112; // u32
+constexpr size_t kMaxCellBlob = 116;  // u32
+constexpr size_t kSourceBytes = 120;  // u64
+constexpr size_t kReservedTail = 128; // zero up to header_size
+}  // namespace hdr
+
+namespace dir {  // one 32-byte directory entry
+constexpr size_t kTag = 0;       // u32
+constexpr size_t kFlags = 4;     // u32, zero in v1.0
+constexpr size_t kOffset = 8;    // u64
+constexpr size_t kSize = 16;     // u64
+constexpr size_t kCrc = 24;      // u32
+constexpr size_t kReserved = 28; // u32, zero
+}  // namespace dir
+
+namespace blob {  // one 24-byte BIDX entry, after the 8-byte prefix
+constexpr size_t kOffset = 0;  // u64
+constexpr size_t kSize = 8;    // u64
+constexpr size_t kCrc = 16;    // u32
+constexpr size_t kFlags = 20;  // u32, zero in v1.0
+}  // namespace blob
+
+}  // namespace blvd::package::detail

@@ -1,0 +1,266 @@
+#include "package/reader.h"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+namespace blvd::package {
+
+namespace {
+
+std::string crcMismatch(const std::string& name, const std::string& what, uint64_t offset,
+                        uint32_t stored, uint32_t computed) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "checksum mismatch (stored 0x%08X, computed 0x%08X)", stored,
+                computed);
+  return name + ": " + what + " at offset " + std::to_string(offset) + ": " + buf;
+}
+
+}  // namespace
+
+PackageReader::~PackageReader() { close(); }
+
+PackageReader::PackageReader(PackageReader&& o) noexcept { *this = std::move(o); }
+
+PackageReader& PackageReader::operator=(PackageReader&& o) noexcept {
+  if (this != &o) {
+    close();
+    data_ = o.data_;
+    size_ = o.size_;
+    mapped_ = o.mapped_;
+    name_ = std::move(o.name_);
+    layout_ = o.layout_;
+    sections_ = std::move(o.sections_);
+    blobs_ = std::move(o.blobs_);
+    o.data_ = nullptr;
+    o.size_ = 0;
+    o.mapped_ = false;
+    o.sections_.clear();
+    o.blobs_.clear();
+  }
+  return *this;
+}
+
+void PackageReader::close() {
+  if (mapped_ && data_) ::munmap(const_cast<uint8_t*>(data_), size_);
+  data_ = nullptr;
+  size_ = 0;
+  mapped_ = false;
+  layout_ = HeaderLayout{};
+  sections_.clear();
+  blobs_.clear();
+}
+
+core::Status PackageReader::open(const std::string& path, PackageReader& out, std::string& err) {
+  out.close();
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    err = path + ": cannot open: " + std::strerror(errno);
+    return core::Status::Io;
+  }
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    err = path + ": cannot stat: " + std::strerror(errno);
+    ::close(fd);
+    return core::Status::Io;
+  }
+  if (!S_ISREG(st.st_mode)) {
+    err = path + ": cannot open: not a regular file";
+    ::close(fd);
+    return core::Status::Io;
+  }
+  const auto file_size = static_cast<uint64_t>(st.st_size);
+  PackageReader r;
+  r.name_ = path;
+  if (file_size > 0) {
+    if (static_cast<uint64_t>(static_cast<size_t>(file_size)) != file_size) {
+      ::close(fd);
+      err = path + ": file is too large to map on this host";
+      return core::Status::Io;
+    }
+    void* p = ::mmap(nullptr, static_cast<size_t>(file_size), PROT_READ, MAP_PRIVATE, fd, 0);
+    if (p == MAP_FAILED) {
+      err = path + ": cannot map " + std::to_string(file_size) + " bytes: " + std::strerror(errno);
+      ::close(fd);
+      return core::Status::Io;
+    }
+    r.data_ = static_cast<const uint8_t*>(p);
+    r.size_ = static_cast<size_t>(file_size);
+    r.mapped_ = true;
+  }
+  ::close(fd);  // the mapping keeps the file referenced
+  const core::Status s = r.validate(err);
+  if (s != core::Status::Ok) return s;  // r's destructor unmaps
+  out = std::move(r);
+  return core::Status::Ok;
+}
+
+PackageReader PackageReader::openOrThrow(const std::string& path) {
+  PackageReader r;
+  std::string err;
+  const core::Status s = open(path, r, err);
+  if (s != core::Status::Ok) throw core::Error(s, err);
+  return r;
+}
+
+core::Status PackageReader::openMemory(const uint8_t* data, size_t size, const std::string& name,
+                                       PackageReader& out, std::string& err) {
+  out.close();
+  if (data == nullptr && size != 0) {
+    err = name + ": null data with nonzero size";
+    return core::Status::Misuse;
+  }
+  PackageReader r;
+  r.name_ = name;
+  r.data_ = data;
+  r.size_ = size;
+  const core::Status s = r.validate(err);
+  if (s != core::Status::Ok) {
+    r.data_ = nullptr;  // not ours: nothing to unmap
+    return s;
+  }
+  out = std::move(r);
+  return core::Status::Ok;
+}
+
+core::Status PackageReader::validate(std::string& err) {
+  core::Status s = parseHeader(data_, size_, size_, name_, layout_, err);
+  if (s != core::Status::Ok) return s;
+  const size_t dir_size = size_t{layout_.directory_count} * kDirEntrySize;
+  s = parseDirectory(data_ + layout_.directory_offset, dir_size, layout_, name_, sections_, err);
+  if (s != core::Status::Ok) return s;
+  const SectionInfo* index = nullptr;
+  const SectionInfo* blob_data = nullptr;
+  for (const SectionInfo& si : sections_) {
+    if (si.tag == kSectionBlobIndex) index = &si;
+    if (si.tag == kSectionBlobData) blob_data = &si;
+  }
+  if (index) {
+    if (!blob_data) {
+      err = name_ + ": section " + tagToString(kSectionBlobIndex) + " at offset " +
+            std::to_string(index->offset) + ": blob index without a " +
+            tagToString(kSectionBlobData) + " section";
+      return core::Status::Corrupt;
+    }
+    s = parseBlobIndex(data_ + index->offset, static_cast<size_t>(index->size), *index, *blob_data,
+                       name_, blobs_, err);
+    if (s != core::Status::Ok) return s;
+  }
+  return core::Status::Ok;
+}
+
+bool PackageReader::hasSection(uint32_t tag) const {
+  for (const SectionInfo& s : sections_)
+    if (s.tag == tag) return true;
+  return false;
+}
+
+Span PackageReader::section(uint32_t tag) const {
+  for (const SectionInfo& s : sections_)
+    if (s.tag == tag) return Span{data_ + s.offset, static_cast<size_t>(s.size), s.offset};
+  return Span{};
+}
+
+core::Status PackageReader::checkedSection(uint32_t tag, Span& out, std::string& err) const {
+  out = Span{};
+  if (!isOpen()) {
+    err = "package reader is not open";
+    return core::Status::Misuse;
+  }
+  for (const SectionInfo& s : sections_) {
+    if (s.tag != tag) continue;
+    const uint32_t crc = crc32c(data_ + s.offset, static_cast<size_t>(s.size));
+    if (crc != s.crc) {
+      err = crcMismatch(name_, "section " + tagToString(tag), s.offset, s.crc, crc);
+      return core::Status::Corrupt;
+    }
+    out = Span{data_ + s.offset, static_cast<size_t>(s.size), s.offset};
+    return core::Status::Ok;
+  }
+  err = name_ + ": no section " + tagToString(tag);
+  return core::Status::NotFound;
+}
+
+core::Status PackageReader::blob(uint32_t i, Span& out, std::string& err) const {
+  out = Span{};
+  if (!isOpen()) {
+    err = "package reader is not open";
+    return core::Status::Misuse;
+  }
+  if (i >= blobs_.size()) {
+    err = name_ + ": blob " + std::to_string(i) + " does not exist (package has " +
+          std::to_string(blobs_.size()) + ")";
+    return core::Status::NotFound;
+  }
+  const BlobInfo& b = blobs_[i];
+  const uint32_t crc = crc32c(data_ + b.offset, static_cast<size_t>(b.size));
+  if (crc != b.crc) {
+    err = crcMismatch(name_, "blob " + std::to_string(i), b.offset, b.crc, crc);
+    return core::Status::Corrupt;
+  }
+  out = Span{data_ + b.offset, static_cast<size_t>(b.size), b.offset};
+  return core::Status::Ok;
+}
+
+core::Status PackageReader::verify(std::string& err) const {
+  if (!isOpen()) {
+    err = "package reader is not open";
+    return core::Status::Misuse;
+  }
+  // Header and directory were checked at open; checking again costs nothing
+  // and keeps verify() a complete statement on its own.
+  HeaderLayout layout;
+  core::Status s = parseHeader(data_, size_, size_, name_, layout, err);
+  if (s != core::Status::Ok) return s;
+  std::vector<SectionInfo> sections;
+  s = parseDirectory(data_ + layout.directory_offset, size_t{layout.directory_count} * kDirEntrySize,
+                     layout, name_, sections, err);
+  if (s != core::Status::Ok) return s;
+  for (const SectionInfo& si : sections) {
+    const uint32_t crc = crc32c(data_ + si.offset, static_cast<size_t>(si.size));
+    if (crc != si.crc) {
+      err = crcMismatch(name_, "section " + tagToString(si.tag), si.offset, si.crc, crc);
+      return core::Status::Corrupt;
+    }
+  }
+  Span unused;
+  for (uint32_t i = 0; i < blobs_.size(); ++i) {
+    s = blob(i, unused, err);
+    if (s != core::Status::Ok) return s;
+  }
+  // Bytes outside header, directory and sections must be zero padding: they
+  // are under no checksum, so this is the only way a flip there shows.
+  struct Range {
+    uint64_t begin, end;
+  };
+  std::vector<Range> used;
+  used.push_back({0, layout.header_size});
+  used.push_back({layout.directory_offset,
+                  layout.directory_offset + uint64_t{layout.directory_count} * kDirEntrySize});
+  for (const SectionInfo& si : sections) used.push_back({si.offset, si.offset + si.size});
+  std::sort(used.begin(), used.end(), [](const Range& a, const Range& b) { return a.begin < b.begin; });
+  uint64_t pos = 0;
+  auto checkGap = [&](uint64_t end) -> bool {
+    for (uint64_t p = pos; p < end; ++p)
+      if (data_[p] != 0) {
+        err = name_ + ": padding at offset " + std::to_string(p) +
+              ": nonzero byte outside every section";
+        return false;
+      }
+    return true;
+  };
+  for (const Range& r : used) {
+    if (r.begin > pos && !checkGap(r.begin)) return core::Status::Corrupt;
+    pos = std::max(pos, r.end);
+  }
+  if (!checkGap(size_)) return core::Status::Corrupt;
+  return core::Status::Ok;
+}
+
+}  // namespace blvd::package

@@ -1,0 +1,104 @@
+// PackageReader: the runtime's view of one package file, memory-mapped
+// read-only and validated once at open, then read zero-copy.
+//
+// Open checks magic, header CRC, version, the directory (CRC, every section
+// inside the file, aligned, not overlapping) and every blob's offset/length,
+// but not the CRC of every section and blob: that would touch the whole file
+// before the first frame. blob() checks the CRC of the blob it returns and
+// checkedSection() of the section; verify() checks everything.
+//
+// Errors never throw (except openOrThrow): a truncated, corrupt or foreign file
+// gives Status::Corrupt (Unsupported for another major version, Io when the
+// file cannot be opened) and a message "<path>: <what> at offset <n>: <why>".
+//
+// Threading: after open, every const method may be called from any number of
+// threads at once (the object is immutable). Lifetime: Spans point into the
+// mapping and stay valid until the reader is closed, destroyed or moved from.
+// The file must not be truncated while mapped (the format is immutable; a
+// package is replaced by renaming a new file over it, which keeps the old
+// mapping intact).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+#include "package/format.h"
+
+namespace blvd::package {
+
+// A range of the package: `data` points into the mapping, `offset` is where
+// it starts in the file (for messages and for range requests).
+struct Span {
+  const uint8_t* data = nullptr;
+  size_t size = 0;
+  uint64_t offset = 0;
+  bool empty() const { return size == 0; }
+};
+
+class PackageReader {
+ public:
+  PackageReader() = default;
+  ~PackageReader();
+  PackageReader(PackageReader&& o) noexcept;
+  PackageReader& operator=(PackageReader&& o) noexcept;
+  PackageReader(const PackageReader&) = delete;
+  PackageReader& operator=(const PackageReader&) = delete;
+
+  // Maps `path` (PROT_READ, MAP_PRIVATE) and validates it. On success `out`
+  // holds the package (whatever it held before is closed); on failure `out` is
+  // left closed and `err` says what is wrong.
+  static core::Status open(const std::string& path, PackageReader& out, std::string& err);
+  // The same, throwing core::Error(status, err) instead.
+  static PackageReader openOrThrow(const std::string& path);
+  // Validates a package that is already in memory (embedded in the host, or
+  // fetched). Does not copy: `data` must outlive the reader. `name` is used in
+  // messages in place of a path.
+  static core::Status openMemory(const uint8_t* data, size_t size, const std::string& name,
+                                 PackageReader& out, std::string& err);
+
+  bool isOpen() const { return data_ != nullptr; }
+  void close();
+
+  const std::string& name() const { return name_; }  // the path given to open()
+  const PackageHeader& header() const { return layout_.header; }
+  uint64_t fileSize() const { return size_; }
+  // Directory order, BIDX and BDAT included (for `blvd pack info`).
+  const std::vector<SectionInfo>& sections() const { return sections_; }
+
+  bool hasSection(uint32_t tag) const;
+  // The section's bytes without a CRC check, or an empty Span (data null)
+  // when the package has no such section: absent optional sections are
+  // normal, so this does not throw. Use hasSection() to tell absent from empty.
+  Span section(uint32_t tag) const;
+  // The section's bytes after checking its CRC: NotFound when absent,
+  // Corrupt (naming section and offset) when the CRC does not match.
+  core::Status checkedSection(uint32_t tag, Span& out, std::string& err) const;
+
+  uint32_t blobCount() const { return static_cast<uint32_t>(blobs_.size()); }
+  // Offset, size and CRC of blob `i` without reading it (for range clients and
+  // stats). `i` must be < blobCount().
+  const BlobInfo& blobInfo(uint32_t i) const { return blobs_[i]; }
+  // Blob `i`, zero-copy, after checking its CRC. NotFound for i >= blobCount(),
+  // Corrupt naming the blob and its offset when the CRC does not match.
+  core::Status blob(uint32_t i, Span& out, std::string& err) const;
+
+  // Checks every checksum (header, directory, each section, each blob) and that
+  // the padding between sections is zero; names the first bad one and its
+  // offset. Reads the whole file.
+  core::Status verify(std::string& err) const;
+
+ private:
+  core::Status validate(std::string& err);
+
+  const uint8_t* data_ = nullptr;
+  size_t size_ = 0;
+  bool mapped_ = false;  // we own the mapping (open) rather than borrow (openMemory)
+  std::string name_;
+  HeaderLayout layout_;
+  std::vector<SectionInfo> sections_;
+  std::vector<BlobInfo> blobs_;
+};
+
+}  // namespace blvd::package

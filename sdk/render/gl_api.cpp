@@ -1,0 +1,23 @@
+// Fills GlApi from a context's getProcAddress.
+#include "render/gl_api.h"
+
+#include "render/context.h"
+
+namespace blvd::render {
+
+bool GlApi::load(Context& ctx, std::string& missing) {
+  missing.clear();
+  // getProcAddress returns void*; converting it to a function pointer is
+  // conditionally supported in C++ and fine on every POSIX platform (dlsym).
+#define BLVD_GL_LOAD(type, fn)                                        \
+  fn = reinterpret_cast<type>(ctx.getProcAddress("gl" #fn));          \
+  if (!fn) {                                                          \
+    if (!missing.empty()) missing += ' ';                             \
+    missing += "gl" #fn;                                              \
+  }
+  BLVD_GL_FUNCTIONS(BLVD_GL_LOAD)
+#undef BLVD_GL_LOAD
+  return missing.empty();
+}
+
+}  // namespace blvd::render

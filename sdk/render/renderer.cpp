@@ -1,0 +1,644 @@
+// Renderer: GL resources, the mesh pool, and the frame.
+//
+// Frame order: background (sky + ground, writes depth 1.0 everywhere) then
+// the culled meshes with depth test. The ground is part of the background
+// pass rather than a big quad: a quad at y = 0 would z-fight with street
+// ribbons a few centimetres above it at every distance beyond ~100 m with a
+// 24-bit depth buffer, and polygon offset cannot fix that at the grazing
+// angles of a street-level view. Drawn as background it can never cover
+// anything (city geometry is at y >= 0 and the eye above it).
+#include "render/renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <cstdio>
+#include <cstring>
+
+#include "render/context.h"
+#include "render/frustum.h"
+#include "render/gl_api.h"
+#include "render/gl_state.h"
+#include "render/shaders.h"
+
+namespace blvd::render {
+
+namespace {
+
+constexpr uint32_t kIndexBits = 20;
+constexpr uint32_t kIndexMask = (1u << kIndexBits) - 1;
+constexpr uint32_t kGenerationMask = (1u << (32 - kIndexBits)) - 1;
+
+// Interleaved: one buffer, one VAO, 28 bytes a vertex.
+struct Vertex {
+  float position[3];
+  float normal[3];
+  uint8_t color[4];
+};
+static_assert(sizeof(Vertex) == 28, "Vertex must be tightly packed");
+
+struct MeshSlot {
+  GLuint vao = 0, vbo = 0, ibo = 0;
+  GLsizei index_count = 0;
+  GLenum index_type = GL_UNSIGNED_SHORT;
+  uint32_t generation = 1;
+  bool live = false;
+  glm::dvec3 center{0.0};  // glTF axes, package frame
+  glm::dvec3 half{0.0};
+  uint64_t bytes = 0;
+};
+
+// Uniform locations of one program (-1 when the program does not use one).
+struct Uniforms {
+  GLint sun_dir = -1, sun_color = -1, sky_ambient = -1, ground_ambient = -1, horizon = -1,
+        inv_fog2 = -1;
+  GLint ray_basis = -1, zenith = -1, ground = -1, eye_height = -1;  // background
+  GLint viewproj = -1, offset = -1;                                 // meshes
+};
+
+glm::vec3 srgbToLinear(const float c[3]) {
+  return {std::pow(c[0], 2.2f), std::pow(c[1], 2.2f), std::pow(c[2], 2.2f)};
+}
+
+const void* byteOffset(size_t n) { return reinterpret_cast<const void*>(n); }
+
+}  // namespace
+
+struct Renderer::Impl {
+  GLuint bg_program = 0, mesh_program = 0;
+  Uniforms bg, mesh;
+  GLuint empty_vao = 0;  // core profile needs a VAO even for attribute-less draws
+  GLuint fbo = 0, color_rb = 0, depth_rb = 0;
+  GLint host_fbo = 0;  // shared: framebuffer bound during the last render()
+
+  std::vector<MeshSlot> slots;  // grows up to capacity, reserved once
+  std::vector<uint32_t> free_slots;
+  uint32_t capacity = 0;
+
+  // upload() scratch, kept to avoid reallocating for every mesh.
+  std::vector<Vertex> vertices;
+  std::vector<uint16_t> indices16;
+  std::vector<float> normals;
+
+  // Look, derived once per setLook().
+  glm::vec3 sun_dir{0.0f, 1.0f, 0.0f}, sun_color{0.0f}, sky_ambient{0.0f}, ground_ambient{0.0f};
+  glm::vec3 zenith{0.0f}, horizon{0.0f}, ground{0.0f};
+};
+
+RendererDesc rendererDescDefaults(const RendererDesc& desc) {
+  RendererDesc d = desc;
+  if (d.width == 0) d.width = 800;
+  if (d.height == 0) d.height = 480;
+  if (d.mesh_capacity == 0) d.mesh_capacity = 16384;
+  return d;
+}
+
+Renderer::Renderer(Context& ctx) : ctx_(ctx), gl_(new GlApi), impl_(new Impl) {}
+
+bool Renderer::fail(const char* what) {
+  error_ = what;
+  return false;
+}
+
+const char* Renderer::backendName() const { return ctx_.name(); }
+
+namespace {
+
+GLuint compile(const GlApi& gl, GLenum type, bool gles, const char* body, std::string& err) {
+  const GLuint s = gl.CreateShader(type);
+  const char* parts[3] = {gles ? shaders::kVersionEs : shaders::kVersionCore, shaders::kPrelude,
+                          body};
+  gl.ShaderSource(s, 3, parts, nullptr);
+  gl.CompileShader(s);
+  GLint ok = GL_FALSE;
+  gl.GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    char log[2048] = {0};
+    gl.GetShaderInfoLog(s, sizeof log, nullptr, log);
+    err = std::string(type == GL_VERTEX_SHADER ? "vertex" : "fragment") +
+          " shader does not compile: " + log;
+    gl.DeleteShader(s);
+    return 0;
+  }
+  return s;
+}
+
+GLuint link(const GlApi& gl, bool gles, const char* vs_body, const char* fs_body,
+            std::string& err) {
+  const GLuint vs = compile(gl, GL_VERTEX_SHADER, gles, vs_body, err);
+  if (!vs) return 0;
+  const GLuint fs = compile(gl, GL_FRAGMENT_SHADER, gles, fs_body, err);
+  if (!fs) {
+    gl.DeleteShader(vs);
+    return 0;
+  }
+  const GLuint p = gl.CreateProgram();
+  gl.AttachShader(p, vs);
+  gl.AttachShader(p, fs);
+  gl.LinkProgram(p);
+  // Flagged for deletion; freed with the program.
+  gl.DeleteShader(vs);
+  gl.DeleteShader(fs);
+  GLint ok = GL_FALSE;
+  gl.GetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    char log[2048] = {0};
+    gl.GetProgramInfoLog(p, sizeof log, nullptr, log);
+    err = std::string("program does not link: ") + log;
+    gl.DeleteProgram(p);
+    return 0;
+  }
+  return p;
+}
+
+Uniforms locate(const GlApi& gl, GLuint p) {
+  Uniforms u;
+  u.sun_dir = gl.GetUniformLocation(p, "u_sun_dir");
+  u.sun_color = gl.GetUniformLocation(p, "u_sun_color");
+  u.sky_ambient = gl.GetUniformLocation(p, "u_sky_ambient");
+  u.ground_ambient = gl.GetUniformLocation(p, "u_ground_ambient");
+  u.horizon = gl.GetUniformLocation(p, "u_horizon");
+  u.inv_fog2 = gl.GetUniformLocation(p, "u_inv_fog2");
+  u.ray_basis = gl.GetUniformLocation(p, "u_ray_basis");
+  u.zenith = gl.GetUniformLocation(p, "u_zenith");
+  u.ground = gl.GetUniformLocation(p, "u_ground");
+  u.eye_height = gl.GetUniformLocation(p, "u_eye_height");
+  u.viewproj = gl.GetUniformLocation(p, "u_viewproj");
+  u.offset = gl.GetUniformLocation(p, "u_offset");
+  return u;
+}
+
+// "OpenGL ES 3.2 Mesa ..." or "4.5 (Core Profile) Mesa ...".
+bool parseVersion(const char* v, bool& gles, int& major, int& minor) {
+  if (!v) return false;
+  gles = std::strncmp(v, "OpenGL ES", 9) == 0;
+  const char* p = v;
+  while (*p && (*p < '0' || *p > '9')) ++p;
+  return std::sscanf(p, "%d.%d", &major, &minor) == 2;
+}
+
+}  // namespace
+
+std::unique_ptr<Renderer> Renderer::create(Context& ctx, const RendererDesc& desc,
+                                           std::string& err) {
+  std::unique_ptr<Renderer> r(new Renderer(ctx));
+  if (!r->init(rendererDescDefaults(desc))) {
+    err = r->error_;
+    return nullptr;
+  }
+  return r;
+}
+
+bool Renderer::init(const RendererDesc& desc) {
+  if (desc.width < 0 || desc.height < 0) return fail("renderer width/height must be >= 0");
+  if (desc.mesh_capacity > kIndexMask) return fail("mesh_capacity above 2^20 - 1");
+  if (!ctx_.makeCurrent()) return fail("cannot make the GL context current");
+  std::string missing;
+  if (!gl_->load(ctx_, missing)) {
+    error_ = std::string("GL entry points missing on ") + ctx_.name() + ": " + missing;
+    return false;
+  }
+  const GlApi& gl = *gl_;
+  shared_ = ctx_.isShared();
+
+  const char* version = reinterpret_cast<const char*>(gl.GetString(GL_VERSION));
+  const char* renderer = reinterpret_cast<const char*>(gl.GetString(GL_RENDERER));
+  gl_version_ = version ? version : "";
+  gl_renderer_ = renderer ? renderer : "";
+  int major = 0, minor = 0;
+  if (!parseVersion(version, gles_, major, minor)) {
+    error_ = "cannot parse GL_VERSION '" + gl_version_ + "'";
+    return false;
+  }
+  // GL_VERSION is authoritative (a shared context may be either kind).
+  const int need_minor = gles_ ? 0 : 3;
+  if (major < 3 || (major == 3 && minor < need_minor)) {
+    error_ = "GL " + gl_version_ + " is too old: need OpenGL ES 3.0 or OpenGL 3.3";
+    return false;
+  }
+
+  ScopedGlState guard(gl, shared_);
+  impl_->bg_program =
+      link(gl, gles_, shaders::kBackgroundVs, shaders::kBackgroundFs, error_);
+  if (!impl_->bg_program) return false;
+  impl_->mesh_program = link(gl, gles_, shaders::kMeshVs, shaders::kMeshFs, error_);
+  if (!impl_->mesh_program) return false;
+  impl_->bg = locate(gl, impl_->bg_program);
+  impl_->mesh = locate(gl, impl_->mesh_program);
+  gl.GenVertexArrays(1, &impl_->empty_vao);
+
+  if (!shared_) {
+    fb_w_ = desc.width;
+    fb_h_ = desc.height;
+    gl.GenRenderbuffers(1, &impl_->color_rb);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, impl_->color_rb);
+    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, fb_w_, fb_h_);
+    gl.GenRenderbuffers(1, &impl_->depth_rb);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, impl_->depth_rb);
+    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, fb_w_, fb_h_);
+    gl.GenFramebuffers(1, &impl_->fbo);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, impl_->fbo);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                               impl_->color_rb);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                               impl_->depth_rb);
+    const GLenum status = gl.CheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "framebuffer %dx%d incomplete (0x%04x)", fb_w_, fb_h_,
+                    status);
+      return fail(buf);
+    }
+  }
+
+  impl_->capacity = desc.mesh_capacity;
+  impl_->slots.reserve(impl_->capacity);
+  impl_->free_slots.reserve(impl_->capacity);
+  setLook(look_);
+  if (!shared_) {
+    const GLenum e = gl.GetError();
+    if (e != GL_NO_ERROR) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "GL error 0x%04x during setup", e);
+      return fail(buf);
+    }
+  }
+  return true;
+}
+
+Renderer::~Renderer() {
+  // Without the context current nothing can be freed; GL objects then die
+  // with the context (or, for a host context, leak: the host switched away).
+  if (!impl_ || !gl_->DeleteBuffers || !ctx_.makeCurrent()) return;
+  const GlApi& gl = *gl_;
+  ScopedGlState guard(gl, shared_);
+  for (MeshSlot& s : impl_->slots) {
+    if (!s.live) continue;
+    gl.DeleteVertexArrays(1, &s.vao);
+    gl.DeleteBuffers(1, &s.vbo);
+    gl.DeleteBuffers(1, &s.ibo);
+  }
+  if (impl_->bg_program) gl.DeleteProgram(impl_->bg_program);
+  if (impl_->mesh_program) gl.DeleteProgram(impl_->mesh_program);
+  if (impl_->empty_vao) gl.DeleteVertexArrays(1, &impl_->empty_vao);
+  if (impl_->fbo) gl.DeleteFramebuffers(1, &impl_->fbo);
+  if (impl_->color_rb) gl.DeleteRenderbuffers(1, &impl_->color_rb);
+  if (impl_->depth_rb) gl.DeleteRenderbuffers(1, &impl_->depth_rb);
+}
+
+void Renderer::setLook(const Look& look) {
+  look_ = look;
+  Impl& m = *impl_;
+  // Sun azimuth is clockwise from north: east = sin, north = cos, and glTF z
+  // points south.
+  const double el = glm::radians(look.sun_elevation_deg);
+  const double az = glm::radians(look.sun_azimuth_deg);
+  m.sun_dir = glm::vec3(glm::normalize(glm::dvec3(std::sin(az) * std::cos(el), std::sin(el),
+                                                  -std::cos(az) * std::cos(el))));
+  // Tuned by eye on llvmpipe: a sunlit wall reaches ~0.9 of its albedo, a
+  // shaded one ~0.35, so facades stay readable on every side.
+  m.sun_color = glm::vec3(1.00f, 0.95f, 0.85f) * 0.75f;
+  m.sky_ambient = glm::vec3(0.42f, 0.46f, 0.55f);
+  m.ground_ambient = glm::vec3(0.25f, 0.24f, 0.22f);
+  m.zenith = srgbToLinear(look.sky_zenith);
+  m.horizon = srgbToLinear(look.sky_horizon);
+  m.ground = srgbToLinear(look.ground);
+}
+
+bool Renderer::isValid(MeshHandle h) const {
+  const uint32_t index = (h.id & kIndexMask) - 1;  // wraps to huge for id 0
+  if (index >= impl_->slots.size()) return false;
+  const MeshSlot& s = impl_->slots[index];
+  return s.live && s.generation == (h.id >> kIndexBits);
+}
+
+MeshHandle Renderer::upload(const geo::MeshData& mesh) {
+  Impl& m = *impl_;
+  const size_t nv = mesh.vertexCount();
+  if (mesh.positions.size() % 3 != 0 || mesh.indices.size() % 3 != 0) {
+    fail("mesh positions or indices are not a multiple of 3");
+    return {};
+  }
+  if (mesh.empty() || nv == 0) {
+    fail("mesh has no triangles");
+    return {};
+  }
+  if (nv > 0xFFFFFFFFull || mesh.indices.size() > 0x7FFFFFFFull) {
+    fail("mesh too large for 32-bit indices");
+    return {};
+  }
+  if (!mesh.normals.empty() && mesh.normals.size() != nv * 3) {
+    fail("mesh normals and positions disagree in count");
+    return {};
+  }
+  if (!mesh.colors.empty() && mesh.colors.size() != nv * 4) {
+    fail("mesh colors and positions disagree in count");
+    return {};
+  }
+  for (uint32_t i : mesh.indices) {
+    if (i >= nv) {
+      fail("mesh index out of range");
+      return {};
+    }
+  }
+  if (m.free_slots.empty() && m.slots.size() >= m.capacity) {
+    fail("mesh pool full (RendererDesc::mesh_capacity)");
+    return {};
+  }
+  if (!ctx_.makeCurrent()) {
+    fail("GL context is not current on this thread");
+    return {};
+  }
+
+  // Box in glTF axes; vertices are stored relative to its centre so floats
+  // keep their precision anywhere in the city.
+  glm::dvec3 lo(mesh.positions[0], mesh.positions[1], mesh.positions[2]), hi = lo;
+  for (size_t v = 1; v < nv; ++v) {
+    const glm::dvec3 p(mesh.positions[v * 3], mesh.positions[v * 3 + 1],
+                       mesh.positions[v * 3 + 2]);
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const glm::dvec3 center = (lo + hi) * 0.5;
+
+  const float* normals = mesh.normals.data();
+  if (mesh.normals.empty()) {
+    // Area-weighted vertex normals: the cross product's length is twice the
+    // triangle's area, so summing unnormalised crosses weights for free.
+    m.normals.assign(nv * 3, 0.0f);
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+      const uint32_t ia = mesh.indices[t], ib = mesh.indices[t + 1], ic = mesh.indices[t + 2];
+      const glm::vec3 a(mesh.positions[ia * 3], mesh.positions[ia * 3 + 1],
+                        mesh.positions[ia * 3 + 2]);
+      const glm::vec3 b(mesh.positions[ib * 3], mesh.positions[ib * 3 + 1],
+                        mesh.positions[ib * 3 + 2]);
+      const glm::vec3 c(mesh.positions[ic * 3], mesh.positions[ic * 3 + 1],
+                        mesh.positions[ic * 3 + 2]);
+      const glm::vec3 n = glm::cross(b - a, c - a);
+      for (uint32_t i : {ia, ib, ic}) {
+        m.normals[i * 3] += n.x;
+        m.normals[i * 3 + 1] += n.y;
+        m.normals[i * 3 + 2] += n.z;
+      }
+    }
+    for (size_t v = 0; v < nv; ++v) {
+      glm::vec3 n(m.normals[v * 3], m.normals[v * 3 + 1], m.normals[v * 3 + 2]);
+      const float len = glm::length(n);
+      n = len > 0.0f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
+      m.normals[v * 3] = n.x;
+      m.normals[v * 3 + 1] = n.y;
+      m.normals[v * 3 + 2] = n.z;
+    }
+    normals = m.normals.data();
+  }
+
+  m.vertices.resize(nv);
+  for (size_t v = 0; v < nv; ++v) {
+    Vertex& out = m.vertices[v];
+    for (int k = 0; k < 3; ++k) {
+      out.position[k] = static_cast<float>(mesh.positions[v * 3 + k] - center[k]);
+      out.normal[k] = normals[v * 3 + k];
+    }
+    if (mesh.colors.empty()) {
+      std::memset(out.color, 200, 3);
+      out.color[3] = 255;
+    } else {
+      std::memcpy(out.color, &mesh.colors[v * 4], 4);
+    }
+  }
+
+  // 16-bit indices halve index bandwidth for typical blocks. The bound is
+  // 65535 exclusive: 0xFFFF is the primitive-restart index a host may enable.
+  const bool small = nv < 0xFFFF;
+  const void* index_data = mesh.indices.data();
+  size_t index_bytes = mesh.indices.size() * sizeof(uint32_t);
+  if (small) {
+    m.indices16.resize(mesh.indices.size());
+    for (size_t i = 0; i < mesh.indices.size(); ++i) {
+      m.indices16[i] = static_cast<uint16_t>(mesh.indices[i]);
+    }
+    index_data = m.indices16.data();
+    index_bytes = m.indices16.size() * sizeof(uint16_t);
+  }
+
+  uint32_t index;
+  if (!m.free_slots.empty()) {
+    index = m.free_slots.back();
+    m.free_slots.pop_back();
+  } else {
+    index = static_cast<uint32_t>(m.slots.size());
+    m.slots.emplace_back();
+  }
+  MeshSlot& s = m.slots[index];
+
+  const GlApi& gl = *gl_;
+  {
+    ScopedGlState guard(gl, shared_);
+    gl.GenVertexArrays(1, &s.vao);
+    gl.GenBuffers(1, &s.vbo);
+    gl.GenBuffers(1, &s.ibo);
+    // VAO first: the element buffer binding below is VAO state, and must not
+    // land in whatever VAO the host had bound.
+    gl.BindVertexArray(s.vao);
+    gl.BindBuffer(GL_ARRAY_BUFFER, s.vbo);
+    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(nv * sizeof(Vertex)),
+                  m.vertices.data(), GL_STATIC_DRAW);
+    gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.ibo);
+    gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(index_bytes), index_data,
+                  GL_STATIC_DRAW);
+    gl.EnableVertexAttribArray(0);
+    gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                           byteOffset(offsetof(Vertex, position)));
+    gl.EnableVertexAttribArray(1);
+    gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                           byteOffset(offsetof(Vertex, normal)));
+    gl.EnableVertexAttribArray(2);
+    gl.VertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(Vertex),
+                           byteOffset(offsetof(Vertex, color)));
+    gl.BindVertexArray(0);
+  }
+
+  s.index_count = static_cast<GLsizei>(mesh.indices.size());
+  s.index_type = small ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
+  s.center = center;
+  s.half = (hi - lo) * 0.5;
+  s.bytes = nv * sizeof(Vertex) + index_bytes;
+  s.live = true;
+  ++live_meshes_;
+  mesh_bytes_ += s.bytes;
+  return MeshHandle{(s.generation << kIndexBits) | (index + 1)};
+}
+
+void Renderer::release(MeshHandle h) {
+  if (!isValid(h) || !ctx_.makeCurrent()) return;
+  const uint32_t index = (h.id & kIndexMask) - 1;
+  MeshSlot& s = impl_->slots[index];
+  {
+    const GlApi& gl = *gl_;
+    ScopedGlState guard(gl, shared_);
+    gl.DeleteVertexArrays(1, &s.vao);
+    gl.DeleteBuffers(1, &s.vbo);
+    gl.DeleteBuffers(1, &s.ibo);
+  }
+  live_meshes_ -= 1;
+  mesh_bytes_ -= s.bytes;
+  const uint32_t generation = s.generation;
+  s = MeshSlot{};
+  // Generation 0 is skipped so a handle never equals a bare index.
+  s.generation = (generation & kGenerationMask) == kGenerationMask ? 1 : generation + 1;
+  impl_->free_slots.push_back(index);
+}
+
+bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, FrameStats* stats) {
+  if (const char* bad = validateCamera(cam)) return fail(bad);
+  if (!shared_ && (cam.width > fb_w_ || cam.height > fb_h_)) {
+    return fail("camera viewport is larger than the renderer's framebuffer");
+  }
+  if (n > 0 && !list) return fail("draw list is null");
+  if (!ctx_.makeCurrent()) return fail("GL context is not current on this thread");
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const GlApi& gl = *gl_;
+  Impl& m = *impl_;
+  FrameStats fs;
+
+  const glm::dvec3 eye = enuToGltf(cam.eye_enu);
+  const glm::dmat4 view = viewRotation(cam);
+  const glm::dmat4 clip = projection(cam) * view;
+  const Frustum frustum = Frustum::fromClip(clip);
+  const float fog_d = look_.fog_distance_m > 0.0f ? look_.fog_distance_m
+                                                   : static_cast<float>(0.4 * cam.far_m);
+  const float inv_fog2 = 1.0f / (fog_d * fog_d);
+
+  {
+    ScopedGlState guard(gl, shared_);
+    if (shared_) {
+      m.host_fbo = guard.saved().draw_framebuffer;
+    } else {
+      gl.BindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+    }
+    gl.Viewport(0, 0, cam.width, cam.height);
+    gl.Disable(GL_SCISSOR_TEST);
+    gl.Disable(GL_STENCIL_TEST);
+    gl.Disable(GL_BLEND);
+    gl.Disable(GL_POLYGON_OFFSET_FILL);
+    gl.Disable(GL_RASTERIZER_DISCARD);
+    gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    gl.DepthMask(GL_TRUE);
+    gl.Enable(GL_DEPTH_TEST);
+
+    auto set_look = [&](const Uniforms& u) {
+      gl.Uniform3f(u.sun_dir, m.sun_dir.x, m.sun_dir.y, m.sun_dir.z);
+      gl.Uniform3f(u.sun_color, m.sun_color.x, m.sun_color.y, m.sun_color.z);
+      gl.Uniform3f(u.sky_ambient, m.sky_ambient.x, m.sky_ambient.y, m.sky_ambient.z);
+      gl.Uniform3f(u.ground_ambient, m.ground_ambient.x, m.ground_ambient.y,
+                   m.ground_ambient.z);
+      gl.Uniform3f(u.horizon, m.horizon.x, m.horizon.y, m.horizon.z);
+      gl.Uniform1f(u.inv_fog2, inv_fog2);
+    };
+
+    // Background: sky and ground in one full-screen triangle. GL_ALWAYS with
+    // depth writes lays down the far depth, replacing a depth clear.
+    {
+      // Camera-to-world rotation is the transpose of the view rotation; its
+      // columns are right, up and back in world axes.
+      const glm::dmat3 cam_to_world = glm::transpose(glm::dmat3(view));
+      const double ty = std::tan(glm::radians(cam.fov_y_deg) * 0.5);
+      const double tx = ty * static_cast<double>(cam.width) / static_cast<double>(cam.height);
+      const glm::mat3 basis(glm::vec3(cam_to_world[0] * tx), glm::vec3(cam_to_world[1] * ty),
+                            glm::vec3(-cam_to_world[2]));
+      gl.UseProgram(m.bg_program);
+      set_look(m.bg);
+      gl.UniformMatrix3fv(m.bg.ray_basis, 1, GL_FALSE, &basis[0][0]);
+      gl.Uniform3f(m.bg.zenith, m.zenith.x, m.zenith.y, m.zenith.z);
+      gl.Uniform3f(m.bg.ground, m.ground.x, m.ground.y, m.ground.z);
+      gl.Uniform1f(m.bg.eye_height, static_cast<float>(eye.y));
+      gl.Disable(GL_CULL_FACE);
+      gl.DepthFunc(GL_ALWAYS);
+      gl.BindVertexArray(m.empty_vao);
+      gl.DrawArrays(GL_TRIANGLES, 0, 3);
+      ++fs.draw_calls;
+    }
+
+    // Meshes.
+    const glm::mat4 clip_f(clip);
+    gl.UseProgram(m.mesh_program);
+    set_look(m.mesh);
+    gl.UniformMatrix4fv(m.mesh.viewproj, 1, GL_FALSE, &clip_f[0][0]);
+    gl.Enable(GL_CULL_FACE);
+    gl.CullFace(GL_BACK);
+    gl.FrontFace(GL_CCW);
+    gl.DepthFunc(GL_LESS);
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t index = (list[i].id & kIndexMask) - 1;
+      if (!isValid(list[i])) {
+        ++fs.meshes_invalid;
+        continue;
+      }
+      const MeshSlot& s = m.slots[index];
+      const glm::dvec3 rel = s.center - eye;
+      if (!frustum.intersectsBox(rel, s.half)) {
+        ++fs.meshes_culled;
+        continue;
+      }
+      gl.Uniform3f(m.mesh.offset, static_cast<float>(rel.x), static_cast<float>(rel.y),
+                   static_cast<float>(rel.z));
+      gl.BindVertexArray(s.vao);
+      gl.DrawElements(GL_TRIANGLES, s.index_count, s.index_type, nullptr);
+      ++fs.draw_calls;
+      ++fs.meshes_drawn;
+      fs.triangles += static_cast<uint64_t>(s.index_count / 3);
+    }
+    gl.BindVertexArray(0);
+  }
+  // The wall time must include the rasterisation, which GL defers.
+  gl.Finish();
+  fs.frame_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  last_w_ = cam.width;
+  last_h_ = cam.height;
+  if (stats) *stats = fs;
+  // Only on a context blvd owns: on a host context this would swallow the
+  // host's own pending errors.
+  if (!shared_) {
+    const GLenum e = gl.GetError();
+    if (e != GL_NO_ERROR) {
+      char buf[48];
+      std::snprintf(buf, sizeof buf, "GL error 0x%04x in render", e);
+      return fail(buf);
+    }
+  }
+  return true;
+}
+
+bool Renderer::readPixels(uint8_t* rgba) {
+  if (!rgba) return fail("readPixels: null output");
+  if (last_w_ == 0) return fail("readPixels: nothing rendered yet");
+  if (!ctx_.makeCurrent()) return fail("GL context is not current on this thread");
+  const GlApi& gl = *gl_;
+  {
+    ScopedGlState guard(gl, shared_);
+    gl.BindFramebuffer(GL_READ_FRAMEBUFFER,
+                       static_cast<GLuint>(shared_ ? impl_->host_fbo : impl_->fbo));
+    if (shared_) {
+      // A bound pack buffer would redirect the read into it.
+      gl.BindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+      gl.PixelStorei(GL_PACK_ROW_LENGTH, 0);
+      gl.PixelStorei(GL_PACK_SKIP_ROWS, 0);
+      gl.PixelStorei(GL_PACK_SKIP_PIXELS, 0);
+    }
+    gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
+    gl.ReadPixels(0, 0, last_w_, last_h_, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+  }
+  // GL's first row is the bottom one; swap rows in place (no scratch buffer).
+  const size_t row = static_cast<size_t>(last_w_) * 4;
+  for (int y = 0; y < last_h_ / 2; ++y) {
+    uint8_t* a = rgba + static_cast<size_t>(y) * row;
+    uint8_t* b = rgba + static_cast<size_t>(last_h_ - 1 - y) * row;
+    std::swap_ranges(a, a + row, b);
+  }
+  return true;
+}
+
+}  // namespace blvd::render

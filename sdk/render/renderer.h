@@ -1,0 +1,123 @@
+// The street-level renderer: uploads meshes once, then per frame draws the
+// sky and ground background, frustum-culls the caller's draw list by each
+// mesh's bounding box and draws what survives, lit by a sun and a sky.
+//
+// Thread: every call on the thread where the context is current.
+// Lifetime: the Renderer borrows the Context; destroy the Renderer first.
+// Memory: the mesh pool is sized once from RendererDesc; render() and
+// readPixels() make no heap allocations (upload() reuses its scratch buffers).
+// Errors: calls return false / an invalid handle and set lastError().
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "geo/mesh.h"
+#include "render/camera.h"
+
+namespace blvd::render {
+
+class Context;
+struct GlApi;
+
+struct RendererDesc {
+  int width = 0;                // own framebuffer size; 0 means 800. Unused when shared
+  int height = 0;               // 0 means 480
+  uint32_t mesh_capacity = 0;   // live meshes at once; 0 means 16384, at most 2^20 - 1
+};
+
+// `desc` with every zero field replaced by its default.
+RendererDesc rendererDescDefaults(const RendererDesc& desc);
+
+// Lighting and atmosphere. Colours are sRGB 0..1.
+struct Look {
+  double sun_elevation_deg = 50.0;
+  double sun_azimuth_deg = 200.0;  // clockwise from north
+  float fog_distance_m = 0.0f;     // e-folding distance of the squared fog; 0 means 0.4 * far
+  float sky_zenith[3] = {0.30f, 0.50f, 0.80f};
+  float sky_horizon[3] = {0.80f, 0.85f, 0.90f};  // also the fog colour
+  float ground[3] = {0.45f, 0.48f, 0.40f};       // grey-green
+};
+
+// Typed handle from a pool: 20-bit slot index + 1 and a 12-bit generation, so
+// a released handle stays invalid after its slot is reused. id 0 is invalid.
+struct MeshHandle {
+  uint32_t id = 0;
+  bool operator==(const MeshHandle& o) const { return id == o.id; }
+  bool operator!=(const MeshHandle& o) const { return id != o.id; }
+};
+
+struct FrameStats {
+  double frame_ms = 0.0;        // render() wall time, glFinish included
+  uint64_t triangles = 0;       // triangles of the meshes drawn (background excluded)
+  uint32_t draw_calls = 0;      // every glDraw* issued, the background's included
+  uint32_t meshes_drawn = 0;
+  uint32_t meshes_culled = 0;   // outside the view frustum
+  uint32_t meshes_invalid = 0;  // stale or null handles in the list, skipped
+};
+
+class Renderer {
+ public:
+  // Loads GL through `ctx` (made current here), compiles the shaders and, for
+  // a context blvd owns, creates the RGBA8 + depth24 framebuffer. nullptr with
+  // `err` set on failure (missing GL entry points, GL older than ES 3.0 / 3.3,
+  // shader or framebuffer errors).
+  static std::unique_ptr<Renderer> create(Context& ctx, const RendererDesc& desc,
+                                          std::string& err);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Copies `mesh` to GL buffers. Missing normals are computed from the
+  // triangles, missing colours default to light grey. Invalid handle when the
+  // mesh is empty or malformed (index out of range, array sizes disagree) or
+  // the pool is full.
+  MeshHandle upload(const geo::MeshData& mesh);
+  // Frees the GL buffers; stale and null handles are ignored.
+  void release(MeshHandle h);
+  bool isValid(MeshHandle h) const;
+
+  void setLook(const Look& look);
+  const Look& look() const { return look_; }
+
+  // Draws one frame of `list[0..n)` (duplicates are drawn twice) seen by
+  // `cam`, into the own framebuffer or, when shared, into the framebuffer the
+  // host has bound, over the viewport (0, 0, cam.width, cam.height). With an
+  // own framebuffer cam.width/height must fit RendererDesc's size.
+  bool render(const Camera& cam, const MeshHandle* list, size_t n, FrameStats* stats);
+
+  // Copies the last frame (lastWidth() x lastHeight()) as RGBA8, top row first.
+  bool readPixels(uint8_t* rgba_top_row_first);
+  int lastWidth() const { return last_w_; }
+  int lastHeight() const { return last_h_; }
+
+  const char* backendName() const;
+  const char* glRenderer() const { return gl_renderer_.c_str(); }
+  const char* glVersion() const { return gl_version_.c_str(); }
+  bool isGles() const { return gles_; }
+  uint32_t meshCount() const { return live_meshes_; }
+  uint64_t meshBytes() const { return mesh_bytes_; }  // vertex + index bytes in GL buffers
+  const std::string& lastError() const { return error_; }
+
+ private:
+  struct Impl;
+  explicit Renderer(Context& ctx);
+  bool init(const RendererDesc& desc);
+  bool fail(const char* what);
+
+  Context& ctx_;
+  std::unique_ptr<GlApi> gl_;
+  std::unique_ptr<Impl> impl_;
+  Look look_;
+  std::string gl_renderer_, gl_version_, error_;
+  bool gles_ = true;
+  bool shared_ = false;
+  int fb_w_ = 0, fb_h_ = 0;
+  int last_w_ = 0, last_h_ = 0;
+  uint32_t live_meshes_ = 0;
+  uint64_t mesh_bytes_ = 0;
+};
+
+}  // namespace blvd::render

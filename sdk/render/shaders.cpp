@@ -1,0 +1,97 @@
+// Shader sources. Lighting is done in linear light: vertex colours are sRGB,
+// decoded with a 2.2 power and encoded back at the end ("sRGB-ish"; the exact
+// piecewise curve is not worth its cost on llvmpipe). Fog is squared
+// exponential so the near city stays crisp and the far city fades into the
+// horizon colour, which is also where the sky gradient starts: the seam at the
+// far plane and at the horizon disappears.
+#include "render/shaders.h"
+
+namespace blvd::render::shaders {
+
+const char* const kVersionEs = "#version 300 es\n";
+const char* const kVersionCore = "#version 330 core\n";
+
+const char* const kPrelude = R"(
+precision highp float;
+uniform vec3 u_sun_dir;        // unit vector towards the sun, glTF axes
+uniform vec3 u_sun_color;      // linear
+uniform vec3 u_sky_ambient;    // linear, light from above
+uniform vec3 u_ground_ambient; // linear, light bounced from below
+uniform vec3 u_horizon;        // linear, also the fog colour
+uniform float u_inv_fog2;      // 1 / fog_distance^2
+
+vec3 fogged(vec3 c, float dist) {
+  float f = 1.0 - exp(-dist * dist * u_inv_fog2);
+  return mix(c, u_horizon, f);
+}
+vec3 toDisplay(vec3 linear_rgb) {
+  return pow(clamp(linear_rgb, 0.0, 1.0), vec3(1.0 / 2.2));
+}
+)";
+
+const char* const kBackgroundVs = R"(
+uniform mat3 u_ray_basis;  // columns: right * tan * aspect, up * tan, forward
+out vec3 v_ray;
+void main() {
+  // Vertices 0, 1, 2 -> (-1,-1), (3,-1), (-1,3): one triangle covers the
+  // viewport without the diagonal seam of a quad.
+  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
+  // z = w puts it on the far plane, so it also lays down depth 1.0 and no
+  // depth clear (with its host-owned clear value) is needed.
+  gl_Position = vec4(p, 1.0, 1.0);
+  v_ray = u_ray_basis * vec3(p, 1.0);
+}
+)";
+
+const char* const kBackgroundFs = R"(
+uniform vec3 u_zenith;        // linear
+uniform vec3 u_ground;        // linear albedo
+uniform float u_eye_height;   // metres above y = 0
+in vec3 v_ray;
+layout(location = 0) out vec4 o_color;
+void main() {
+  vec3 d = normalize(v_ray);
+  vec3 c;
+  if (d.y < 0.0 && u_eye_height > 0.0) {
+    float dist = u_eye_height / -d.y;
+    vec3 lit = u_ground * (u_sky_ambient + u_sun_color * max(u_sun_dir.y, 0.0));
+    c = fogged(lit, dist);
+  } else {
+    // Square root: the pale band hugs the horizon, most of the sky is blue.
+    c = mix(u_horizon, u_zenith, sqrt(clamp(d.y, 0.0, 1.0)));
+  }
+  o_color = vec4(toDisplay(c), 1.0);
+}
+)";
+
+const char* const kMeshVs = R"(
+layout(location = 0) in vec3 a_position;  // relative to the mesh's box centre
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec4 a_color;     // sRGB, normalised bytes
+uniform mat4 u_viewproj;                  // eye-relative
+uniform vec3 u_offset;                    // box centre - eye, from doubles
+out vec3 v_rel;
+out vec3 v_lit;
+void main() {
+  vec3 p = a_position + u_offset;
+  v_rel = p;
+  vec3 n = normalize(a_normal);
+  vec3 albedo = pow(a_color.rgb, vec3(2.2));
+  vec3 ambient = mix(u_ground_ambient, u_sky_ambient, n.y * 0.5 + 0.5);
+  v_lit = albedo * (ambient + u_sun_color * max(dot(n, u_sun_dir), 0.0));
+  gl_Position = u_viewproj * vec4(p, 1.0);
+}
+)";
+
+const char* const kMeshFs = R"(
+in vec3 v_rel;
+in vec3 v_lit;
+layout(location = 0) out vec4 o_color;
+void main() {
+  // Per fragment: street ribbons are long triangles, a per-vertex distance
+  // would fog their middle wrongly.
+  o_color = vec4(toDisplay(fogged(v_lit, length(v_rel))), 1.0);
+}
+)";
+
+}  // namespace blvd::render::shaders

@@ -1,0 +1,88 @@
+#include "stream/city.h"
+
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
+
+#include "package/glb.h"
+
+namespace blvd::stream {
+
+core::Status City::open(const std::string& path, std::string& err) {
+  core::Status st = package::PackageReader::open(path, reader_, err);
+  if (st != core::Status::Ok) return st;
+  try {
+    package::Span s;
+    for (uint32_t tag : {package::kSectionGraph, package::kSectionCells, package::kSectionBlocks}) {
+      st = reader_.checkedSection(tag, s, err);
+      if (st != core::Status::Ok) {
+        if (st == core::Status::NotFound) {
+          err = path + ": missing section " + package::tagToString(tag);
+          st = core::Status::Corrupt;
+        }
+        return st;
+      }
+      if (tag == package::kSectionGraph) graph::parseGraph(s.data, s.size, s.offset, graph_);
+      if (tag == package::kSectionCells) graph::parseCells(s.data, s.size, s.offset, graph_);
+      if (tag == package::kSectionBlocks) graph::parseBlocks(s.data, s.size, s.offset, reader_.blobCount(), blocks_);
+    }
+  } catch (const core::Error& e) {
+    err = path + ": " + e.what();
+    return e.status();
+  }
+  if (blocks_.size() != graph_.faces.size()) {
+    err = path + ": block table has " + std::to_string(blocks_.size()) + " blocks but the graph " +
+          std::to_string(graph_.faces.size()) + " faces";
+    return core::Status::Corrupt;
+  }
+  const auto& h = reader_.header();
+  frame_ = geo::LocalFrame(h.origin_lat, h.origin_lon, h.origin_h);
+  return core::Status::Ok;
+}
+
+core::Status City::decodeBlock(uint32_t b, geo::MeshData& out, std::string& err) const {
+  out.clear();
+  if (b >= blocks_.size()) {
+    err = "block " + std::to_string(b) + " does not exist";
+    return core::Status::NotFound;
+  }
+  if (blocks_[b].blob == 0xffffffffu) return core::Status::Ok;
+  package::Span s;
+  core::Status st = reader_.blob(blocks_[b].blob, s, err);
+  if (st != core::Status::Ok) return st;
+  st = package::decodeGlb(s.data, s.size, out, err);
+  if (st != core::Status::Ok) err = reader_.name() + ": block " + std::to_string(b) + " at offset " +
+                                    std::to_string(s.offset) + ": " + err;
+  return st;
+}
+
+uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m) const {
+  const glm::dvec2 dir(std::sin(glm::radians(heading_deg)), std::cos(glm::radians(heading_deg)));
+  double best = 1e300;
+  uint32_t best_h = graph::kNone;
+  for (uint32_t h = 0; h < graph_.halfedges.size(); ++h) {
+    const auto& e = graph_.halfedges[h];
+    double along = 0;
+    for (uint32_t i = 0; i + 1 < e.pts_count; ++i) {
+      const glm::dvec2 a = graph_.points[e.pts_begin + i], b = graph_.points[e.pts_begin + i + 1];
+      const glm::dvec2 d = b - a;
+      const double len = glm::length(d);
+      if (len < 1e-9) continue;
+      const double t = glm::clamp(glm::dot(p - a, d) / (len * len), 0.0, 1.0);
+      const double dist = glm::length(a + d * t - p);
+      // Distance plus a penalty for facing the wrong way, so of two twin
+      // half-edges the one going our way wins.
+      const double cost = dist + 5.0 * (1.0 - glm::dot(d / len, dir));
+      if (cost < best) {
+        best = cost;
+        best_h = h;
+        if (arc_m) *arc_m = along + t * len;
+      }
+      along += len;
+    }
+  }
+  return best_h;
+}
+
+}  // namespace blvd::stream

@@ -1,0 +1,48 @@
+// A city opened from a package: the validated header, street graph, cells and
+// block table, plus decoding of a block's geometry on request. This is the
+// read side every runtime path shares; residency (which blocks are decoded and
+// uploaded, in fixed pools) builds on it.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+#include "geo/local_frame.h"
+#include "geo/mesh.h"
+#include "graph/block_table.h"
+#include "graph/street_graph.h"
+#include "package/reader.h"
+
+namespace blvd::stream {
+
+class City {
+ public:
+  // Opens and validates `path`: the package container, then the GRPH, CELL and
+  // BLCK sections (CRC-checked and parsed with bounds checks). Returns
+  // Io/Corrupt/Unsupported with a message naming the file and offset.
+  core::Status open(const std::string& path, std::string& err);
+
+  const package::PackageReader& package() const { return reader_; }
+  const package::PackageHeader& header() const { return reader_.header(); }
+  const graph::StreetGraph& graph() const { return graph_; }
+  const std::vector<graph::BlockRecord>& blocks() const { return blocks_; }
+  const geo::LocalFrame& frame() const { return frame_; }
+
+  // Decodes block `b`'s GLB into `out` (cleared first). An empty block gives an
+  // empty mesh and Ok. Corrupt if the blob's CRC or the GLB is bad.
+  core::Status decodeBlock(uint32_t b, geo::MeshData& out, std::string& err) const;
+
+  // The cell nearest to local point p whose direction best matches heading_deg
+  // (clockwise from north); kNone for an empty graph. Also returns the arc
+  // length along the cell of the closest point.
+  uint32_t nearestCell(glm::dvec2 p, double heading_deg, double* arc_m = nullptr) const;
+
+ private:
+  package::PackageReader reader_;
+  graph::StreetGraph graph_;
+  std::vector<graph::BlockRecord> blocks_;
+  geo::LocalFrame frame_{0, 0, 0};
+};
+
+}  // namespace blvd::stream

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# The `blvd` tool end to end on the baked Monaco package: pack info/verify/
+# extract, and a corrupted copy that verify must reject naming the offset.
+# Usage: test_cli.sh BLVD_EXE PACKAGE WORKDIR
+set -euo pipefail
+blvd=$1 pkg=$2 work=$3
+mkdir -p "$work"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+"$blvd" pack info "$pkg" | grep -q "junctions" || fail "pack info"
+"$blvd" pack info "$pkg" --json > "$work/info.json"
+python3 - "$work/info.json" <<'PY'
+import json, sys
+j = json.load(open(sys.argv[1]))
+c = j["counts"]
+assert c["junctions"] > 100 and c["cells"] > 200 and c["blocks"] > 50, c
+assert c["buildings"] > 1000 and c["triangles"] > 10000, c
+for s in ("GRPH", "CELL", "BLCK", "META", "BIDX", "BDAT"):
+    assert s in j["sections"] and j["sections"][s]["bytes"] > 0, s
+PY
+"$blvd" pack verify "$pkg" | grep -q "ok" || fail "verify of a good package"
+
+# Flip one byte in the middle of the blob data: verify exits 1 naming a blob offset.
+cp "$pkg" "$work/bad.blvd"
+size=$(stat -c %s "$work/bad.blvd")
+python3 - "$work/bad.blvd" <<'PY'
+import sys
+p = sys.argv[1]
+b = bytearray(open(p, "rb").read())
+b[len(b) * 2 // 3] ^= 0x5A
+open(p, "wb").write(b)
+PY
+set +e
+msg=$("$blvd" pack verify "$work/bad.blvd" 2>&1); rc=$?
+set -e
+[ "$rc" = 1 ] || fail "verify of a corrupt package exited $rc: $msg"
+echo "$msg" | grep -q "offset" || fail "verify message names no offset: $msg"
+echo "$msg" | grep -q "bad.blvd" || fail "verify message names no file: $msg"
+
+# Truncated package: every command fails cleanly.
+head -c $((size / 2)) "$pkg" > "$work/cut.blvd"
+set +e
+"$blvd" pack info "$work/cut.blvd" > /dev/null 2>&1; rc=$?
+set -e
+[ "$rc" = 1 ] || fail "pack info on a truncated package exited $rc"
+
+# Extract: a block and a cell's local model are valid GLBs (magic, version 2, length).
+"$blvd" pack extract "$pkg" --block 1 -o "$work/block1.glb"
+"$blvd" pack extract "$pkg" --cell 0 -o "$work/cell0.glb"
+for f in "$work/block1.glb" "$work/cell0.glb"; do
+python3 - "$f" <<'PY'
+import struct, sys, json
+b = open(sys.argv[1], "rb").read()
+magic, ver, length = struct.unpack_from("<4sII", b)
+assert magic == b"glTF" and ver == 2 and length == len(b), (magic, ver, length)
+clen, ctype = struct.unpack_from("<I4s", b, 12)
+assert ctype == b"JSON"
+j = json.loads(b[20:20 + clen])
+assert j["asset"]["version"] == "2.0" and j["meshes"], j.keys()
+PY
+done
+echo "cli: all checks passed"

@@ -1,0 +1,135 @@
+// Street map construction on small hand-made networks where the answer is known.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "bake/street_map.h"
+#include "graph_test_util.h"
+
+using namespace blvd;
+using blvd::test::street;
+
+namespace {
+std::vector<uint32_t> successors(const graph::StreetGraph& g, uint32_t h) {
+  return {g.successors.begin(h), g.successors.end(h)};
+}
+uint32_t findCell(const graph::StreetGraph& g, glm::dvec2 from, glm::dvec2 to) {
+  for (uint32_t h = 0; h < g.halfedges.size(); ++h) {
+    const auto& e = g.halfedges[h];
+    if (g.points[e.pts_begin] == from && g.points[e.pts_begin + e.pts_count - 1] == to) return h;
+  }
+  return graph::kNone;
+}
+}  // namespace
+
+TEST(StreetMap, GridOfFourBlocks) {
+  // A 3x3 lattice of streets sharing nodes: 9 junctions, 12 edges, 4 blocks + outside.
+  std::vector<bake::OsmStreet> s;
+  for (int i = 0; i < 3; ++i) {
+    s.push_back(street(10 + i, {100 + i * 3, 101 + i * 3, 102 + i * 3}, {{0, i * 100.0}, {100, i * 100.0}, {200, i * 100.0}}));
+    s.push_back(street(20 + i, {100 + i, 103 + i, 106 + i}, {{i * 100.0, 0}, {i * 100.0, 100}, {i * 100.0, 200}}));
+  }
+  bake::StreetMap map(s);
+  const graph::StreetGraph& g = map.graph();
+  EXPECT_EQ(g.vertices.size(), 9u);
+  EXPECT_EQ(g.halfedges.size(), 24u);
+  EXPECT_EQ(g.faces.size(), 5u);
+  EXPECT_EQ(g.junctionCount(), 9u);
+  const auto bad = graph::checkInvariants(g);
+  EXPECT_TRUE(bad.empty()) << bad.front();
+  // Each block has area 100x100.
+  int bounded = 0;
+  for (const auto& f : g.faces)
+    if (!f.unbounded) {
+      ++bounded;
+      EXPECT_NEAR(f.area, 1e4, 1e-6);
+    }
+  EXPECT_EQ(bounded, 4);
+  // From the centre junction eastwards, a vehicle can turn left, go straight or turn right.
+  const uint32_t h = findCell(g, {0, 100}, {100, 100});
+  ASSERT_NE(h, graph::kNone);
+  EXPECT_EQ(successors(g, h).size(), 3u);
+  // Local blocks of a centre street: the two sides plus those at both end junctions = all 4 + outside.
+  EXPECT_EQ(g.local_blocks.count(h), 5u);
+  // Points inside each quadrant land in distinct faces.
+  const uint32_t f1 = map.locateFace({50, 50}), f2 = map.locateFace({150, 50}), f3 = map.locateFace({50, 150});
+  EXPECT_NE(f1, f2);
+  EXPECT_NE(f1, f3);
+  EXPECT_TRUE(g.faces[map.locateFace({500, 500})].unbounded);
+}
+
+TEST(StreetMap, BridgeCrossingIsNotAJunction) {
+  // Street A (west-east) crosses bridge B (south-north) without a shared node.
+  std::vector<bake::OsmStreet> s = {
+      street(1, {1, 2}, {{-100, 0}, {100, 0}}),
+      street(2, {3, 4}, {{0, -100}, {0, 100}}, 1),
+  };
+  bake::StreetMap map(s);
+  const graph::StreetGraph& g = map.graph();
+  EXPECT_TRUE(graph::checkInvariants(g).empty());
+  ASSERT_EQ(g.vertices.size(), 5u);  // four ends + the crossing
+  size_t crossings = 0;
+  for (const auto& v : g.vertices) crossings += v.kind == graph::VertexKind::Crossing;
+  EXPECT_EQ(crossings, 1u);
+  EXPECT_EQ(g.junctionCount(), 4u);  // the dead ends only
+  // A vehicle on A reaching the crossing can only continue on A.
+  const uint32_t h = findCell(g, {-100, 0}, {0, 0});
+  ASSERT_NE(h, graph::kNone);
+  const auto succ = successors(g, h);
+  ASSERT_EQ(succ.size(), 1u);
+  EXPECT_EQ(g.halfedges[succ[0]].osm_way, 1);
+  EXPECT_EQ(g.points[g.halfedges[succ[0]].pts_begin + 1], glm::dvec2(100, 0));
+}
+
+TEST(StreetMap, SharedNodeMakesAJunction) {
+  std::vector<bake::OsmStreet> s = {
+      street(1, {1, 9, 2}, {{-100, 0}, {0, 0}, {100, 0}}),
+      street(2, {3, 9, 4}, {{0, -100}, {0, 0}, {0, 100}}),
+  };
+  bake::StreetMap map(s);
+  const graph::StreetGraph& g = map.graph();
+  EXPECT_TRUE(graph::checkInvariants(g).empty());
+  const uint32_t h = findCell(g, {-100, 0}, {0, 0});
+  ASSERT_NE(h, graph::kNone);
+  EXPECT_EQ(successors(g, h).size(), 3u);
+  EXPECT_EQ(g.junctionCount(), 5u);
+}
+
+TEST(StreetMap, DegreeTwoVerticesBecomePolylines) {
+  // One way with a bend, split into two OSM ways at a shared node: one edge, one polyline.
+  std::vector<bake::OsmStreet> s = {
+      street(1, {1, 2, 3}, {{0, 0}, {50, 10}, {100, 0}}),
+      street(2, {3, 4}, {{100, 0}, {150, 40}}),
+  };
+  bake::StreetMap map(s);
+  const graph::StreetGraph& g = map.graph();
+  EXPECT_TRUE(graph::checkInvariants(g).empty());
+  EXPECT_EQ(g.vertices.size(), 2u);
+  ASSERT_EQ(g.halfedges.size(), 2u);
+  EXPECT_EQ(g.halfedges[0].pts_count, 4u);
+  EXPECT_NEAR(g.halfedges[0].length, std::hypot(50, 10) * 2 + std::hypot(50, 40), 1e-3);
+  // Dead end both ways: the only successor is the U-turn.
+  EXPECT_EQ(successors(g, 0), std::vector<uint32_t>{1});
+}
+
+TEST(StreetMap, IsolatedRingRoad) {
+  std::vector<bake::OsmStreet> s = {street(1, {1, 2, 3, 4, 1}, {{0, 0}, {10, 0}, {10, 10}, {0, 10}, {0, 0}})};
+  bake::StreetMap map(s);
+  const graph::StreetGraph& g = map.graph();
+  const auto bad = graph::checkInvariants(g);
+  EXPECT_TRUE(bad.empty()) << bad.front();
+  EXPECT_EQ(g.faces.size(), 2u);
+}
+
+TEST(StreetMap, TwoComponentsEuler) {
+  std::vector<bake::OsmStreet> s = {
+      street(1, {1, 2, 3, 4, 1}, {{0, 0}, {10, 0}, {10, 10}, {0, 10}, {0, 0}}),
+      street(2, {5, 6}, {{100, 0}, {200, 0}}),
+      street(3, {7, 8}, {{2, 2}, {8, 8}}),  // inside the ring: a hole in its face
+  };
+  bake::StreetMap map(s);
+  const graph::StreetGraph& g = map.graph();
+  EXPECT_EQ(g.componentCount(), 3u);
+  const auto bad = graph::checkInvariants(g);
+  EXPECT_TRUE(bad.empty()) << bad.front();
+}

@@ -1,0 +1,293 @@
+// Rendering on every backend: a red box in front of the camera under the
+// sky, checked pixel by pixel and against a golden image; a small city for
+// culling statistics and for a human to look at; mesh handle lifetimes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <set>
+
+#include "render/context.h"
+#include "render/image.h"
+#include "render/renderer.h"
+#include "scene.h"
+
+namespace blvd::render {
+namespace {
+
+using test::Rgb;
+
+constexpr int kW = 160, kH = 120;
+constexpr uint8_t kRed[4] = {200, 40, 40, 255};
+
+struct Rig {
+  std::unique_ptr<Context> ctx;
+  std::unique_ptr<Renderer> renderer;
+};
+
+// Context + renderer for `b`; on failure `why` says which and why.
+Rig makeRig(Backend b, int w, int h, std::string& why, uint32_t capacity = 0) {
+  Rig rig;
+  rig.ctx = createContext(b, why);
+  if (!rig.ctx) return rig;
+  RendererDesc desc;
+  desc.width = w;
+  desc.height = h;
+  desc.mesh_capacity = capacity;
+  rig.renderer = Renderer::create(*rig.ctx, desc, why);
+  return rig;
+}
+
+Camera boxCamera() {
+  Camera cam;
+  cam.eye_enu = {0.0, 0.0, 2.0};  // 2 m up, looking north
+  cam.width = kW;
+  cam.height = kH;
+  return cam;
+}
+
+class BackendScene : public ::testing::TestWithParam<Backend> {};
+
+TEST_P(BackendScene, BoxInFrontOfTheCamera) {
+  std::string why;
+  Rig rig = makeRig(GetParam(), kW, kH, why);
+  if (GetParam() == Backend::EglDevice && !rig.ctx) {
+    GTEST_SKIP() << "egl-device unavailable here: " << why;
+  }
+  ASSERT_NE(rig.renderer, nullptr) << why;
+  Renderer& r = *rig.renderer;
+
+  // 4 m cube whose near face is 8 m north of the eye (glTF z = -north).
+  const MeshHandle box = r.upload(test::makeBox(0, 2, -10, 4, 4, 4, kRed));
+  ASSERT_TRUE(r.isValid(box)) << r.lastError();
+  FrameStats stats;
+  ASSERT_TRUE(r.render(boxCamera(), &box, 1, &stats)) << r.lastError();
+  EXPECT_EQ(stats.draw_calls, 2u);  // background + box
+  EXPECT_EQ(stats.triangles, 12u);
+  EXPECT_EQ(stats.meshes_drawn, 1u);
+  EXPECT_EQ(stats.meshes_culled, 0u);
+  EXPECT_GT(stats.frame_ms, 0.0);
+
+  std::vector<uint8_t> img(static_cast<size_t>(kW) * kH * 4);
+  ASSERT_TRUE(r.readPixels(img.data())) << r.lastError();
+  std::string err;
+  const std::string name = std::string("box_") + backendName(GetParam()) + ".png";
+  ASSERT_TRUE(writePng(test::outPath(name), kW, kH, img.data(), err)) << err;
+
+  // Top row: sky, bluer than it is red, brighter towards the top than at
+  // the horizon... and the same all along the row (no geometry there).
+  const Rgb top = test::pixel(img, kW, kW / 2, 0);
+  EXPECT_GT(top.b, top.r + 30) << top.r << "," << top.g << "," << top.b;
+  EXPECT_GT(top.b, top.g);
+  const Rgb top_left = test::pixel(img, kW, 0, 0);
+  EXPECT_NEAR(top_left.b, top.b, 6);
+
+  // Centre: the box's south face, sunlit from the south-south-west.
+  const Rgb mid = test::pixel(img, kW, kW / 2, kH / 2);
+  EXPECT_GT(mid.r, 150) << mid.r << "," << mid.g << "," << mid.b;
+  EXPECT_LT(mid.g, 90);
+  EXPECT_LT(mid.b, 90);
+
+  // Bottom corner: the ground, grey-green (green above blue, unlike the sky).
+  const Rgb ground = test::pixel(img, kW, 2, kH - 1);
+  EXPECT_GT(ground.g, ground.b) << ground.r << "," << ground.g << "," << ground.b;
+  EXPECT_LT(std::abs(ground.r - ground.g), 40);
+
+  // Not blank: many distinct colours (gradient sky, fogged ground, box).
+  std::set<uint32_t> colours;
+  for (size_t i = 0; i < img.size(); i += 4) {
+    colours.insert(uint32_t{img[i]} << 16 | uint32_t{img[i + 1]} << 8 | img[i + 2]);
+  }
+  EXPECT_GT(colours.size(), 20u);
+
+  // Golden image, shared by all backends: GLES on EGL and desktop GL on
+  // OSMesa must agree. BLVD_UPDATE_GOLDEN=1 rewrites it.
+  const std::string golden = std::string(BLVD_RENDER_GOLDEN_DIR) + "/box.png";
+  if (std::getenv("BLVD_UPDATE_GOLDEN")) {
+    ASSERT_TRUE(writePng(golden, kW, kH, img.data(), err)) << err;
+  }
+  int gw = 0, gh = 0;
+  std::vector<uint8_t> gold;
+  ASSERT_TRUE(readPng(golden, gw, gh, gold, err)) << err;
+  ASSERT_EQ(gw, kW);
+  ASSERT_EQ(gh, kH);
+  const double db = psnr(img.data(), gold.data(), static_cast<size_t>(kW) * kH);
+  std::printf("%s: PSNR vs golden %.1f dB, frame %.2f ms\n", backendName(GetParam()), db,
+              stats.frame_ms);
+  EXPECT_GT(db, 35.0) << "compare " << test::outPath(name) << " with " << golden;
+}
+
+INSTANTIATE_TEST_SUITE_P(Render, BackendScene,
+                         ::testing::Values(Backend::EglSurfaceless, Backend::EglDevice,
+                                           Backend::OSMesa),
+                         [](const ::testing::TestParamInfo<Backend>& p) {
+                           switch (p.param) {
+                             case Backend::EglSurfaceless: return std::string("EglSurfaceless");
+                             case Backend::EglDevice: return std::string("EglDevice");
+                             case Backend::OSMesa: return std::string("OSMesa");
+                             default: return std::string("Other");
+                           }
+                         });
+
+// A 9 x 9 grid of blocks with streets between them, seen from a street.
+struct City {
+  std::vector<MeshHandle> meshes;
+  size_t boxes = 0;
+};
+
+City buildCity(Renderer& r) {
+  City city;
+  const uint8_t street[4] = {90, 90, 95, 255};
+  const uint8_t palette[4][4] = {
+      {200, 180, 150, 255}, {170, 120, 100, 255}, {210, 210, 200, 255}, {140, 150, 170, 255}};
+  for (int i = -4; i <= 4; ++i) {
+    for (int j = -4; j <= 4; ++j) {
+      // 40 m blocks on a 60 m pitch: 20 m streets along x = 30 + 60k.
+      const float cx = static_cast<float>(i * 60), cz = static_cast<float>(j * 60);
+      const float h = 8.0f + static_cast<float>((i * 7 + j * 13 + 100) % 5) * 6.0f;
+      city.meshes.push_back(
+          r.upload(test::makeBox(cx, h / 2, cz, 40, h, 40, palette[(i + j + 8) % 4])));
+      ++city.boxes;
+    }
+    // Street ribbons 5 cm above the ground plane, one per row and column.
+    const float s = static_cast<float>(i * 60 + 30);
+    city.meshes.push_back(r.upload(test::makeFlat(s - 8, -270, s + 8, 270, 0.05f, street)));
+    city.meshes.push_back(r.upload(test::makeFlat(-270, s - 8, 270, s + 8, 0.05f, street)));
+  }
+  return city;
+}
+
+TEST(Render, CityCullsAndLooksRight) {
+  std::string why;
+  Rig rig = makeRig(Backend::Auto, 800, 480, why);
+  ASSERT_NE(rig.renderer, nullptr) << why;
+  Renderer& r = *rig.renderer;
+  City city = buildCity(r);
+  for (MeshHandle h : city.meshes) ASSERT_TRUE(r.isValid(h)) << r.lastError();
+
+  // On the street x = 30, 1.5 m up, looking north-north-east, slightly down.
+  Camera cam;
+  cam.eye_enu = {30.0, -200.0, 1.5};
+  cam.heading_deg = 10.0;
+  cam.pitch_deg = -2.0;
+  FrameStats stats;
+  ASSERT_TRUE(r.render(cam, city.meshes.data(), city.meshes.size(), &stats)) << r.lastError();
+  std::vector<uint8_t> img(800u * 480u * 4u);
+  ASSERT_TRUE(r.readPixels(img.data()));
+  std::string err;
+  ASSERT_TRUE(writePng(test::outPath("city_" + std::string(r.backendName()) + ".png"), 800, 480,
+                       img.data(), err))
+      << err;
+  std::printf("%s city: %u drawn, %u culled, %llu triangles, %u draw calls, %.2f ms\n",
+              r.backendName(), stats.meshes_drawn, stats.meshes_culled,
+              static_cast<unsigned long long>(stats.triangles), stats.draw_calls, stats.frame_ms);
+  EXPECT_EQ(stats.meshes_drawn + stats.meshes_culled, city.meshes.size());
+  EXPECT_GT(stats.meshes_culled, 20u);  // everything south of the eye, and the flanks
+  EXPECT_EQ(stats.draw_calls, stats.meshes_drawn + 1);
+
+  // Turning around swaps what is culled.
+  cam.heading_deg = 190.0;
+  FrameStats back;
+  ASSERT_TRUE(r.render(cam, city.meshes.data(), city.meshes.size(), &back));
+  EXPECT_LT(back.meshes_drawn, stats.meshes_drawn);
+
+  // The street ribbon right below the camera must win against the ground
+  // plane: a bottom-centre pixel looking north is street grey, not green.
+  cam.heading_deg = 0.0;
+  cam.pitch_deg = -30.0;
+  ASSERT_TRUE(r.render(cam, city.meshes.data(), city.meshes.size(), nullptr));
+  ASSERT_TRUE(r.readPixels(img.data()));
+  const Rgb below = test::pixel(img, 800, 400, 470);
+  EXPECT_LE(std::abs(below.g - below.b), 8) << below.r << "," << below.g << "," << below.b;
+}
+
+TEST(Render, HandlesAndPool) {
+  std::string why;
+  Rig rig = makeRig(Backend::Auto, 64, 48, why, /*capacity=*/2);
+  ASSERT_NE(rig.renderer, nullptr) << why;
+  Renderer& r = *rig.renderer;
+  const geo::MeshData box = test::makeBox(0, 2, -10, 4, 4, 4, kRed);
+
+  const MeshHandle a = r.upload(box);
+  const MeshHandle b = r.upload(box);
+  ASSERT_TRUE(r.isValid(a));
+  ASSERT_TRUE(r.isValid(b));
+  EXPECT_EQ(r.meshCount(), 2u);
+  EXPECT_EQ(r.meshBytes(), 2u * (24u * 28u + 36u * 2u));  // 16-bit indices
+  EXPECT_FALSE(r.isValid(r.upload(box)));                  // pool full
+  EXPECT_NE(r.lastError().find("pool full"), std::string::npos) << r.lastError();
+
+  r.release(a);
+  EXPECT_FALSE(r.isValid(a));
+  r.release(a);  // stale: ignored
+  r.release(MeshHandle{});
+  const MeshHandle c = r.upload(box);  // reuses a's slot with a new generation
+  ASSERT_TRUE(r.isValid(c));
+  EXPECT_NE(c, a);
+  EXPECT_FALSE(r.isValid(a));
+
+  Camera cam = boxCamera();
+  cam.width = 64;
+  cam.height = 48;
+  const MeshHandle list[] = {a, b, c, MeshHandle{}};
+  FrameStats stats;
+  ASSERT_TRUE(r.render(cam, list, 4, &stats)) << r.lastError();
+  EXPECT_EQ(stats.meshes_invalid, 2u);
+  EXPECT_EQ(stats.meshes_drawn, 2u);
+
+  // A viewport larger than the framebuffer is refused, not clipped.
+  cam.width = 65;
+  EXPECT_FALSE(r.render(cam, list, 4, &stats));
+}
+
+TEST(Render, RejectsMalformedMeshes) {
+  std::string why;
+  Rig rig = makeRig(Backend::Auto, 32, 32, why);
+  ASSERT_NE(rig.renderer, nullptr) << why;
+  Renderer& r = *rig.renderer;
+  geo::MeshData m = test::makeBox(0, 0, 0, 1, 1, 1, kRed);
+  m.indices.back() = 24;  // one past the last vertex
+  EXPECT_FALSE(r.isValid(r.upload(m)));
+  EXPECT_NE(r.lastError().find("out of range"), std::string::npos);
+  m = test::makeBox(0, 0, 0, 1, 1, 1, kRed);
+  m.normals.pop_back();
+  EXPECT_FALSE(r.isValid(r.upload(m)));
+  m = test::makeBox(0, 0, 0, 1, 1, 1, kRed);
+  m.colors.resize(4);
+  EXPECT_FALSE(r.isValid(r.upload(m)));
+  EXPECT_FALSE(r.isValid(r.upload(geo::MeshData{})));
+  EXPECT_EQ(r.meshCount(), 0u);
+  // Bad cameras are refused with a reason.
+  Camera cam;
+  cam.width = 32;
+  cam.height = 32;
+  cam.fov_y_deg = 0.0;
+  EXPECT_FALSE(r.render(cam, nullptr, 0, nullptr));
+  EXPECT_NE(r.lastError().find("fov"), std::string::npos);
+  EXPECT_FALSE(r.readPixels(nullptr));
+}
+
+TEST(Render, LargeMeshUses32BitIndices) {
+  std::string why;
+  Rig rig = makeRig(Backend::Auto, 64, 48, why);
+  ASSERT_NE(rig.renderer, nullptr) << why;
+  Renderer& r = *rig.renderer;
+  // 2800 boxes = 67200 vertices, more than 16-bit indices can address.
+  geo::MeshData big;
+  for (int i = 0; i < 2800; ++i) {
+    big.append(test::makeBox(static_cast<float>(i % 70) - 35.0f, 0.5f,
+                             -20.0f - static_cast<float>(i / 70), 0.5f, 0.5f, 0.5f, kRed));
+  }
+  const MeshHandle h = r.upload(big);
+  ASSERT_TRUE(r.isValid(h)) << r.lastError();
+  EXPECT_EQ(r.meshBytes(), 67200u * 28u + big.indices.size() * 4u);
+  Camera cam = boxCamera();
+  cam.width = 64;
+  cam.height = 48;
+  FrameStats stats;
+  ASSERT_TRUE(r.render(cam, &h, 1, &stats)) << r.lastError();
+  EXPECT_EQ(stats.triangles, 2800u * 12u);
+}
+
+}  // namespace
+}  // namespace blvd::render
