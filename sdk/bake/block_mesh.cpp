@@ -47,7 +47,9 @@ void appendHalfStreet(const graph::StreetGraph& g, uint32_t h, geo::MeshData& ou
     // hairpins do not throw spikes across the block.
     m = ml < 1e-6 ? n0 : m / ml;
     const double c = std::max(0.5, glm::dot(m, n0));
-    pushVertex(out, p[i], kStreetLift, col);
+    // The inner edge reaches 15 cm past the centre line so the two halves of a
+    // street overlap instead of leaving pixel cracks where they meet.
+    pushVertex(out, p[i] - m * (0.15 / c), kStreetLift, col);
     pushVertex(out, p[i] + m * (half / c), kStreetLift, col);
     ++emitted;
   }

@@ -1,10 +1,13 @@
 #include "cli/route.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <unordered_set>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 
 namespace blvd::cli {
 namespace {

@@ -6,8 +6,9 @@
 // Colours: geo::MeshData carries sRGB bytes, glTF's COLOR_0 is linear. The
 // encoder converts sRGB -> linear and stores COLOR_0 as normalized unsigned
 // byte RGBA; the decoder converts back. 8-bit linear is coarse in the darks:
-// a round trip changes sRGB values below ~20 by up to ~6 levels, mid and light
-// values by at most ~2.
+// a round trip moves sRGB values below 40 by up to 6 levels (near black) and
+// the rest by at most 2; alpha is exact. Flat per-face colours show no banding,
+// and unorm8 keeps the blobs small; switch COLOR_0 to unorm16 if that changes.
 #pragma once
 #include <cstddef>
 #include <cstdint>

@@ -53,9 +53,11 @@ std::unique_ptr<Context> createContext(Backend b, std::string& why) {
     case Backend::Shared: return createSharedContext(why);
     case Backend::Auto: break;
   }
-  // A hardware EGL device goes first: on a GPU box Mesa's surfaceless platform
-  // still works but renders with llvmpipe, so taking it first would silently
-  // leave the GPU idle. Without a GPU this costs one eglQueryDevicesEXT call.
+  // A hardware EGL device goes first: the surfaceless platform goes to
+  // whichever vendor glvnd asks first, which on a box with both Mesa and a GPU
+  // driver can be llvmpipe, leaving the GPU idle. An explicit non-software
+  // device cannot be. Without a GPU this costs one eglQueryDevicesEXT call.
+  // (Checked on an H100 with NVIDIA 580: Auto picks egl-device on the GPU.)
   if (auto ctx = createEglDeviceContext(why, true)) return ctx;
   if (auto ctx = createEglSurfacelessContext(why)) return ctx;
   if (auto ctx = createEglDeviceContext(why, false)) return ctx;

@@ -12,7 +12,7 @@ namespace blvd::render {
 
 // Values match blvd_backend in include/blvd/blvd.h, so capi casts 1:1.
 enum class Backend : int {
-  Auto = 0,            // EGL surfaceless, then EGL device, then OSMesa
+  Auto = 0,            // hardware EGL device, EGL surfaceless, any EGL device, OSMesa
   EglSurfaceless = 1,  // EGL_MESA_platform_surfaceless, GLES 3.x, no surface
   EglDevice = 2,       // EGL_EXT_platform_device, GLES 3.x, no surface
   OSMesa = 3,          // Mesa's pure-software off-screen desktop GL 3.3+
@@ -48,7 +48,8 @@ class Context {
 };
 
 // Creates a context and makes it current on the calling thread. With
-// Backend::Auto, the environment variable BLVD_BACKEND (a backendName()) picks
+// Backend::Auto (order: a hardware EGL device, EGL surfaceless, any EGL device,
+// OSMesa), the environment variable BLVD_BACKEND (a backendName()) picks
 // one backend instead of trying them in order.
 // On failure returns nullptr and `why` lists one line per backend tried, e.g.
 // "egl-surfaceless: eglInitialize failed (EGL_NOT_INITIALIZED)".

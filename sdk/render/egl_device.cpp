@@ -21,8 +21,11 @@ bool isSoftware(PFNEGLQUERYDEVICESTRINGEXTPROC query_string, EGLDeviceEXT dev) {
 std::unique_ptr<Context> createEglDeviceContext(std::string& why, bool hardware_only) {
   constexpr const char* kName = "egl-device";
   const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-  if (!egl::hasExtension(client, "EGL_EXT_device_enumeration") ||
-      !egl::hasExtension(client, "EGL_EXT_platform_device")) {
+  // NVIDIA's EGL advertises EGL_EXT_device_base, the older umbrella for
+  // enumeration + query, instead of EGL_EXT_device_enumeration.
+  const bool enumeration = egl::hasExtension(client, "EGL_EXT_device_enumeration") ||
+                           egl::hasExtension(client, "EGL_EXT_device_base");
+  if (!enumeration || !egl::hasExtension(client, "EGL_EXT_platform_device")) {
     why += kName;
     why += ": EGL_EXT_device_enumeration / EGL_EXT_platform_device not offered by this EGL\n";
     return nullptr;

@@ -4,11 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
+
+#include <glm/common.hpp>
 
 #include "bake/block_mesh.h"
 #include "bake/osm_reader.h"
 #include "bake/street_map.h"
+#include "core/status.h"
 
 using namespace blvd;
 
@@ -88,7 +92,7 @@ void checkCity(const std::string& file, size_t min_buildings) {
   EXPECT_GT(F, 50);
   size_t crossings = 0;
   for (const auto& v : g.vertices) crossings += v.kind == graph::VertexKind::Crossing;
-  RecordProperty("crossings", static_cast<int>(crossings));
+  ::testing::Test::RecordProperty("crossings", static_cast<int>(crossings));
   // Every cell but a few isolated ones continues somewhere.
   size_t stuck = 0;
   for (uint32_t h = 0; h < g.halfedges.size(); ++h) stuck += g.successors.count(h) == 0;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <memory>
 #include <cstdlib>
 #include <new>
 
@@ -62,6 +63,12 @@ TEST(FrameAlloc, RenderAndReadPixelsAllocateNothingAfterWarmUp) {
   }
   g_counting = false;
   EXPECT_EQ(g_allocations.load(), 0u);
+
+  // The counter itself works.
+  g_counting = true;
+  auto probe = std::make_unique<int>(1);
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 1u);
   EXPECT_GT(stats.meshes_drawn, 0u);
 }
 

@@ -191,6 +191,19 @@ TEST(Render, CityCullsAndLooksRight) {
   ASSERT_TRUE(r.render(cam, city.meshes.data(), city.meshes.size(), &back));
   EXPECT_LT(back.meshes_drawn, stats.meshes_drawn);
 
+  // From above the south-west corner: fog, ground plane and horizon.
+  Camera overview;
+  overview.eye_enu = {-330.0, -330.0, 60.0};
+  overview.heading_deg = 45.0;
+  overview.pitch_deg = -12.0;
+  FrameStats over;
+  ASSERT_TRUE(r.render(overview, city.meshes.data(), city.meshes.size(), &over));
+  ASSERT_TRUE(r.readPixels(img.data()));
+  ASSERT_TRUE(writePng(test::outPath("city_overview_" + std::string(r.backendName()) + ".png"),
+                       800, 480, img.data(), err))
+      << err;
+  EXPECT_GT(over.meshes_drawn, stats.meshes_drawn);
+
   // The street ribbon right below the camera must win against the ground
   // plane: a bottom-centre pixel looking north is street grey, not green.
   cam.heading_deg = 0.0;
