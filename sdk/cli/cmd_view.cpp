@@ -109,9 +109,13 @@ int run(const ViewOpts& o) {
     char name[64];
     std::snprintf(name, sizeof name, "frame_%04zu.png", i);
     writeFrame(rt, w, h, o.out + "/" + name, rgba);
-    html << "<figure><img src=\"" << name << "\"><figcaption>#" << i << " cell " << p.cell << ", heading "
-         << static_cast<int>(p.heading_deg) << "&deg;, " << fs.frame_ms << " ms, " << fs.triangles
-         << " triangles</figcaption></figure>\n";
+    double lat = 0, lon = 0, alt = 0;
+    city.frame().reverse({p.x, p.y, 0}, lat, lon, alt);
+    char caption[256];
+    std::snprintf(caption, sizeof caption,
+                  "#%zu cell %u &middot; %.6f, %.6f heading %.0f&deg; &middot; %.1f ms, %llu triangles", i, p.cell,
+                  lat, lon, p.heading_deg, fs.frame_ms, static_cast<unsigned long long>(fs.triangles));
+    html << "<figure><img src=\"" << name << "\"><figcaption>" << caption << "</figcaption></figure>\n";
     std::fprintf(stderr, "\r  frame %zu/%zu", i + 1, poses.size());
   }
   std::fprintf(stderr, "\n");

@@ -963,7 +963,11 @@ class Decoder {
     const bool mirrored = det < 0;
     const double sign = mirrored ? -1.0 : 1.0;
     auto xform = [&](const float* v, float* o) {
-      for (int r = 0; r < 3; ++r) o[r] = static_cast<float>(m[r] * v[0] + m[4 + r] * v[1] + m[8 + r] * v[2] + m[12 + r]);
+      for (int r = 0; r < 3; ++r) {
+        o[r] = static_cast<float>(m[r] * v[0] + m[4 + r] * v[1] + m[8 + r] * v[2] + m[12 + r]);
+        // Finite inputs can still overflow float under a huge node scale.
+        if (!std::isfinite(o[r])) fail("a node transform moves a position out of float range");
+      }
     };
     auto xformNormal = [&](const float* n, float* o) {
       double r[3];
