@@ -57,6 +57,22 @@ clen, ctype = struct.unpack_from("<I4s", b, 12)
 assert ctype == b"JSON"
 j = json.loads(b[20:20 + clen])
 assert j["asset"]["version"] == "2.0" and j["meshes"], j.keys()
+assert "KHR_draco_mesh_compression" in j.get("extensionsRequired", []), "blocks must be Draco-compressed"
+prim = j["meshes"][0]["primitives"][0]
+assert "KHR_draco_mesh_compression" in prim["extensions"], prim
 PY
 done
+# view: one pose to PNG.
+"$blvd" view "$pkg" --lat 43.735370 --lon 7.417288 --heading 211 --size 320x200 -o "$work/view.png"
+python3 - "$work/view.png" <<'PY'
+import struct, sys
+b = open(sys.argv[1], "rb").read()
+assert b[:8] == b"\x89PNG\r\n\x1a\n"
+w, h = struct.unpack(">II", b[16:24])
+assert (w, h) == (320, 200), (w, h)
+PY
+set +e
+"$blvd" view "$pkg" --lat 43.7 --size 12x3 -o "$work/x.png" > /dev/null 2>&1; rc=$?
+set -e
+[ "$rc" != 0 ] || fail "view with a bad --size succeeded"
 echo "cli: all checks passed"
