@@ -13,5 +13,8 @@ using Runner = std::function<int()>;
 void addBake(CLI::App& app, Runner& run);
 void addPack(CLI::App& app, Runner& run);
 void addView(CLI::App& app, Runner& run);
+// Defined in adapters/<x>/cli_<x>.cpp, compiled into the CLI when the adapter exists.
+void addNmea(CLI::App& app, Runner& run);
+void addCan(CLI::App& app, Runner& run);
 
 }  // namespace blvd::cli

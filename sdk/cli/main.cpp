@@ -17,6 +17,12 @@ int main(int argc, char** argv) {
   blvd::cli::addBake(app, run);
   blvd::cli::addPack(app, run);
   blvd::cli::addView(app, run);
+#ifdef BLVD_HAVE_GNSS_ADAPTER
+  blvd::cli::addNmea(app, run);
+#endif
+#ifdef BLVD_HAVE_CAN_ADAPTER
+  blvd::cli::addCan(app, run);
+#endif
   CLI11_PARSE(app, argc, argv);
   if (verbose) blvd::core::setLogLevel(blvd::core::LogLevel::Debug);
   try {
