@@ -7,6 +7,7 @@ void MeshData::append(const MeshData& o) {
   positions.insert(positions.end(), o.positions.begin(), o.positions.end());
   normals.insert(normals.end(), o.normals.begin(), o.normals.end());
   colors.insert(colors.end(), o.colors.begin(), o.colors.end());
+  texcoords.insert(texcoords.end(), o.texcoords.begin(), o.texcoords.end());
   indices.reserve(indices.size() + o.indices.size());
   for (uint32_t i : o.indices) indices.push_back(base + i);
 }

@@ -5,6 +5,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace blvd::geo {
@@ -13,7 +14,11 @@ struct MeshData {
   std::vector<float> positions;  // xyz per vertex
   std::vector<float> normals;    // xyz per vertex, unit length
   std::vector<uint8_t> colors;   // rgba per vertex, sRGB
+  std::vector<float> texcoords;  // uv per vertex (textured meshes: impostors), or empty
   std::vector<uint32_t> indices; // triangles, counter-clockwise seen from outside
+  // An embedded texture (PNG or JPEG bytes) sampled with texcoords, or empty.
+  std::vector<uint8_t> image;
+  std::string image_mime;        // "image/png" or "image/jpeg"
 
   size_t vertexCount() const { return positions.size() / 3; }
   size_t triangleCount() const { return indices.size() / 3; }
@@ -22,7 +27,10 @@ struct MeshData {
     positions.clear();
     normals.clear();
     colors.clear();
+    texcoords.clear();
     indices.clear();
+    image.clear();
+    image_mime.clear();
   }
   // Appends `o`, offsetting its indices.
   void append(const MeshData& o);

@@ -1,8 +1,7 @@
 // EGL device backend: enumerates EGL devices (EGL_EXT_device_enumeration) and
-// opens one through EGL_EXT_platform_device. This is the path to a real GPU on
-// a headless box (NVIDIA's driver offers no Mesa surfaceless platform), so
-// hardware devices are tried before Mesa's software device.
-#include <cstring>
+// opens one through EGL_EXT_platform_device. It names the GPU explicitly,
+// whereas the surfaceless platform goes to whichever EGL vendor answers
+// first, so hardware devices are tried before Mesa's software device.
 
 #include "render/egl_common.h"
 

@@ -90,15 +90,19 @@ void reseal(std::vector<uint8_t>& b) {
   sealHeader();
 }
 
-std::string tempPath() {
-  static std::string path = [] {
-    std::string tmpl = (std::filesystem::temp_directory_path() / "blvd_fuzz_pkg_XXXXXX").string();
-    const int fd = ::mkstemp(tmpl.data());
+// One scratch file per process, reused by every run. A plain char array (no
+// destructor) so the atexit cleanup can still read it at exit.
+const char* tempPath() {
+  static char path[4096] = {};
+  if (!path[0]) {
+    const std::string tmpl = (std::filesystem::temp_directory_path() / "blvd_fuzz_pkg_XXXXXX").string();
+    if (tmpl.size() >= sizeof path) std::abort();
+    std::memcpy(path, tmpl.c_str(), tmpl.size() + 1);
+    const int fd = ::mkstemp(path);
     if (fd < 0) std::abort();
     ::close(fd);
-    std::atexit([] { ::unlink(tempPath().c_str()); });
-    return tmpl;
-  }();
+    std::atexit([] { ::unlink(path); });
+  }
   return path;
 }
 
@@ -138,8 +142,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (s == Status::Ok) exercise(r);
   }
   {
-    const std::string path = tempPath();
-    const int fd = ::open(path.c_str(), O_WRONLY | O_TRUNC);
+    const char* path = tempPath();
+    const int fd = ::open(path, O_WRONLY | O_TRUNC);
     if (fd < 0) std::abort();
     size_t done = 0;
     while (done < size) {
