@@ -662,9 +662,13 @@ class Decoder {
     if (a.contains("sparse")) fail(where + ": sparse accessors are not supported", Status::Unsupported);
     if (info.count > kMaxDecodedVertices)
       fail(where + ": " + std::to_string(info.count) + " elements exceed the decoder limit", Status::Unsupported);
+    // Without a bufferView an accessor is all zeros, useful only as the base
+    // of a sparse accessor; refusing it also stops a few bytes of JSON from
+    // asking for millions of vertices.
+    if (!a.contains("bufferView"))
+      fail(where + ": no bufferView (zero-filled accessors are not supported)", Status::Unsupported);
     const auto n = static_cast<size_t>(info.count);
     std::vector<float> out(n * want, 0.0f);
-    if (!a.contains("bufferView")) return out;  // spec: no bufferView means zeros
     const View view = bufferView(index(a, "bufferView", where, count("bufferViews"), "bufferViews"));
     const uint64_t off = unsignedMember(a, "byteOffset", where, 0);
     const size_t cb = componentBytes(info.component_type);

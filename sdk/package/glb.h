@@ -52,7 +52,8 @@ inline constexpr size_t kMaxDecodedVertices = size_t{1} << 24;
 // become flat normals (the primitive's triangles are unwelded); missing
 // colours are white; the material's baseColorFactor multiplies the colours.
 // Buffers come from the GLB BIN chunk or base64 data: URIs; external files are
-// Unsupported, as are sparse accessors and unknown extensionsRequired.
+// Unsupported, as are sparse accessors, accessors without a bufferView (outside
+// Draco) and unknown extensionsRequired.
 //
 // Never throws and never reads outside [data, data + size): bad input returns
 // Corrupt with `err` naming what failed (e.g. "accessors[2]: 24 elements of 12

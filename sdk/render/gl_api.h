@@ -23,6 +23,7 @@ class Context;
   X(PFNGLBINDBUFFERPROC, BindBuffer)                           \
   X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                 \
   X(PFNGLBINDRENDERBUFFERPROC, BindRenderbuffer)               \
+  X(PFNGLBINDTEXTUREPROC, BindTexture)                         \
   X(PFNGLBINDVERTEXARRAYPROC, BindVertexArray)                 \
   X(PFNGLBLENDFUNCPROC, BlendFunc)                             \
   X(PFNGLBUFFERDATAPROC, BufferData)                           \
@@ -40,6 +41,7 @@ class Context;
   X(PFNGLDELETEPROGRAMPROC, DeleteProgram)                     \
   X(PFNGLDELETERENDERBUFFERSPROC, DeleteRenderbuffers)         \
   X(PFNGLDELETESHADERPROC, DeleteShader)                       \
+  X(PFNGLDELETETEXTURESPROC, DeleteTextures)                   \
   X(PFNGLDELETEVERTEXARRAYSPROC, DeleteVertexArrays)           \
   X(PFNGLDEPTHFUNCPROC, DepthFunc)                             \
   X(PFNGLDEPTHMASKPROC, DepthMask)                             \
@@ -55,6 +57,8 @@ class Context;
   X(PFNGLGENBUFFERSPROC, GenBuffers)                           \
   X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers)                 \
   X(PFNGLGENRENDERBUFFERSPROC, GenRenderbuffers)               \
+  X(PFNGLGENTEXTURESPROC, GenTextures)                         \
+  X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap)                   \
   X(PFNGLGENVERTEXARRAYSPROC, GenVertexArrays)                 \
   X(PFNGLGETBOOLEANVPROC, GetBooleanv)                         \
   X(PFNGLGETERRORPROC, GetError)                               \
@@ -74,8 +78,12 @@ class Context;
   X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage)         \
   X(PFNGLSCISSORPROC, Scissor)                                 \
   X(PFNGLSHADERSOURCEPROC, ShaderSource)                       \
+  X(PFNGLTEXIMAGE2DPROC, TexImage2D)                           \
+  X(PFNGLTEXPARAMETERIPROC, TexParameteri)                     \
   X(PFNGLUNIFORM1FPROC, Uniform1f)                             \
+  X(PFNGLUNIFORM1IPROC, Uniform1i)                             \
   X(PFNGLUNIFORM3FPROC, Uniform3f)                             \
+  X(PFNGLUNIFORM4FPROC, Uniform4f)                             \
   X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)               \
   X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)               \
   X(PFNGLUSEPROGRAMPROC, UseProgram)                           \

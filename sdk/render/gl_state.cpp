@@ -28,6 +28,11 @@ void GlStateSnapshot::capture(const GlApi& gl) {
   gl.GetIntegerv(GL_RENDERBUFFER_BINDING, &renderbuffer);
   gl.GetIntegerv(GL_VIEWPORT, viewport);
   gl.GetIntegerv(GL_ACTIVE_TEXTURE, &active_texture);
+  // Impostors sample unit 0: remember what the host had bound there.
+  gl.ActiveTexture(GL_TEXTURE0);
+  gl.GetIntegerv(GL_TEXTURE_BINDING_2D, &texture0_2d);
+  gl.ActiveTexture(static_cast<GLenum>(active_texture));
+  gl.GetFloatv(GL_COLOR_CLEAR_VALUE, clear_color);
   gl.GetIntegerv(GL_DEPTH_FUNC, &depth_func);
   gl.GetIntegerv(GL_CULL_FACE_MODE, &cull_face_mode);
   gl.GetIntegerv(GL_FRONT_FACE, &front_face);
@@ -56,7 +61,10 @@ void GlStateSnapshot::restore(const GlApi& gl) const {
   gl.BindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(read_framebuffer));
   gl.BindRenderbuffer(GL_RENDERBUFFER, static_cast<GLuint>(renderbuffer));
   gl.Viewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+  gl.ActiveTexture(GL_TEXTURE0);
+  gl.BindTexture(GL_TEXTURE_2D, static_cast<GLuint>(texture0_2d));
   gl.ActiveTexture(static_cast<GLenum>(active_texture));
+  gl.ClearColor(clear_color[0], clear_color[1], clear_color[2], clear_color[3]);
   gl.DepthFunc(static_cast<GLenum>(depth_func));
   gl.CullFace(static_cast<GLenum>(cull_face_mode));
   gl.FrontFace(static_cast<GLenum>(front_face));

@@ -17,7 +17,8 @@ struct GlStateSnapshot {
   GLint program, vertex_array, array_buffer, element_buffer, pixel_pack_buffer;
   GLint draw_framebuffer, read_framebuffer, renderbuffer;
   GLint viewport[4];
-  GLint active_texture, depth_func, cull_face_mode, front_face;
+  GLint active_texture, texture0_2d, depth_func, cull_face_mode, front_face;
+  GLfloat clear_color[4];
   GLint pack_alignment, pack_row_length, pack_skip_rows, pack_skip_pixels;
   GLboolean depth_test, depth_mask, cull_face, blend, polygon_offset_fill, scissor_test,
       stencil_test, rasterizer_discard;

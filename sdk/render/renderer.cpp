@@ -22,6 +22,8 @@
 #include "render/gl_state.h"
 #include "render/shaders.h"
 
+#include <stb_image.h>
+
 namespace blvd::render {
 
 namespace {
@@ -30,16 +32,18 @@ constexpr uint32_t kIndexBits = 20;
 constexpr uint32_t kIndexMask = (1u << kIndexBits) - 1;
 constexpr uint32_t kGenerationMask = (1u << (32 - kIndexBits)) - 1;
 
-// Interleaved: one buffer, one VAO, 28 bytes a vertex.
+// Interleaved: one buffer, one VAO, 36 bytes a vertex.
 struct Vertex {
   float position[3];
   float normal[3];
   uint8_t color[4];
+  float uv[2];
 };
-static_assert(sizeof(Vertex) == 28, "Vertex must be tightly packed");
+static_assert(sizeof(Vertex) == 36, "Vertex must be tightly packed");
 
 struct MeshSlot {
   GLuint vao = 0, vbo = 0, ibo = 0;
+  GLuint texture = 0;  // impostors: the captured colour
   GLsizei index_count = 0;
   GLenum index_type = GL_UNSIGNED_SHORT;
   uint32_t generation = 1;
@@ -55,6 +59,7 @@ struct Uniforms {
         inv_fog2 = -1;
   GLint ray_basis = -1, zenith = -1, ground = -1, eye_height = -1;  // background
   GLint viewproj = -1, offset = -1;                                 // meshes
+  GLint item = -1, forward = -1, depth_scale = -1, texture = -1;    // capture, impostors
 };
 
 glm::vec3 srgbToLinear(const float c[3]) {
@@ -67,7 +72,8 @@ const void* byteOffset(size_t n) { return reinterpret_cast<const void*>(n); }
 
 struct Renderer::Impl {
   GLuint bg_program = 0, mesh_program = 0;
-  Uniforms bg, mesh;
+  GLuint item_program = 0, cap_color_program = 0, cap_depth_program = 0, tex_program = 0;
+  Uniforms bg, mesh, item, cap_color, cap_depth, tex;
   GLuint empty_vao = 0;  // core profile needs a VAO even for attribute-less draws
   GLuint fbo = 0, color_rb = 0, depth_rb = 0;
   GLint host_fbo = 0;  // shared: framebuffer bound during the last render()
@@ -166,6 +172,10 @@ Uniforms locate(const GlApi& gl, GLuint p) {
   u.eye_height = gl.GetUniformLocation(p, "u_eye_height");
   u.viewproj = gl.GetUniformLocation(p, "u_viewproj");
   u.offset = gl.GetUniformLocation(p, "u_offset");
+  u.item = gl.GetUniformLocation(p, "u_item");
+  u.forward = gl.GetUniformLocation(p, "u_forward");
+  u.depth_scale = gl.GetUniformLocation(p, "u_depth_scale");
+  u.texture = gl.GetUniformLocation(p, "u_texture");
   return u;
 }
 
@@ -224,8 +234,20 @@ bool Renderer::init(const RendererDesc& desc) {
   if (!impl_->bg_program) return false;
   impl_->mesh_program = link(gl, gles_, shaders::kMeshVs, shaders::kMeshFs, error_);
   if (!impl_->mesh_program) return false;
+  impl_->item_program = link(gl, gles_, shaders::kMeshVs, shaders::kItemFs, error_);
+  if (!impl_->item_program) return false;
+  impl_->cap_color_program = link(gl, gles_, shaders::kMeshVs, shaders::kCaptureColorFs, error_);
+  if (!impl_->cap_color_program) return false;
+  impl_->cap_depth_program = link(gl, gles_, shaders::kMeshVs, shaders::kCaptureDepthFs, error_);
+  if (!impl_->cap_depth_program) return false;
+  impl_->tex_program = link(gl, gles_, shaders::kTexturedVs, shaders::kTexturedFs, error_);
+  if (!impl_->tex_program) return false;
   impl_->bg = locate(gl, impl_->bg_program);
   impl_->mesh = locate(gl, impl_->mesh_program);
+  impl_->item = locate(gl, impl_->item_program);
+  impl_->cap_color = locate(gl, impl_->cap_color_program);
+  impl_->cap_depth = locate(gl, impl_->cap_depth_program);
+  impl_->tex = locate(gl, impl_->tex_program);
   gl.GenVertexArrays(1, &impl_->empty_vao);
 
   if (!shared_) {
@@ -278,9 +300,11 @@ Renderer::~Renderer() {
     gl.DeleteVertexArrays(1, &s.vao);
     gl.DeleteBuffers(1, &s.vbo);
     gl.DeleteBuffers(1, &s.ibo);
+    if (s.texture) gl.DeleteTextures(1, &s.texture);
   }
-  if (impl_->bg_program) gl.DeleteProgram(impl_->bg_program);
-  if (impl_->mesh_program) gl.DeleteProgram(impl_->mesh_program);
+  for (GLuint p : {impl_->bg_program, impl_->mesh_program, impl_->item_program, impl_->cap_color_program,
+                   impl_->cap_depth_program, impl_->tex_program})
+    if (p) gl.DeleteProgram(p);
   if (impl_->empty_vao) gl.DeleteVertexArrays(1, &impl_->empty_vao);
   if (impl_->fbo) gl.DeleteFramebuffers(1, &impl_->fbo);
   if (impl_->color_rb) gl.DeleteRenderbuffers(1, &impl_->color_rb);
@@ -336,6 +360,11 @@ MeshHandle Renderer::upload(const geo::MeshData& mesh) {
     fail("mesh colors and positions disagree in count");
     return {};
   }
+  if (!mesh.texcoords.empty() && mesh.texcoords.size() != nv * 2) {
+    fail("mesh texcoords and positions disagree in count");
+    return {};
+  }
+  const bool textured = !mesh.image.empty() && !mesh.texcoords.empty();
   for (uint32_t i : mesh.indices) {
     if (i >= nv) {
       fail("mesh index out of range");
@@ -406,6 +435,20 @@ MeshHandle Renderer::upload(const geo::MeshData& mesh) {
     } else {
       std::memcpy(out.color, &mesh.colors[v * 4], 4);
     }
+    out.uv[0] = mesh.texcoords.empty() ? 0.0f : mesh.texcoords[v * 2];
+    out.uv[1] = mesh.texcoords.empty() ? 0.0f : mesh.texcoords[v * 2 + 1];
+  }
+
+  // Impostor texture: decoded here (stb), uploaded with mipmaps so a far
+  // impostor does not shimmer.
+  int tw = 0, th = 0, tc = 0;
+  stbi_uc* texels = nullptr;
+  if (textured) {
+    if (mesh.image.size() > 0x7fffffff ||
+        !(texels = stbi_load_from_memory(mesh.image.data(), static_cast<int>(mesh.image.size()), &tw, &th, &tc, 4))) {
+      fail("mesh image cannot be decoded");
+      return {};
+    }
   }
 
   // 16-bit indices halve index bandwidth for typical blocks. The bound is
@@ -456,14 +499,30 @@ MeshHandle Renderer::upload(const geo::MeshData& mesh) {
     gl.EnableVertexAttribArray(2);
     gl.VertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(Vertex),
                            byteOffset(offsetof(Vertex, color)));
+    gl.EnableVertexAttribArray(3);
+    gl.VertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex), byteOffset(offsetof(Vertex, uv)));
     gl.BindVertexArray(0);
+    if (texels) {
+      gl.ActiveTexture(GL_TEXTURE0);
+      gl.GenTextures(1, &s.texture);
+      gl.BindTexture(GL_TEXTURE_2D, s.texture);
+      gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+      gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, tw, th, 0, GL_RGBA, GL_UNSIGNED_BYTE, texels);
+      gl.GenerateMipmap(GL_TEXTURE_2D);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+      gl.BindTexture(GL_TEXTURE_2D, 0);
+      stbi_image_free(texels);
+    }
   }
 
   s.index_count = static_cast<GLsizei>(mesh.indices.size());
   s.index_type = small ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
   s.center = center;
   s.half = (hi - lo) * 0.5;
-  s.bytes = nv * sizeof(Vertex) + index_bytes;
+  s.bytes = nv * sizeof(Vertex) + index_bytes + (s.texture ? uint64_t(tw) * th * 4 * 4 / 3 : 0);
   s.live = true;
   ++live_meshes_;
   mesh_bytes_ += s.bytes;
@@ -480,6 +539,7 @@ void Renderer::release(MeshHandle h) {
     gl.DeleteVertexArrays(1, &s.vao);
     gl.DeleteBuffers(1, &s.vbo);
     gl.DeleteBuffers(1, &s.ibo);
+    if (s.texture) gl.DeleteTextures(1, &s.texture);
   }
   live_meshes_ -= 1;
   mesh_bytes_ -= s.bytes;
@@ -490,12 +550,14 @@ void Renderer::release(MeshHandle h) {
   impl_->free_slots.push_back(index);
 }
 
-bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, FrameStats* stats) {
+bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, FrameStats* stats,
+                      const RenderOptions& opt) {
   if (const char* bad = validateCamera(cam)) return fail(bad);
   if (!shared_ && (cam.width > fb_w_ || cam.height > fb_h_)) {
     return fail("camera viewport is larger than the renderer's framebuffer");
   }
   if (n > 0 && !list) return fail("draw list is null");
+  if (opt.pass == Pass::ItemBuffer && n > 0 && !opt.item_ids) return fail("item buffer pass without item ids");
   if (!ctx_.makeCurrent()) return fail("GL context is not current on this thread");
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -538,9 +600,10 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
       gl.Uniform1f(u.inv_fog2, inv_fog2);
     };
 
-    // Background: sky and ground in one full-screen triangle. GL_ALWAYS with
-    // depth writes lays down the far depth, replacing a depth clear.
-    {
+    const glm::mat4 clip_f(clip);
+    if (opt.pass == Pass::Shaded) {
+      // Background: sky and ground in one full-screen triangle. GL_ALWAYS with
+      // depth writes lays down the far depth, replacing a depth clear.
       // Camera-to-world rotation is the transpose of the view rotation; its
       // columns are right, up and back in world axes.
       const glm::dmat3 cam_to_world = glm::transpose(glm::dmat3(view));
@@ -559,38 +622,83 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
       gl.BindVertexArray(m.empty_vao);
       gl.DrawArrays(GL_TRIANGLES, 0, 3);
       ++fs.draw_calls;
+    } else {
+      // Bake captures start from nothing: transparent black, far depth.
+      gl.ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+      gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     }
 
-    // Meshes.
-    const glm::mat4 clip_f(clip);
-    gl.UseProgram(m.mesh_program);
-    set_look(m.mesh);
-    gl.UniformMatrix4fv(m.mesh.viewproj, 1, GL_FALSE, &clip_f[0][0]);
-    gl.Enable(GL_CULL_FACE);
-    gl.CullFace(GL_BACK);
-    gl.FrontFace(GL_CCW);
+    // Meshes: untextured with the pass's program, then (shaded pass only) the
+    // textured impostors with theirs.
+    GLuint program = m.mesh_program;
+    const Uniforms* u = &m.mesh;
+    switch (opt.pass) {
+      case Pass::Shaded: break;
+      case Pass::ItemBuffer: program = m.item_program, u = &m.item; break;
+      case Pass::CaptureColor: program = m.cap_color_program, u = &m.cap_color; break;
+      case Pass::CaptureDepth: program = m.cap_depth_program, u = &m.cap_depth; break;
+    }
+    const bool capture = opt.pass == Pass::CaptureColor || opt.pass == Pass::CaptureDepth;
+    if (capture) {
+      gl.Disable(GL_CULL_FACE);
+    } else {
+      gl.Enable(GL_CULL_FACE);
+      gl.CullFace(GL_BACK);
+      gl.FrontFace(GL_CCW);
+    }
     gl.DepthFunc(GL_LESS);
-    for (size_t i = 0; i < n; ++i) {
-      const uint32_t index = (list[i].id & kIndexMask) - 1;
-      if (!isValid(list[i])) {
-        ++fs.meshes_invalid;
-        continue;
+    for (int textured = 0; textured < 2; ++textured) {
+      if (textured) {
+        if (opt.pass != Pass::Shaded) break;
+        program = m.tex_program;
+        u = &m.tex;
       }
-      const MeshSlot& s = m.slots[index];
-      const glm::dvec3 rel = s.center - eye;
-      if (!frustum.intersectsBox(rel, s.half)) {
-        ++fs.meshes_culled;
-        continue;
+      bool bound = false;
+      for (size_t i = 0; i < n; ++i) {
+        const uint32_t index = (list[i].id & kIndexMask) - 1;
+        if (!isValid(list[i])) {
+          if (!textured) ++fs.meshes_invalid;
+          continue;
+        }
+        const MeshSlot& s = m.slots[index];
+        if ((s.texture != 0) != (textured != 0)) continue;
+        const glm::dvec3 rel = s.center - eye;
+        if (!frustum.intersectsBox(rel, s.half)) {
+          ++fs.meshes_culled;
+          continue;
+        }
+        if (!bound) {
+          bound = true;
+          gl.UseProgram(program);
+          set_look(*u);
+          gl.UniformMatrix4fv(u->viewproj, 1, GL_FALSE, &clip_f[0][0]);
+          if (opt.pass == Pass::CaptureDepth) {
+            const glm::dvec3 f = viewForward(cam);
+            gl.Uniform3f(u->forward, float(f.x), float(f.y), float(f.z));
+            gl.Uniform1f(u->depth_scale, float(16777215.0 / opt.max_depth_m));
+          }
+          if (textured) {
+            gl.ActiveTexture(GL_TEXTURE0);
+            gl.Uniform1i(u->texture, 0);
+          }
+        }
+        if (opt.pass == Pass::ItemBuffer) {
+          const uint32_t id = opt.item_ids[i];
+          gl.Uniform4f(u->item, float(id & 255u) / 255.0f, float((id >> 8) & 255u) / 255.0f,
+                       float((id >> 16) & 255u) / 255.0f, 1.0f);
+        }
+        if (textured) gl.BindTexture(GL_TEXTURE_2D, s.texture);
+        gl.Uniform3f(u->offset, static_cast<float>(rel.x), static_cast<float>(rel.y),
+                     static_cast<float>(rel.z));
+        gl.BindVertexArray(s.vao);
+        gl.DrawElements(GL_TRIANGLES, s.index_count, s.index_type, nullptr);
+        ++fs.draw_calls;
+        ++fs.meshes_drawn;
+        fs.triangles += static_cast<uint64_t>(s.index_count / 3);
       }
-      gl.Uniform3f(m.mesh.offset, static_cast<float>(rel.x), static_cast<float>(rel.y),
-                   static_cast<float>(rel.z));
-      gl.BindVertexArray(s.vao);
-      gl.DrawElements(GL_TRIANGLES, s.index_count, s.index_type, nullptr);
-      ++fs.draw_calls;
-      ++fs.meshes_drawn;
-      fs.triangles += static_cast<uint64_t>(s.index_count / 3);
     }
     gl.BindVertexArray(0);
+    gl.BindTexture(GL_TEXTURE_2D, 0);
   }
   // The wall time must include the rasterisation, which GL defers.
   gl.Finish();

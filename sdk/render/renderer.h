@@ -57,6 +57,28 @@ struct FrameStats {
   uint32_t meshes_invalid = 0;  // stale or null handles in the list, skipped
 };
 
+// What a render() call draws. Shaded is the street view. The capture passes
+// serve the bake (S97 §4.2, D99 §5.3): they clear to transparent black, draw
+// no sky or ground, and turn back-face culling off so undersides occlude.
+enum class Pass {
+  Shaded,        // sky + ground background, lit and fogged meshes, textured impostors
+  ItemBuffer,    // each mesh in the flat colour of its id (RGB = 24-bit id, A = 255)
+  CaptureColor,  // lit colour without fog; A = 255 geometry, 128 an underside, 0 nothing
+  CaptureDepth,  // view depth packed as 24-bit RGB fixed point over [0, max_depth_m]; 0 = nothing
+};
+
+struct RenderOptions {
+  Pass pass = Pass::Shaded;
+  const uint32_t* item_ids = nullptr;  // ItemBuffer: one id per list entry (ids < 2^24, 0 = nothing)
+  double max_depth_m = 8192.0;         // CaptureDepth scale
+};
+
+// Unpacks a CaptureDepth pixel to metres (0 where nothing was drawn).
+inline double unpackCaptureDepth(const uint8_t* rgba, double max_depth_m) {
+  const uint32_t q = (uint32_t(rgba[0]) << 16) | (uint32_t(rgba[1]) << 8) | rgba[2];
+  return q == 0 ? 0.0 : double(q) * max_depth_m / 16777215.0;
+}
+
 class Renderer {
  public:
   // Loads GL through `ctx` (made current here), compiles the shaders and, for
@@ -70,7 +92,9 @@ class Renderer {
   Renderer& operator=(const Renderer&) = delete;
 
   // Copies `mesh` to GL buffers. Missing normals are computed from the
-  // triangles, missing colours default to light grey. Invalid handle when the
+  // triangles, missing colours default to light grey. A mesh with texcoords
+  // and an embedded image (PNG/JPEG) is drawn textured and unlit (its colour
+  // was lit when it was captured): the impostors. Invalid handle when the
   // mesh is empty or malformed (index out of range, array sizes disagree) or
   // the pool is full.
   MeshHandle upload(const geo::MeshData& mesh);
@@ -85,7 +109,8 @@ class Renderer {
   // `cam`, into the own framebuffer or, when shared, into the framebuffer the
   // host has bound, over the viewport (0, 0, cam.width, cam.height). With an
   // own framebuffer cam.width/height must fit RendererDesc's size.
-  bool render(const Camera& cam, const MeshHandle* list, size_t n, FrameStats* stats);
+  bool render(const Camera& cam, const MeshHandle* list, size_t n, FrameStats* stats,
+              const RenderOptions& options = RenderOptions());
 
   // Copies the last frame (lastWidth() x lastHeight()) as RGBA8, top row first.
   bool readPixels(uint8_t* rgba_top_row_first);

@@ -94,4 +94,71 @@ void main() {
 }
 )";
 
+// ---- bake capture passes (S97 §4.2, D99 §5.3) --------------------------------
+// Culling is off in these passes: the underside of anything (the paper's
+// "bottom face of ground elements") must still occlude, and is marked so the
+// external contour can leave it out.
+
+const char* const kItemFs = R"(
+uniform vec4 u_item;  // the object's id as a colour (item buffer)
+layout(location = 0) out vec4 o_color;
+void main() { o_color = u_item; }
+)";
+
+const char* const kCaptureColorFs = R"(
+in vec3 v_rel;
+in vec3 v_lit;
+layout(location = 0) out vec4 o_color;
+void main() {
+  // No fog: the runtime fogs the impostor by the distance it is seen from.
+  // Alpha 1 marks geometry, 0.5 the underside ("special colour"), 0 nothing.
+  if (gl_FrontFacing) o_color = vec4(toDisplay(v_lit), 1.0);
+  else o_color = vec4(1.0, 0.0, 1.0, 0.5);
+}
+)";
+
+const char* const kCaptureDepthFs = R"(
+precision highp int;
+in vec3 v_rel;
+in vec3 v_lit;
+uniform vec3 u_forward;     // unit view direction, world axes
+uniform float u_depth_scale;  // (2^24 - 1) / max depth
+layout(location = 0) out vec4 o_color;
+void main() {
+  // View depth packed in 24 bits of RGB: GLES 3.0 cannot read back the depth
+  // buffer, and float colour buffers are an extension.
+  float z = max(dot(v_rel, u_forward), 0.0);
+  uint q = uint(clamp(z * u_depth_scale, 1.0, 16777215.0));
+  o_color = vec4(float((q >> 16) & 255u), float((q >> 8) & 255u), float(q & 255u), 255.0) / 255.0;
+}
+)";
+
+// ---- textured depth meshes (impostors) ----------------------------------------
+
+const char* const kTexturedVs = R"(
+layout(location = 0) in vec3 a_position;
+layout(location = 3) in vec2 a_uv;
+uniform mat4 u_viewproj;
+uniform vec3 u_offset;
+out vec3 v_rel;
+out vec2 v_uv;
+void main() {
+  vec3 p = a_position + u_offset;
+  v_rel = p;
+  v_uv = a_uv;
+  gl_Position = u_viewproj * vec4(p, 1.0);
+}
+)";
+
+const char* const kTexturedFs = R"(
+uniform sampler2D u_texture;  // lit colour captured at bake time (sRGB)
+in vec3 v_rel;
+in vec2 v_uv;
+layout(location = 0) out vec4 o_color;
+void main() {
+  vec3 c = pow(texture(u_texture, v_uv).rgb, vec3(2.2));
+  o_color = vec4(toDisplay(fogged(c, length(v_rel))), 1.0);
+}
+)";
+
 }  // namespace blvd::render::shaders

@@ -19,4 +19,14 @@ extern const char* const kBackgroundFs;
 extern const char* const kMeshVs;
 extern const char* const kMeshFs;
 
+// Bake capture passes over kMeshVs: item buffer (flat id colour), lit colour
+// without fog (undersides marked), view depth packed into RGB.
+extern const char* const kItemFs;
+extern const char* const kCaptureColorFs;
+extern const char* const kCaptureDepthFs;
+
+// Textured depth meshes (impostors): the baked colour, fogged at draw time.
+extern const char* const kTexturedVs;
+extern const char* const kTexturedFs;
+
 }  // namespace blvd::render::shaders
