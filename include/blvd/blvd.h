@@ -84,6 +84,18 @@ typedef enum blvd_backend {
   BLVD_BACKEND_FORCE_32 = 0x7fffffff
 } blvd_backend;
 
+/* What a frame draws. BLVD_MODE_BLVD is the method: the current cell's local
+ * blocks as geometry plus its multi-layer impostors for everything farther. The
+ * others exist to compare against it. */
+typedef enum blvd_render_mode {
+  BLVD_MODE_BLVD = 0,    /* local blocks + layered impostors (default) */
+  BLVD_MODE_FULL = 1,    /* every block, frustum-culled: the reference */
+  BLVD_MODE_LOCAL = 2,   /* the cell's local blocks only */
+  BLVD_MODE_RADIUS = 3,  /* blocks within radius_m of the eye (visibility-radius baseline) */
+  BLVD_MODE_SINGLE = 4,  /* local blocks + one impostor mesh per cell (Sillion 97) */
+  BLVD_MODE_FORCE_32 = 0x7fffffff
+} blvd_render_mode;
+
 typedef struct blvd_runtime_desc {
   uint32_t struct_size;     /* sizeof(blvd_runtime_desc); 0 is treated as the current size */
   const char* package_path; /* required: a .blvd file made by `blvd bake`; copied */
@@ -93,6 +105,8 @@ typedef struct blvd_runtime_desc {
   float fov_y_deg;          /* vertical field of view; 0 means 45 */
   float eye_height_m;       /* eye height above the street; 0 means 1.5 */
   float far_m;              /* far clip distance; 0 means 3000 */
+  blvd_render_mode mode;    /* 0 means BLVD_MODE_BLVD (falls back to FULL if the package has no impostors) */
+  float radius_m;           /* for BLVD_MODE_RADIUS; 0 means 250 */
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */
@@ -141,9 +155,18 @@ typedef struct blvd_frame_stats {
   double frame_ms;    /* CPU+GPU time of the last blvd_render, glFinish included */
   uint64_t triangles; /* triangles submitted by the last blvd_render */
   uint32_t draw_calls;
+  uint32_t cell;            /* the cell the pose was matched to (UINT32_MAX: none) */
+  uint32_t impostor_layers; /* impostor meshes drawn */
+  uint32_t blocks_drawn;    /* block meshes submitted (before frustum culling) */
 } blvd_frame_stats;
 
-/* Renders one frame of the full model at the current pose into the runtime's
+/* Switches what frames draw (see blvd_render_mode). radius_m is used by
+ * BLVD_MODE_RADIUS (0 means 250). Errors: BLVD_ERR_INVALID_ARG for an unknown
+ * mode; BLVD_ERR_UNSUPPORTED for BLVD/SINGLE on a package baked without those
+ * impostors. Render thread only. */
+BLVD_API blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mode, float radius_m);
+
+/* Renders one frame of the current render mode at the current pose into the runtime's
  * framebuffer (or the host's, with BLVD_CONTEXT_SHARED). Render thread only. */
 BLVD_API blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats /* may be NULL */);
 

@@ -53,11 +53,11 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   std::vector<graph::BlockRecord> blocks(g.faces.size());
   uint32_t max_blob = 0;
   float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-  geo::MeshData mesh;
+  std::vector<geo::MeshData> block_meshes(g.faces.size());  // kept for the impostor captures
   package::GlbOptions glb_opt;
   glb_opt.draco = opt.draco;
   for (uint32_t f = 0; f < g.faces.size(); ++f) {
-    mesh.clear();
+    geo::MeshData& mesh = block_meshes[f];
     graph::BlockRecord& rec = blocks[f];
     if (g.faces[f].unbounded) rec.flags |= graph::kBlockUnbounded;
     std::string why;
@@ -95,6 +95,29 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   if (sum.skipped_buildings)
     BLVD_LOG_WARN("%zu buildings skipped (footprint unusable; see --verbose)", sum.skipped_buildings);
 
+  graph::CellTables tables;
+  if (opt.impostor.mode != ImpostorMode::None) {
+    std::string current;
+    ImpostorOptions iopt = opt.impostor;
+    if (opt.select_cells) iopt.only_cells = opt.select_cells(g);
+    const ImpostorBakeResult ir =
+        bakeImpostors(g, block_meshes, iopt, writer, [&](const char* stage, double d, double t) {
+          if (current != stage) progress.stage(current = stage);
+          progress.update(d, t);
+        });
+    tables = ir.tables;
+    sum.impostors = ir.records.size();
+    sum.item_samples = ir.samples;
+    sum.pvs_seconds = ir.pvs_seconds;
+    sum.impostor_seconds = ir.impostor_seconds;
+    for (const auto& c : tables.impostors) sum.impostor_cells += !c.layered.empty() || !c.single.empty();
+    for (const auto& r : ir.records) {
+      sum.impostor_triangles += r.triangles;
+      sum.impostor_bytes += r.bytes;
+    }
+    if (opt.on_impostors) opt.on_impostors(g, ir);
+  }
+
   progress.stage("writing package");
   const std::vector<std::string> bad = graph::checkInvariants(g);
   if (!bad.empty()) throw core::Error(core::Status::Internal, "street graph invariant broken: " + bad.front());
@@ -116,6 +139,10 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   writer.addSection(package::kSectionGraph, graph::serializeGraph(g));
   writer.addSection(package::kSectionCells, graph::serializeCells(g));
   writer.addSection(package::kSectionBlocks, graph::serializeBlocks(blocks));
+  if (!tables.visibility.empty()) {
+    writer.addSection(package::kSectionVisibility, graph::serializeVisibility(tables));
+    writer.addSection(package::kSectionImpostors, graph::serializeImpostors(tables));
+  }
   nlohmann::json meta = {
       {"generator", "blvd bake"},
       {"source", osm_path.substr(osm_path.find_last_of('/') + 1)},
@@ -123,6 +150,15 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
       {"default_height_m", opt.osm.default_height_m},
       {"level_height_m", opt.osm.level_height_m},
       {"draco", opt.draco},
+      {"impostors",
+       {{"mode", opt.impostor.mode == ImpostorMode::None     ? "none"
+                 : opt.impostor.mode == ImpostorMode::Single ? "single"
+                 : opt.impostor.mode == ImpostorMode::Both   ? "both"
+                                                             : "layered"},
+        {"threshold_px", opt.impostor.threshold_px},
+        {"texture_max", opt.impostor.texture_max},
+        {"grid_px", opt.impostor.grid_px},
+        {"display", {opt.impostor.display_width, opt.impostor.display_height, opt.impostor.display_fov_y_deg}}}},
       {"counts",
        {{"streets", sum.streets}, {"buildings", sum.buildings}, {"height_tagged", city.height_tagged},
         {"level_tagged", city.level_tagged}, {"defaulted", city.defaulted}, {"skipped", sum.skipped_buildings}}},

@@ -2,8 +2,10 @@
 // buildings) -> per-block GLB (Draco) -> one package file.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <string>
 
+#include "bake/impostor_bake.h"
 #include "bake/osm_reader.h"
 
 namespace blvd::bake {
@@ -12,12 +14,21 @@ struct BakeOptions {
   OsmReadOptions osm;
   bool quiet = false;
   bool draco = true;
+  ImpostorOptions impostor;
+  // Called with the graph and the impostor results before the package is
+  // written (the CLI writes its HTML bake report from them).
+  std::function<void(const graph::StreetGraph&, const ImpostorBakeResult&)> on_impostors;
+  // Chooses the cells that get impostors (all when unset), e.g. a benchmark route.
+  std::function<std::vector<uint32_t>(const graph::StreetGraph&)> select_cells;
 };
 
 struct BakeSummary {
   size_t streets = 0, junctions = 0, vertices = 0, cells = 0, blocks = 0, buildings = 0;
   size_t skipped_buildings = 0, bad_polygons = 0, defaulted_heights = 0;
   uint64_t triangles = 0;
+  size_t impostors = 0, impostor_cells = 0, item_samples = 0;
+  uint64_t impostor_triangles = 0, impostor_bytes = 0;
+  double pvs_seconds = 0, impostor_seconds = 0;
   uint64_t source_bytes = 0, package_bytes = 0;
   double seconds = 0;
 };

@@ -19,11 +19,10 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
-#include <string>
-#include <vector>
-
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <string>
+#include <vector>
 
 #include "bake/triangulate.h"
 #include "geo/mesh.h"
@@ -62,7 +61,7 @@ struct CaptureImage {
   int height = 0;
   std::vector<uint8_t> rgba;  // 4 bytes per pixel, or empty (the mesh does not need it)
   // View depth z per pixel in metres; +inf, NaN or <= 0 where nothing was
-  // drawn (background).
+  // drawn (background). Depths outside [1e-6, 1e15] count as background.
   std::vector<float> depth;
   // Optional: 0 = background or excluded (for example the underside of the
   // ground, drawn in the paper's special colour), non-zero = geometry. Empty:

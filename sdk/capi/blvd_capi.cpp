@@ -95,6 +95,10 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
     t_create_error = "blvd_runtime_create: fov_y_deg, eye_height_m or far_m out of range";
     return BLVD_ERR_INVALID_ARG;
   }
+  if (static_cast<int>(d.mode) < 0 || d.mode > BLVD_MODE_SINGLE) {
+    t_create_error = "blvd_runtime_create: unknown render mode";
+    return BLVD_ERR_INVALID_ARG;
+  }
   if (static_cast<int>(d.backend) < 0 || d.backend > BLVD_CONTEXT_SHARED) {
     t_create_error = "blvd_runtime_create: unknown backend";
     return BLVD_ERR_INVALID_ARG;
@@ -138,6 +142,11 @@ blvd_status blvd_set_pose_geo(blvd_runtime* rt, double lat, double lon, float he
 blvd_status blvd_set_pose_local(blvd_runtime* rt, double x, double y, float heading_deg, float pitch_deg) {
   if (!rt) return misuse(nullptr, "blvd_set_pose_local: rt is NULL");
   return guarded(rt, [&] { rt->impl->setPoseLocal(x, y, heading_deg, pitch_deg); });
+}
+
+blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mode, float radius_m) {
+  if (!rt) return misuse(nullptr, "blvd_set_render_mode: rt is NULL");
+  return guarded(rt, [&] { rt->impl->setMode(mode, radius_m); });
 }
 
 blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats) {

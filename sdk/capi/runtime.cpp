@@ -24,28 +24,37 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   renderer_ = render::Renderer::create(*ctx_, rd, err);
   if (!renderer_) throw Error(Status::Backend, err);
 
-  // Full model: every block resident. Fixed-budget streaming replaces this.
+  // Every block resident. Fixed-budget streaming replaces this.
   geo::MeshData mesh;
+  block_meshes_.resize(city_.blocks().size());
   for (uint32_t b = 0; b < city_.blocks().size(); ++b) {
     st = city_.decodeBlock(b, mesh, err);
     if (st != Status::Ok) throw Error(st, err);
     if (mesh.empty()) continue;
-    const render::MeshHandle h = renderer_->upload(mesh);
-    if (h.id == 0) throw Error(Status::Internal, "block " + std::to_string(b) + ": " + renderer_->lastError());
-    meshes_.push_back(h);
+    block_meshes_[b] = renderer_->upload(mesh);
+    if (block_meshes_[b].id == 0)
+      throw Error(Status::Internal, "block " + std::to_string(b) + ": " + renderer_->lastError());
   }
+  draw_.reserve(block_meshes_.size() + 64);
+  cache_.resize(16);
+  setMode(desc.mode, desc.radius_m);
   cam_.fov_y_deg = desc.fov_y_deg;
   cam_.far_m = desc.far_m;
   cam_.width = static_cast<int>(desc.width);
   cam_.height = static_cast<int>(desc.height);
   cam_.eye_enu = {0, 0, desc.eye_height_m};
-  BLVD_LOG_INFO("runtime: %s, %zu blocks on %s (%s)", desc.package_path, meshes_.size(), ctx_->name(),
+  BLVD_LOG_INFO("runtime: %s, %zu blocks on %s (%s)", desc.package_path, block_meshes_.size(), ctx_->name(),
                 renderer_->glRenderer());
 }
 
 Runtime::~Runtime() {
-  if (renderer_ && ctx_ && ctx_->makeCurrent())
-    for (render::MeshHandle h : meshes_) renderer_->release(h);
+  if (renderer_ && ctx_ && ctx_->makeCurrent()) {
+    for (render::MeshHandle h : block_meshes_) renderer_->release(h);
+    for (auto& c : cache_) {
+      for (render::MeshHandle h : c.layered) renderer_->release(h);
+      for (render::MeshHandle h : c.single) renderer_->release(h);
+    }
+  }
   renderer_.reset();
   ctx_.reset();
 }
@@ -66,10 +75,100 @@ void Runtime::setPoseGeo(double lat, double lon, double heading_deg, double pitc
   setPoseLocal(p.e, p.n, heading_deg, pitch_deg);
 }
 
+void Runtime::setMode(blvd_render_mode mode, float radius_m) {
+  if (mode < BLVD_MODE_BLVD || mode > BLVD_MODE_SINGLE) throw Error(Status::InvalidArg, "unknown render mode");
+  if (!(radius_m >= 0 && radius_m < 1e6)) throw Error(Status::InvalidArg, "radius_m out of range");
+  if ((mode == BLVD_MODE_BLVD || mode == BLVD_MODE_SINGLE) && !city_.hasImpostors()) {
+    if (mode == BLVD_MODE_SINGLE)
+      throw Error(Status::Unsupported, "the package has no impostors (baked with --impostor none)");
+    mode = BLVD_MODE_FULL;  // the default on a package without impostors
+  }
+  mode_ = mode;
+  radius_m_ = radius_m > 0 ? radius_m : 250.f;
+}
+
+Runtime::CellImpostorCache& Runtime::impostorsOf(uint32_t cell) {
+  for (auto& c : cache_)
+    if (c.cell == cell) {
+      c.last_used = frame_;
+      return c;
+    }
+  // Replace the least recently used entry.
+  CellImpostorCache* victim = &cache_[0];
+  for (auto& c : cache_)
+    if (c.last_used < victim->last_used) victim = &c;
+  for (render::MeshHandle h : victim->layered) renderer_->release(h);
+  for (render::MeshHandle h : victim->single) renderer_->release(h);
+  victim->layered.clear();
+  victim->single.clear();
+  victim->cell = cell;
+  victim->last_used = frame_;
+  const graph::CellImpostors& ci = city_.cellTables().impostors[cell];
+  geo::MeshData mesh;
+  std::string err;
+  for (int single = 0; single < 2; ++single)
+    for (const graph::ImpostorLayer& layer : single ? ci.single : ci.layered) {
+      const Status st = city_.decodeImpostor(layer, mesh, err);
+      if (st != Status::Ok) throw Error(st, err);
+      const render::MeshHandle h = renderer_->upload(mesh);
+      if (h.id == 0) throw Error(Status::Internal, "impostor of cell " + std::to_string(cell) + ": " + renderer_->lastError());
+      (single ? victim->single : victim->layered).push_back(h);
+    }
+  return *victim;
+}
+
+void Runtime::buildDrawList(uint32_t cell) {
+  draw_.clear();
+  impostors_drawn_ = 0;
+  const auto& blocks = city_.blocks();
+  auto addBlock = [&](uint32_t b) {
+    if (b < block_meshes_.size() && block_meshes_[b].id) draw_.push_back(block_meshes_[b]);
+  };
+  const graph::StreetGraph& g = city_.graph();
+  switch (mode_) {
+    case BLVD_MODE_FULL:
+      for (uint32_t b = 0; b < block_meshes_.size(); ++b) addBlock(b);
+      break;
+    case BLVD_MODE_RADIUS: {
+      // Visibility radius (the VOP baseline): blocks whose box comes within R.
+      const double ex = cam_.eye_enu.x, ez = -cam_.eye_enu.y;
+      for (uint32_t b = 0; b < blocks.size(); ++b) {
+        const auto& r = blocks[b];
+        const double dx = std::max({double(r.bbox_min[0]) - ex, 0.0, ex - double(r.bbox_max[0])});
+        const double dz = std::max({double(r.bbox_min[2]) - ez, 0.0, ez - double(r.bbox_max[2])});
+        if (dx * dx + dz * dz <= double(radius_m_) * radius_m_) addBlock(b);
+      }
+      break;
+    }
+    case BLVD_MODE_LOCAL:
+    case BLVD_MODE_BLVD:
+    case BLVD_MODE_SINGLE:
+    default:
+      if (cell == graph::kNone) break;
+      // Sillion 97 §3.1: the local model as geometry ...
+      for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) addBlock(*b);
+      if (mode_ == BLVD_MODE_LOCAL) break;
+      // ... plus the cell's impostors for the rest; the blocks they stand
+      // for are never drawn with them (K06 §3.1.2): they are not local.
+      {
+        const CellImpostorCache& c = impostorsOf(cell);
+        for (render::MeshHandle h : mode_ == BLVD_MODE_SINGLE ? c.single : c.layered) {
+          draw_.push_back(h);
+          ++impostors_drawn_;
+        }
+      }
+      break;
+  }
+  blocks_drawn_ = static_cast<uint32_t>(draw_.size() - impostors_drawn_);
+}
+
 void Runtime::render(blvd_frame_stats* stats) {
   if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
+  ++frame_;
+  const uint32_t cell = city_.nearestCell({cam_.eye_enu.x, cam_.eye_enu.y}, cam_.heading_deg);
+  buildDrawList(cell);
   render::FrameStats fs;
-  if (!renderer_->render(cam_, meshes_.data(), meshes_.size(), &fs))
+  if (!renderer_->render(cam_, draw_.data(), draw_.size(), &fs))
     throw Error(Status::Internal, "render failed: " + renderer_->lastError());
   rendered_ = true;
   if (stats) {
@@ -79,6 +178,9 @@ void Runtime::render(blvd_frame_stats* stats) {
     s.frame_ms = fs.frame_ms;
     s.triangles = fs.triangles;
     s.draw_calls = fs.draw_calls;
+    s.cell = cell;
+    s.impostor_layers = impostors_drawn_;
+    s.blocks_drawn = blocks_drawn_;
     std::memcpy(stats, &s, std::min<size_t>(size, sizeof s));
   }
 }

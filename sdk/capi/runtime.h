@@ -24,6 +24,7 @@ class Runtime {
   void render(blvd_frame_stats* stats);
   void readPixels(void* rgba, size_t bytes);
   void info(blvd_runtime_info* out) const;
+  void setMode(blvd_render_mode mode, float radius_m);
 
   std::string last_error;
 
@@ -32,7 +33,23 @@ class Runtime {
   stream::City city_;
   std::unique_ptr<render::Context> ctx_;
   std::unique_ptr<render::Renderer> renderer_;
-  std::vector<render::MeshHandle> meshes_;  // every non-empty block (full model)
+  // Impostor meshes of recently visited cells (a small LRU; fixed-budget
+  // streaming replaces it).
+  struct CellImpostorCache {
+    uint32_t cell = 0xffffffffu;
+    std::vector<render::MeshHandle> layered, single;
+    uint64_t last_used = 0;
+  };
+  void buildDrawList(uint32_t cell);
+  CellImpostorCache& impostorsOf(uint32_t cell);
+
+  std::vector<render::MeshHandle> block_meshes_;  // per block (id 0 when empty); all resident for now
+  std::vector<render::MeshHandle> draw_;          // this frame's list
+  std::vector<CellImpostorCache> cache_;
+  uint64_t frame_ = 0;
+  blvd_render_mode mode_ = BLVD_MODE_BLVD;
+  float radius_m_ = 250.f;
+  uint32_t impostors_drawn_ = 0, blocks_drawn_ = 0;
   render::Camera cam_;
   bool rendered_ = false;
 };

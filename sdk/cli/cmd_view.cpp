@@ -19,7 +19,7 @@ namespace blvd::cli {
 namespace {
 
 struct ViewOpts {
-  std::string package, out, size = "800x480", backend = "auto", path;
+  std::string package, out, size = "800x480", backend = "auto", path, mode = "blvd";
   double lat = NAN, lon = NAN, heading = 0, pitch = 0, fov = 45, step = 8;
   uint64_t seed = 1;
   int repeat = 1;
@@ -29,6 +29,21 @@ void check(blvd_status st, blvd_runtime* rt, const char* what) {
   if (st != BLVD_OK)
     throw core::Error(static_cast<core::Status>(st), std::string(what) + ": " + blvd_last_error(rt));
 }
+
+}  // namespace
+
+bool parseMode(const std::string& s, blvd_render_mode& mode, float& radius) {
+  radius = 0;
+  if (s == "blvd" || s == "layered") mode = BLVD_MODE_BLVD;
+  else if (s == "full") mode = BLVD_MODE_FULL;
+  else if (s == "local") mode = BLVD_MODE_LOCAL;
+  else if (s == "single") mode = BLVD_MODE_SINGLE;
+  else if (std::sscanf(s.c_str(), "radius:%f", &radius) == 1 && radius > 0) mode = BLVD_MODE_RADIUS;
+  else return false;
+  return true;
+}
+
+namespace {
 
 blvd_backend parseBackendName(const std::string& s) {
   if (s == "auto") return BLVD_BACKEND_AUTO;
@@ -61,6 +76,8 @@ int run(const ViewOpts& o) {
   desc.height = static_cast<uint32_t>(h);
   desc.fov_y_deg = static_cast<float>(o.fov);
   desc.backend = parseBackendName(o.backend);
+  if (!parseMode(o.mode, desc.mode, desc.radius_m))
+    throw core::Error(core::Status::InvalidArg, "--mode must be full, local, radius:R, single, layered or blvd");
   blvd_runtime* rt = nullptr;
   check(blvd_runtime_create(&desc, &rt), nullptr, "create runtime");
   std::unique_ptr<blvd_runtime, void (*)(blvd_runtime*)> guard(rt, blvd_runtime_destroy);
@@ -84,9 +101,9 @@ int run(const ViewOpts& o) {
       if (i > 0 || o.repeat <= 1) ms.push_back(fs.frame_ms);
     }
     writeFrame(rt, w, h, o.out, rgba);
-    std::printf("wrote %s (%s %.1f ms over %zu frames, %llu triangles, %u draw calls)\n", o.out.c_str(),
-                ms.size() > 1 ? "median" : "frame", median(ms), ms.size(),
-                static_cast<unsigned long long>(fs.triangles), fs.draw_calls);
+    std::printf("wrote %s (%s %.1f ms over %zu frames, %llu triangles, %u draw calls, cell %u, %u impostor layers)\n",
+                o.out.c_str(), ms.size() > 1 ? "median" : "frame", median(ms), ms.size(),
+                static_cast<unsigned long long>(fs.triangles), fs.draw_calls, fs.cell, fs.impostor_layers);
     return 0;
   }
 
@@ -146,6 +163,8 @@ void addView(CLI::App& app, Runner& runner) {
   cmd->add_option("--fov", o->fov, "vertical field of view, degrees")->capture_default_str()->check(CLI::Range(5.0, 150.0));
   cmd->add_option("--size", o->size, "frame size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--backend", o->backend, "auto, egl-surfaceless, egl-device or osmesa")->capture_default_str();
+  cmd->add_option("--mode", o->mode, "what to draw: full, local, radius:R, single, layered or blvd (= layered)")
+      ->capture_default_str();
   cmd->add_option("--path", o->path, "drive auto:N connected cells instead of one pose; -o is then a folder");
   cmd->add_option("--repeat", o->repeat, "render the pose N more times and report the median frame time")
       ->capture_default_str()->check(CLI::Range(1, 10000));

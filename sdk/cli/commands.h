@@ -4,6 +4,9 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <string>
+
+#include "blvd/blvd.h"
 
 namespace blvd::cli {
 
@@ -13,6 +16,8 @@ using Runner = std::function<int()>;
 void addBake(CLI::App& app, Runner& run);
 void addPack(CLI::App& app, Runner& run);
 void addView(CLI::App& app, Runner& run);
+// "full", "local", "radius:R", "single", "layered"/"blvd" -> mode (+ radius).
+bool parseMode(const std::string& s, blvd_render_mode& mode, float& radius);
 // Defined in adapters/<x>/cli_<x>.cpp, compiled into the CLI when the adapter exists.
 void addNmea(CLI::App& app, Runner& run);
 void addCan(CLI::App& app, Runner& run);

@@ -92,6 +92,13 @@ void validateMesh(const geo::MeshData& m, const GlbOptions& opt) {
   if (!m.colors.empty() && m.colors.size() != n * 4)
     bad("colors.size() " + std::to_string(m.colors.size()) + " != 4 * vertex count " +
         std::to_string(n));
+  if (!m.texcoords.empty() && m.texcoords.size() != n * 2)
+    bad("texcoords.size() " + std::to_string(m.texcoords.size()) + " != 2 * vertex count " + std::to_string(n));
+  for (size_t i = 0; i < m.texcoords.size(); ++i)
+    if (!std::isfinite(m.texcoords[i])) bad("texcoord component " + std::to_string(i) + " is not finite");
+  if (!m.image.empty() && m.texcoords.empty()) bad("an image without texcoords");
+  if (!m.image.empty() && m.image_mime != "image/png" && m.image_mime != "image/jpeg")
+    bad("image_mime must be image/png or image/jpeg, is '" + m.image_mime + "'");
   if (m.indices.size() % 3) bad("indices.size() is not a multiple of 3");
   for (size_t i = 0; i < m.indices.size(); ++i)
     if (m.indices[i] >= n)
@@ -107,6 +114,7 @@ void validateMesh(const geo::MeshData& m, const GlbOptions& opt) {
   bits(opt.position_bits, "position_bits");
   bits(opt.normal_bits, "normal_bits");
   bits(opt.color_bits, "color_bits");
+  bits(opt.texcoord_bits, "texcoord_bits");
   if (opt.compression_level < 0 || opt.compression_level > 10)
     bad("compression_level must be 0..10, is " + std::to_string(opt.compression_level));
 }
@@ -172,6 +180,26 @@ std::vector<uint8_t> linearColors(const geo::MeshData& mesh) {
   return c;
 }
 
+// Puts the mesh's image (if any) at the end of `bin` as its own bufferView and
+// makes it material 0's unlit base colour texture.
+void addImage(const geo::MeshData& mesh, json& doc, json& views, std::vector<uint8_t>& bin) {
+  if (mesh.image.empty()) return;
+  while (bin.size() % 4) bin.push_back(0);
+  const size_t off = bin.size();
+  bin.insert(bin.end(), mesh.image.begin(), mesh.image.end());
+  views.push_back({{"buffer", 0}, {"byteOffset", off}, {"byteLength", mesh.image.size()}});
+  doc["images"] = json::array({{{"bufferView", views.size() - 1}, {"mimeType", mesh.image_mime}}});
+  // 9729 LINEAR, 9987 LINEAR_MIPMAP_LINEAR, 33071 CLAMP_TO_EDGE.
+  doc["samplers"] = json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 33071}, {"wrapT", 33071}}});
+  doc["textures"] = json::array({{{"source", 0}, {"sampler", 0}}});
+  json& mat = doc["materials"][0];
+  mat["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+  mat["extensions"] = {{"KHR_materials_unlit", json::object()}};
+  json used = doc.value("extensionsUsed", json::array());
+  used.push_back("KHR_materials_unlit");
+  doc["extensionsUsed"] = used;
+}
+
 // Plain buffers: POSITION/NORMAL float32, COLOR_0 unorm8 RGBA, indices u16/u32.
 std::vector<uint8_t> encodePlain(const geo::MeshData& mesh, json doc) {
   const size_t n = mesh.vertexCount();
@@ -202,6 +230,11 @@ std::vector<uint8_t> encodePlain(const geo::MeshData& mesh, json doc) {
                          {"componentType", kUnsignedByte}, {"normalized", true},
                          {"count", n}, {"type", "VEC4"}});
   }
+  if (!mesh.texcoords.empty()) {
+    attributes["TEXCOORD_0"] = accessors.size();
+    accessors.push_back({{"bufferView", addView(mesh.texcoords.data(), n * 8, kArrayBuffer)},
+                         {"componentType", kFloat}, {"count", n}, {"type", "VEC2"}});
+  }
   const int ictype = componentForIndices(n);
   size_t iview;
   if (ictype == kUnsignedShort) {
@@ -213,6 +246,7 @@ std::vector<uint8_t> encodePlain(const geo::MeshData& mesh, json doc) {
   const size_t iacc = accessors.size();
   accessors.push_back({{"bufferView", iview}, {"componentType", ictype},
                        {"count", mesh.indices.size()}, {"type", "SCALAR"}});
+  addImage(mesh, doc, views, bin);
   doc["buffers"] = json::array({{{"byteLength", bin.size()}}});
   doc["bufferViews"] = views;
   doc["accessors"] = accessors;
@@ -243,7 +277,7 @@ std::vector<uint8_t> encodeDraco(const geo::MeshData& mesh, const GlbOptions& op
   };
   const uint32_t pos_id = addAttribute(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32,
                                        false, 12, mesh.positions.data());
-  std::optional<uint32_t> nrm_id, col_id;
+  std::optional<uint32_t> nrm_id, col_id, tex_id;
   if (!mesh.normals.empty())
     nrm_id = addAttribute(draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32, false, 12,
                           mesh.normals.data());
@@ -252,6 +286,8 @@ std::vector<uint8_t> encodeDraco(const geo::MeshData& mesh, const GlbOptions& op
     lin = linearColors(mesh);
     col_id = addAttribute(draco::GeometryAttribute::COLOR, 4, draco::DT_UINT8, true, 4, lin.data());
   }
+  if (!mesh.texcoords.empty())
+    tex_id = addAttribute(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT32, false, 8, mesh.texcoords.data());
   dm.SetNumFaces(mesh.triangleCount());
   for (size_t f = 0; f < mesh.triangleCount(); ++f) {
     draco::Mesh::Face face;
@@ -263,6 +299,7 @@ std::vector<uint8_t> encodeDraco(const geo::MeshData& mesh, const GlbOptions& op
   if (opt.position_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::POSITION, opt.position_bits);
   if (opt.normal_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, opt.normal_bits);
   if (opt.color_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::COLOR, opt.color_bits);
+  if (opt.texcoord_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::TEX_COORD, opt.texcoord_bits);
   const int speed = 10 - opt.compression_level;
   enc.SetSpeedOptions(speed, speed);
   draco::EncoderBuffer eb;
@@ -308,10 +345,17 @@ std::vector<uint8_t> encodeDraco(const geo::MeshData& mesh, const GlbOptions& op
     draco_attrs["COLOR_0"] = *col_id;
     accessors.push_back({{"componentType", kUnsignedByte}, {"normalized", true}, {"count", points}, {"type", "VEC4"}});
   }
+  if (tex_id) {
+    attributes["TEXCOORD_0"] = accessors.size();
+    draco_attrs["TEXCOORD_0"] = *tex_id;
+    accessors.push_back({{"componentType", kFloat}, {"count", points}, {"type", "VEC2"}});
+  }
   doc["extensionsUsed"] = json::array({"KHR_draco_mesh_compression"});
   doc["extensionsRequired"] = json::array({"KHR_draco_mesh_compression"});
+  json views = json::array({{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", bin.size()}}});
+  addImage(mesh, doc, views, bin);
   doc["buffers"] = json::array({{{"byteLength", bin.size()}}});
-  doc["bufferViews"] = json::array({{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", bin.size()}}});
+  doc["bufferViews"] = views;
   doc["accessors"] = accessors;
   json prim = {{"attributes", attributes}, {"indices", 0}, {"material", 0}, {"mode", kModeTriangles},
                {"extensions", {{"KHR_draco_mesh_compression", {{"bufferView", 0}, {"attributes", draco_attrs}}}}}};
@@ -352,6 +396,7 @@ struct Primitive {
   std::vector<float> positions;  // xyz
   std::vector<float> normals;    // xyz or empty
   std::vector<float> colors;     // linear rgba or empty
+  std::vector<float> texcoords;  // uv or empty
   std::vector<uint32_t> indices; // triangle list
 };
 
@@ -374,6 +419,12 @@ class Decoder {
   Decoder(const json& doc, const uint8_t* bin, size_t bin_size) : doc_(doc), bin_(bin), bin_size_(bin_size) {}
 
   void run(geo::MeshData& out) {
+    runGeometry(out);
+    if (!out.texcoords.empty()) image(out);
+  }
+
+ private:
+  void runGeometry(geo::MeshData& out) {
     checkRequiredExtensions();
     const json* scenes = arrayMember(doc_, "scenes", "");
     const json* nodes = arrayMember(doc_, "nodes", "");
@@ -739,6 +790,7 @@ class Decoder {
     if (!pos) fail(where + ": no POSITION attribute");
     const auto nrm = attr("NORMAL");
     const auto col = attr("COLOR_0");
+    const auto tex = attr("TEXCOORD_0");
     std::optional<size_t> idx;
     if (prim.contains("indices")) idx = index(prim, "indices", where, n_acc, "accessors");
 
@@ -750,7 +802,7 @@ class Decoder {
     size_t vertex_count = 0;
     if (draco) {
       if (mode != kModeTriangles) fail(where + ": Draco primitive with mode " + std::to_string(mode) + " (only TRIANGLES)");
-      loadDraco(*draco, where, *attrs, idx, pos, nrm, col, p);
+      loadDraco(*draco, where, *attrs, idx, pos, nrm, col, tex, p);
       vertex_count = p.positions.size() / 3;
     } else {
       p.positions = readFloats(*pos, 3, "POSITION");
@@ -767,6 +819,10 @@ class Decoder {
         p.colors = readColors(*col);
         sameCount(p.colors, 4, "COLOR_0");
       }
+      if (tex) {
+        p.texcoords = readFloats(*tex, 2, "TEXCOORD_0");
+        sameCount(p.texcoords, 2, "TEXCOORD_0");
+      }
       std::vector<uint32_t> raw;
       if (idx) {
         raw = readIndices(*idx);
@@ -778,6 +834,8 @@ class Decoder {
     }
     for (size_t i = 0; i < p.positions.size(); ++i)
       if (!std::isfinite(p.positions[i])) fail(where + ": POSITION element " + std::to_string(i / 3) + " is not finite");
+    for (size_t i = 0; i < p.texcoords.size(); ++i)
+      if (!std::isfinite(p.texcoords[i])) fail(where + ": TEXCOORD_0 element " + std::to_string(i / 2) + " is not finite");
     for (size_t i = 0; i < p.indices.size(); ++i)
       if (p.indices[i] >= vertex_count)
         fail(where + ": index " + std::to_string(i) + " = " + std::to_string(p.indices[i]) + " >= vertex count " + std::to_string(vertex_count));
@@ -812,7 +870,8 @@ class Decoder {
   }
 
   void loadDraco(const json& ext, const std::string& where, const json& attrs, std::optional<size_t> idx,
-                 std::optional<size_t> pos, std::optional<size_t> nrm, std::optional<size_t> col, Primitive& p) {
+                 std::optional<size_t> pos, std::optional<size_t> nrm, std::optional<size_t> col,
+                 std::optional<size_t> tex, Primitive& p) {
     const std::string dwhere = where + ".extensions.KHR_draco_mesh_compression";
     const View view = bufferView(index(ext, "bufferView", dwhere, count("bufferViews"), "bufferViews"));
     auto dattrs = ext.find("attributes");
@@ -875,6 +934,7 @@ class Decoder {
     p.positions = load("POSITION", pos, 3);
     p.normals = load("NORMAL", nrm, 3);
     p.colors = load("COLOR_0", col, 4);
+    p.texcoords = load("TEXCOORD_0", tex, 2);
     p.indices.resize(faces * 3);
     for (uint32_t f = 0; f < faces; ++f) {
       const draco::Mesh::Face& face = mesh->face(draco::FaceIndex(f));
@@ -920,6 +980,35 @@ class Decoder {
       for (int rr = 0; rr < 3; ++rr) m.m[c * 4 + rr] = R[c * 3 + rr] * S[c];
     if (!t.empty()) m.m[12] = t[0], m.m[13] = t[1], m.m[14] = t[2];
     return m;
+  }
+
+  // The base colour texture of material 0, when it is an image stored in a
+  // bufferView (impostor meshes carry their captured colour this way).
+  void image(geo::MeshData& out) {
+    if (count("materials") == 0 || count("textures") == 0 || count("images") == 0) return;
+    const json& mat = element("materials", 0);
+    auto pbr = mat.find("pbrMetallicRoughness");
+    if (pbr == mat.end() || !pbr->is_object()) return;
+    auto bct = pbr->find("baseColorTexture");
+    if (bct == pbr->end()) return;
+    const size_t ti = index(object(*bct, "materials[0].pbrMetallicRoughness.baseColorTexture"), "index",
+                            "materials[0].pbrMetallicRoughness.baseColorTexture", count("textures"), "textures");
+    const json& tex = element("textures", ti);
+    const std::string tw = "textures[" + std::to_string(ti) + "]";
+    if (!tex.contains("source")) return;
+    const size_t ii = index(tex, "source", tw, count("images"), "images");
+    const json& img = element("images", ii);
+    const std::string iw = "images[" + std::to_string(ii) + "]";
+    if (!img.contains("bufferView")) return;  // uri images: dropped like other unusable ones below
+    const View v = bufferView(index(img, "bufferView", iw, count("bufferViews"), "bufferViews"));
+    // The bytes decide the type, not mimeType (it can lie); anything but PNG
+    // or JPEG is dropped, keeping the geometry usable.
+    static const uint8_t kPng[4] = {0x89, 'P', 'N', 'G'}, kJpeg[3] = {0xFF, 0xD8, 0xFF};
+    const uint8_t* d = v.bytes.data;
+    if (v.bytes.size >= 4 && std::memcmp(d, kPng, 4) == 0) out.image_mime = "image/png";
+    else if (v.bytes.size >= 3 && std::memcmp(d, kJpeg, 3) == 0) out.image_mime = "image/jpeg";
+    else return;
+    out.image.assign(d, d + v.bytes.size);
   }
 
   void emitMesh(size_t mesh_index, const Mat4& world, geo::MeshData& out) {
@@ -989,6 +1078,12 @@ class Decoder {
       for (int k = 0; k < 3; ++k) out.colors.push_back(linearToSrgbByte(rgba[k] * factor[k]));
       out.colors.push_back(unitToByte(rgba[3] * factor[3]));
     };
+    // Texture coordinates are kept when every primitive so far has them.
+    const bool uv = !p.texcoords.empty() && out.texcoords.size() == out.vertexCount() * 2;
+    if (!uv) out.texcoords.clear();
+    auto pushUv = [&](size_t v) {
+      if (uv) out.texcoords.insert(out.texcoords.end(), &p.texcoords[v * 2], &p.texcoords[v * 2] + 2);
+    };
     const bool flat = p.normals.empty();
     const size_t added_vertices = flat ? p.indices.size() : p.positions.size() / 3;
     if (out.vertexCount() + added_vertices > kMaxDecodedVertices || out.indices.size() + p.indices.size() > 3 * kMaxDecodedVertices)
@@ -1003,6 +1098,7 @@ class Decoder {
         xformNormal(&p.normals[v * 3], o);
         out.normals.insert(out.normals.end(), o, o + 3);
         pushColor(v);
+        pushUv(v);
       }
       for (size_t t = 0; t + 2 < p.indices.size(); t += 3) {
         const uint32_t i0 = p.indices[t], i1 = p.indices[t + 1], i2 = p.indices[t + 2];
@@ -1028,6 +1124,7 @@ class Decoder {
         out.positions.insert(out.positions.end(), q[k], q[k] + 3);
         out.normals.insert(out.normals.end(), fn, fn + 3);
         pushColor(tri[k]);
+        pushUv(tri[k]);
         out.indices.push_back(first + static_cast<uint32_t>(k));
       }
     }

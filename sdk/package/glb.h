@@ -25,11 +25,15 @@ struct GlbOptions {
   int position_bits = 16;     // Draco quantization, 1..30; 0 = keep float32 (lossless)
   int normal_bits = 10;       // 1..30; 0 = keep float32
   int color_bits = 8;         // only for float colours; our uint8 colours are lossless in Draco
+  int texcoord_bits = 14;     // TEXCOORD_0 quantization (impostor uv); 0 = keep float32
   int compression_level = 7;  // 0 (fastest) .. 10 (smallest), as draco_encoder -cl
 };
 
 // Encodes `mesh` as a GLB with one mesh, one primitive (POSITION, NORMAL if
-// the mesh has normals, COLOR_0 if it has colours, indices), one material
+// the mesh has normals, COLOR_0 if it has colours, TEXCOORD_0 if it has uvs,
+// indices), and, when the mesh carries an image, that image in the BIN chunk
+// as material 0's base colour texture, unlit (KHR_materials_unlit: impostor
+// colour was lit when it was captured). One material
 // (white, roughness 1, metallic 0, so vertex colours show), one node and one
 // scene. An empty mesh (no triangles) gives a valid GLB with an empty scene,
 // which decodeGlb() reads back as an empty mesh.
@@ -51,6 +55,9 @@ inline constexpr size_t kMaxDecodedVertices = size_t{1} << 24;
 // decoded and their counts checked against the accessors. Missing normals
 // become flat normals (the primitive's triangles are unwelded); missing
 // colours are white; the material's baseColorFactor multiplies the colours.
+// TEXCOORD_0 is kept when every primitive has it, and then material 0's base
+// colour texture (an image in a bufferView) is returned as `out.image` when
+// its bytes are PNG or JPEG (`image_mime` says which; other images are dropped).
 // Buffers come from the GLB BIN chunk or base64 data: URIs; external files are
 // Unsupported, as are sparse accessors, accessors without a bufferView (outside
 // Draco) and unknown extensionsRequired.

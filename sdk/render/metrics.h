@@ -5,8 +5,9 @@
 // Images are RGBA8, tightly packed, top row first, 4 bytes a pixel, as in
 // image.h. Alpha is ignored everywhere. `a` is the reference (the full-model
 // frame), `b` the image under test. All functions are pure, thread-safe and
-// never throw; ssim()/ssimMap() allocate scratch (about 40 bytes a pixel),
-// the others allocate nothing.
+// never throw; ssim()/ssimMap() allocate scratch of about 640 bytes per image
+// column (0.5 MB at 800 px wide), the others allocate nothing. An 800x480 SSIM
+// takes about 6 ms on one core of the dev VM (Xeon, AVX2), badPixelShare 1 ms.
 #pragma once
 #include <cstddef>
 #include <cstdint>

@@ -27,6 +27,16 @@ core::Status City::open(const std::string& path, std::string& err) {
       if (tag == package::kSectionCells) graph::parseCells(s.data, s.size, s.offset, graph_);
       if (tag == package::kSectionBlocks) graph::parseBlocks(s.data, s.size, s.offset, reader_.blobCount(), blocks_);
     }
+    // Optional sections: present when the bake made impostors.
+    const uint32_t cells = static_cast<uint32_t>(graph_.halfedges.size());
+    const uint32_t nblocks = static_cast<uint32_t>(blocks_.size());
+    for (uint32_t tag : {package::kSectionVisibility, package::kSectionImpostors}) {
+      if (!reader_.hasSection(tag)) continue;
+      st = reader_.checkedSection(tag, s, err);
+      if (st != core::Status::Ok) return st;
+      if (tag == package::kSectionVisibility) graph::parseVisibility(s.data, s.size, s.offset, cells, nblocks, tables_);
+      else graph::parseImpostors(s.data, s.size, s.offset, cells, nblocks, reader_.blobCount(), tables_);
+    }
   } catch (const core::Error& e) {
     err = path + ": " + e.what();
     return e.status();
@@ -54,6 +64,17 @@ core::Status City::decodeBlock(uint32_t b, geo::MeshData& out, std::string& err)
   st = package::decodeGlb(s.data, s.size, out, err);
   if (st != core::Status::Ok) err = reader_.name() + ": block " + std::to_string(b) + " at offset " +
                                     std::to_string(s.offset) + ": " + err;
+  return st;
+}
+
+core::Status City::decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshData& out, std::string& err) const {
+  package::Span s;
+  core::Status st = reader_.blob(layer.blob, s, err);
+  if (st != core::Status::Ok) return st;
+  st = package::decodeGlb(s.data, s.size, out, err);
+  if (st != core::Status::Ok)
+    err = reader_.name() + ": impostor blob " + std::to_string(layer.blob) + " at offset " + std::to_string(s.offset) +
+          ": " + err;
   return st;
 }
 

@@ -11,6 +11,7 @@
 #include "geo/local_frame.h"
 #include "geo/mesh.h"
 #include "graph/block_table.h"
+#include "graph/cell_tables.h"
 #include "graph/street_graph.h"
 #include "package/reader.h"
 
@@ -27,6 +28,12 @@ class City {
   const package::PackageHeader& header() const { return reader_.header(); }
   const graph::StreetGraph& graph() const { return graph_; }
   const std::vector<graph::BlockRecord>& blocks() const { return blocks_; }
+  // Visibility and impostors per cell; empty tables for a package baked with
+  // --impostor none.
+  const graph::CellTables& cellTables() const { return tables_; }
+  bool hasImpostors() const { return !tables_.impostors.empty(); }
+  // Decodes one impostor layer's GLB (textured depth mesh with its image).
+  core::Status decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshData& out, std::string& err) const;
   const geo::LocalFrame& frame() const { return frame_; }
 
   // Decodes block `b`'s GLB into `out` (cleared first). An empty block gives an
@@ -42,6 +49,7 @@ class City {
   package::PackageReader reader_;
   graph::StreetGraph graph_;
   std::vector<graph::BlockRecord> blocks_;
+  graph::CellTables tables_;
   geo::LocalFrame frame_{0, 0, 0};
 };
 

@@ -45,6 +45,12 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   bare.colors.clear();
   writeSeed(dir, "seed_bare_draco.glb", blvd::package::encodeGlb(bare));
   writeSeed(dir, "seed_empty.glb", blvd::package::encodeGlb(blvd::geo::MeshData{}));
+  blvd::geo::MeshData textured = seedMesh();  // an impostor-like mesh: uvs + an embedded image
+  for (size_t v = 0; v < textured.vertexCount(); ++v) textured.texcoords.insert(textured.texcoords.end(), {v * 0.1f, 1 - v * 0.1f});
+  textured.image = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n', 0, 0, 0, 13};
+  textured.image_mime = "image/png";
+  writeSeed(dir, "seed_textured_draco.glb", blvd::package::encodeGlb(textured));
+  writeSeed(dir, "seed_textured_plain.glb", blvd::package::encodeGlb(textured, plain));
   return 0;
 }
 
@@ -59,7 +65,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // The decoder promises a consistent mesh; anything else is a bug.
   const size_t n = mesh.vertexCount();
   if (mesh.positions.size() != n * 3 || mesh.normals.size() != n * 3 || mesh.colors.size() != n * 4 ||
-      mesh.indices.size() % 3 != 0)
+      (!mesh.texcoords.empty() && mesh.texcoords.size() != n * 2) || mesh.indices.size() % 3 != 0)
     std::abort();
   for (uint32_t i : mesh.indices)
     if (i >= n) std::abort();

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
 
@@ -268,6 +269,52 @@ TEST(Glb, LargeIndicesUseUint32) {
     EXPECT_EQ(out.triangleCount(), m.triangleCount());
     EXPECT_EQ(out.vertexCount(), m.vertexCount());
   }
+}
+
+// Textured meshes (impostors): TEXCOORD_0 and an embedded PNG/JPEG survive
+// both encodings; the image type comes from its bytes.
+TEST(Glb, TexcoordsAndImage) {
+  MeshData src = box();
+  for (size_t v = 0; v < src.vertexCount(); ++v) src.texcoords.insert(src.texcoords.end(), {(v % 4) * 0.25f, (v / 4) / 6.0f});
+  src.image = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n', 1, 2, 3};
+  src.image_mime = "image/png";
+  for (bool draco : {false, true}) {
+    GlbOptions opt;
+    opt.draco = draco;
+    const auto glb = encodeGlb(src, opt);
+    MeshData out;
+    std::string err;
+    ASSERT_EQ(decodeGlb(glb.data(), glb.size(), out, err), Status::Ok) << err;
+    ASSERT_EQ(out.texcoords.size(), out.vertexCount() * 2);
+    EXPECT_EQ(out.image, src.image);
+    EXPECT_EQ(out.image_mime, "image/png");
+    if (!draco) {
+      EXPECT_EQ(out.texcoords, src.texcoords);
+    }
+  }
+  // A non-image payload is dropped, the geometry still decodes.
+  src.image = {'G', 'I', 'F', '8', '9', 'a'};
+  src.image_mime = "image/jpeg";  // the encoder trusts the caller; the decoder checks the bytes
+  GlbOptions plain;
+  plain.draco = false;
+  auto glb = encodeGlb(src, plain);
+  MeshData out;
+  std::string err;
+  ASSERT_EQ(decodeGlb(glb.data(), glb.size(), out, err), Status::Ok) << err;
+  EXPECT_TRUE(out.image.empty());
+  EXPECT_EQ(out.triangleCount(), 12u);
+  // Non-finite uvs in a file are refused (the encoder refuses them too).
+  src.image.clear();
+  glb = encodeGlb(src, plain);
+  const auto doc = glbJson(glb);
+  const int tex_acc = doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<int>();
+  const size_t at = 20 + 8 + doc["bufferViews"][doc["accessors"][tex_acc]["bufferView"].get<int>()]["byteOffset"].get<size_t>();
+  uint32_t json_len;
+  std::memcpy(&json_len, glb.data() + 12, 4);
+  const float inf = std::numeric_limits<float>::infinity();
+  std::memcpy(glb.data() + json_len + at, &inf, 4);
+  EXPECT_EQ(decodeGlb(glb.data(), glb.size(), out, err), Status::Corrupt);
+  EXPECT_NE(err.find("TEXCOORD_0 element 0 is not finite"), std::string::npos) << err;
 }
 
 TEST(Glb, InvalidMeshIsRefused) {

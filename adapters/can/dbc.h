@@ -1,0 +1,135 @@
+// A subset of the Vector DBC format, enough to decode and encode the signals of
+// a vehicle's messages: BO_ (messages) and SG_ (signals) with Intel (@1) and
+// Motorola (@0) byte order, signed (-) and unsigned (+) values, factor/offset,
+// [min|max], unit and receivers. VAL_ (value descriptions) and SIG_VALTYPE_
+// (IEEE float signals) are read when present; CM_ and every other statement are
+// skipped, including multi-line quoted strings.
+//
+// Multiplexing is not supported. A multiplexed signal (`m12`, `m12M`) does not
+// make the load fail: the rest of the file is usable, the signal is kept with
+// supported == false and the message "unsupported: multiplexed signal X in
+// message Y (line N)", listed in Database::diagnostics(), and decode() leaves it
+// out. The multiplexor itself (`M`) is an ordinary field and is decoded. Set
+// DbcOptions::reject_unsupported to make such a file fail to load instead.
+//
+// A syntax error in BO_ or SG_ fails the load with "file:line: reason": a
+// decoder that silently lost one signal would be worse than one that refuses the file.
+//
+// Bit numbering is the DBC's: bit b is bit (b % 8) of byte (b / 8). An Intel
+// signal's start bit is its least significant bit, and it grows towards higher
+// bit numbers; a Motorola signal's start bit is its most significant bit, and it
+// continues from bit 0 of a byte to bit 7 of the next byte (the "sawtooth").
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "blvd/blvd.h"
+#include "can/frame.h"
+
+namespace blvd::can {
+
+enum class ByteOrder : uint8_t { Intel, Motorola };  // @1 little endian, @0 big endian
+enum class ValueType : uint8_t { Integer, Float32, Float64 };  // SIG_VALTYPE_ 0 / 1 / 2
+
+struct Signal {
+  std::string name;
+  uint16_t start_bit = 0;  // as written: Intel LSB, Motorola MSB
+  uint16_t length = 0;     // 1..64 bits
+  ByteOrder order = ByteOrder::Intel;
+  bool is_signed = false;
+  ValueType type = ValueType::Integer;
+  double factor = 1, offset = 0;
+  double minimum = 0, maximum = 0;  // as declared; advisory, not enforced (many DBCs get them wrong)
+  std::string unit;
+  std::vector<std::string> receivers;
+  bool multiplexor = false;        // 'M'
+  int32_t multiplex_value = -1;    // 'm12' -> 12; -1 when not multiplexed
+  bool supported = true;
+  std::string unsupported;         // why, when !supported
+  uint32_t line = 0;
+  uint16_t bytes_needed = 0;       // the frame must carry this many bytes to hold the signal
+  std::vector<std::pair<int64_t, std::string>> values;  // VAL_ descriptions, in file order
+
+  // The description VAL_ gives for a raw value, or nullptr.
+  const std::string* describe(int64_t raw) const;
+};
+
+struct Message {
+  uint32_t id = 0;  // without the extended flag
+  bool extended = false;
+  std::string name;
+  uint32_t size = 0;  // bytes
+  std::string transmitter;
+  std::vector<Signal> signals;
+  uint32_t line = 0;
+
+  const Signal* signal(std::string_view signal_name) const;
+};
+
+struct DecodedSignal {
+  const Signal* signal = nullptr;
+  uint64_t raw = 0;    // the bits as stored (not sign-extended)
+  double value = 0;    // physical value: raw (sign-extended or as float) * factor + offset
+};
+
+struct DbcOptions {
+  bool reject_unsupported = false;  // fail the load (BLVD_ERR_UNSUPPORTED) at the first multiplexed signal
+};
+
+class Database {
+ public:
+  // Parses DBC text; `source` names it in messages. On failure the database is
+  // empty and `err` is "source:line: reason". BLVD_ERR_CORRUPT for a syntax error.
+  blvd_status parse(std::string_view text, const std::string& source, std::string& err,
+                    const DbcOptions& opt = DbcOptions{});
+  // Reads and parses a file. BLVD_ERR_IO when it cannot be read.
+  blvd_status load(const std::string& path, std::string& err, const DbcOptions& opt = DbcOptions{});
+
+  const std::vector<Message>& messages() const { return messages_; }
+  const Message* find(uint32_t id, bool extended) const;
+  const Message* find(const Frame& f) const { return f.error || f.rtr ? nullptr : find(f.id, f.extended); }
+  const Message* findByName(std::string_view name) const;
+  // Non-fatal findings, one line each, "source:line: text" (unsupported signals first among them).
+  const std::vector<std::string>& diagnostics() const { return diagnostics_; }
+  const std::string& source() const { return source_; }
+
+ private:
+  std::vector<Message> messages_;
+  std::unordered_map<uint32_t, size_t> by_id_;  // id | 0x80000000 for extended ids
+  std::vector<std::string> diagnostics_;
+  std::string source_;
+};
+
+// The raw bits of `s` in `data`, which must hold at least s.bytes_needed bytes.
+uint64_t extractRaw(const Signal& s, const uint8_t* data);
+// Writes the low s.length bits of `raw` into `data`, leaving every other bit alone.
+void insertRaw(const Signal& s, uint64_t raw, uint8_t* data);
+// raw -> physical value.
+double toPhysical(const Signal& s, uint64_t raw);
+// physical value -> raw bits, rounding to the nearest step. False when the value
+// is not finite or does not fit the signal's bits.
+bool toRaw(const Signal& s, double value, uint64_t& raw);
+
+// Decodes the supported signals of `m` that lie inside f's payload (a frame
+// shorter than the message loses only the signals past its end) into `out`
+// (cleared first). Returns the number decoded.
+size_t decode(const Message& m, const Frame& f, std::vector<DecodedSignal>& out);
+
+// Writes the given signals into `f`: sets f's id, extended flag and (when it is
+// shorter) length from `m`, and changes only the bits of those signals, so
+// encode(m, decode(m, f), f2) reproduces every signal bit of f in f2.
+// Each entry's `signal` must point into m.signals (else BLVD_ERR_MISUSE). `value` is
+// encoded; when it is exactly the value `raw` decodes to, `raw` is written as is.
+// BLVD_ERR_INVALID_ARG with `err` naming the signal when a value does not fit;
+// BLVD_ERR_UNSUPPORTED for a multiplexed signal.
+blvd_status encode(const Message& m, const std::vector<DecodedSignal>& values, Frame& f, std::string& err);
+// The same, signals given by name. BLVD_ERR_NOT_FOUND for a name m lacks.
+blvd_status encode(const Message& m, const std::vector<std::pair<std::string, double>>& values, Frame& f,
+                   std::string& err);
+
+}  // namespace blvd::can

@@ -1,0 +1,101 @@
+#include "bake/capture.h"
+
+#include <cmath>
+
+#include <glm/trigonometric.hpp>
+
+#include "core/status.h"
+
+namespace blvd::bake {
+namespace {
+constexpr double kMaxDepth = 8192.0;
+}
+
+PinholeCamera pinholeOf(const render::Camera& cam) {
+  PinholeCamera p;
+  const glm::dmat3 cam_to_world = glm::transpose(glm::dmat3(render::viewRotation(cam)));
+  p.right = cam_to_world[0];
+  p.up = cam_to_world[1];
+  p.forward = -cam_to_world[2];
+  p.eye = render::enuToGltf(cam.eye_enu);
+  p.tan_half_y = std::tan(glm::radians(cam.fov_y_deg) * 0.5);
+  p.tan_half_x = p.tan_half_y * double(cam.width) / double(cam.height);
+  p.width = cam.width;
+  p.height = cam.height;
+  return p;
+}
+
+CaptureRig::CaptureRig(const std::vector<geo::MeshData>& block_meshes, int max_width, int max_height,
+                       render::Backend backend)
+    : max_w_(max_width), max_h_(max_height) {
+  std::string err;
+  ctx_ = render::createContext(backend, err);
+  if (!ctx_) throw core::Error(core::Status::Backend, "bake capture: " + err);
+  render::RendererDesc rd;
+  rd.width = max_width;
+  rd.height = max_height;
+  rd.mesh_capacity = static_cast<uint32_t>(block_meshes.size() + 1);
+  renderer_ = render::Renderer::create(*ctx_, rd, err);
+  if (!renderer_) throw core::Error(core::Status::Backend, "bake capture: " + err);
+  handles_.resize(block_meshes.size());
+  for (size_t b = 0; b < block_meshes.size(); ++b)
+    if (!block_meshes[b].empty()) handles_[b] = renderer_->upload(block_meshes[b]);
+  pixels_.resize(size_t(max_width) * max_height * 4);
+  depth_pixels_.resize(pixels_.size());
+}
+
+CaptureRig::~CaptureRig() = default;
+
+void CaptureRig::itemBuffer(const render::Camera& cam, std::vector<uint32_t>& counts) {
+  list_.clear();
+  ids_.clear();
+  for (size_t b = 0; b < handles_.size(); ++b) {
+    if (handles_[b].id == 0) continue;
+    list_.push_back(handles_[b]);
+    ids_.push_back(static_cast<uint32_t>(b + 1));
+  }
+  render::RenderOptions opt;
+  opt.pass = render::Pass::ItemBuffer;
+  opt.item_ids = ids_.data();
+  if (!renderer_->render(cam, list_.data(), list_.size(), nullptr, opt) || !renderer_->readPixels(pixels_.data()))
+    throw core::Error(core::Status::Internal, "bake item buffer: " + renderer_->lastError());
+  const size_t n = size_t(cam.width) * cam.height;
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* p = &pixels_[i * 4];
+    if (p[3] == 0) continue;
+    const uint32_t id = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16;
+    if (id >= 1 && id <= counts.size()) ++counts[id - 1];
+  }
+}
+
+void CaptureRig::capture(const render::Camera& cam, const std::vector<uint32_t>& blocks, CaptureImage& out,
+                         PinholeCamera& pinhole) {
+  list_.clear();
+  for (uint32_t b : blocks)
+    if (b < handles_.size() && handles_[b].id != 0) list_.push_back(handles_[b]);
+  render::RenderOptions opt;
+  opt.pass = render::Pass::CaptureColor;
+  if (!renderer_->render(cam, list_.data(), list_.size(), nullptr, opt) || !renderer_->readPixels(pixels_.data()))
+    throw core::Error(core::Status::Internal, "bake capture: " + renderer_->lastError());
+  opt.pass = render::Pass::CaptureDepth;
+  opt.max_depth_m = kMaxDepth;
+  if (!renderer_->render(cam, list_.data(), list_.size(), nullptr, opt) ||
+      !renderer_->readPixels(depth_pixels_.data()))
+    throw core::Error(core::Status::Internal, "bake capture: " + renderer_->lastError());
+  const size_t n = size_t(cam.width) * cam.height;
+  out.width = cam.width;
+  out.height = cam.height;
+  out.rgba.assign(pixels_.begin(), pixels_.begin() + n * 4);
+  out.depth.resize(n);
+  out.mask.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const double z = render::unpackCaptureDepth(&depth_pixels_[i * 4], kMaxDepth);
+    // Alpha 255 = geometry; 128 = an underside (the paper's special colour),
+    // which occludes but is not part of the impostor; 0 = nothing.
+    out.mask[i] = pixels_[i * 4 + 3] == 255 && z > 0 ? 1 : 0;
+    out.depth[i] = z > 0 ? static_cast<float>(z) : std::numeric_limits<float>::infinity();
+  }
+  pinhole = pinholeOf(cam);
+}
+
+}  // namespace blvd::bake

@@ -1,0 +1,52 @@
+// Off-screen captures for the bake, through the same renderer and shading as
+// the runtime: item buffers for visibility (Décoret 99 §5.3) and coverage
+// (Marvie's ACH), and colour + depth images of a set of blocks for textured
+// depth meshes (Sillion 97 §4.2).
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bake/depth_mesh.h"
+#include "geo/mesh.h"
+#include "render/camera.h"
+#include "render/context.h"
+#include "render/renderer.h"
+
+namespace blvd::bake {
+
+class CaptureRig {
+ public:
+  // Uploads every block's mesh once. Throws core::Error(Backend) if no GL
+  // context or renderer can be made.
+  CaptureRig(const std::vector<geo::MeshData>& block_meshes, int max_width, int max_height,
+             render::Backend backend = render::Backend::Auto);
+  ~CaptureRig();
+
+  // Renders every block as its id (block + 1) and adds each block's pixel
+  // count to counts[block] (counts is sized to the block count).
+  void itemBuffer(const render::Camera& cam, std::vector<uint32_t>& counts);
+
+  // Colour (lit, unfogged) and view depth of `blocks` only, as seen by `cam`.
+  // Also fills `pinhole` with the matching camera for depth-mesh building.
+  void capture(const render::Camera& cam, const std::vector<uint32_t>& blocks, CaptureImage& out,
+               PinholeCamera& pinhole);
+
+  const char* backendName() const { return ctx_->name(); }
+  size_t blockCount() const { return handles_.size(); }
+
+ private:
+  std::unique_ptr<render::Context> ctx_;
+  std::unique_ptr<render::Renderer> renderer_;
+  std::vector<render::MeshHandle> handles_;  // per block (id 0 when empty)
+  std::vector<render::MeshHandle> list_;
+  std::vector<uint32_t> ids_;
+  std::vector<uint8_t> pixels_, depth_pixels_;
+  int max_w_, max_h_;
+};
+
+// The pinhole model of a render::Camera (glTF axes), for depth_mesh.
+PinholeCamera pinholeOf(const render::Camera& cam);
+
+}  // namespace blvd::bake

@@ -1,0 +1,105 @@
+#include "graph/cell_tables.h"
+
+#include <cmath>
+
+#include "core/bytes.h"
+
+namespace blvd::graph {
+namespace {
+void putLayers(core::ByteWriter& w, const std::vector<ImpostorLayer>& layers) {
+  w.put<uint32_t>(static_cast<uint32_t>(layers.size()));
+  for (const ImpostorLayer& l : layers) {
+    w.put(l.blob);
+    w.put(l.triangles);
+    w.put(l.texture_width);
+    w.put(l.texture_height);
+    w.put<uint32_t>(static_cast<uint32_t>(l.blocks.size()));
+    for (uint32_t b : l.blocks) w.put(b);
+  }
+}
+
+void getLayers(core::ByteReader& r, std::vector<ImpostorLayer>& layers, uint32_t blocks, uint32_t blobs) {
+  layers.resize(r.getCount(16));
+  for (ImpostorLayer& l : layers) {
+    const size_t at = r.pos();
+    l.blob = r.get<uint32_t>();
+    l.triangles = r.get<uint32_t>();
+    l.texture_width = r.get<uint16_t>();
+    l.texture_height = r.get<uint16_t>();
+    if (l.blob >= blobs) r.fail("impostor blob index out of range", at);
+    l.blocks.resize(r.getCount(4));
+    for (uint32_t& b : l.blocks) {
+      b = r.get<uint32_t>();
+      if (b >= blocks) r.fail("impostor block index out of range");
+    }
+  }
+}
+}  // namespace
+
+std::vector<uint8_t> serializeVisibility(const CellTables& t) {
+  core::ByteWriter w;
+  w.put<uint32_t>(1);
+  w.put<uint32_t>(static_cast<uint32_t>(t.visibility.size()));
+  for (const CellVisibility& v : t.visibility) {
+    w.put<uint32_t>(static_cast<uint32_t>(v.blocks.size()));
+    for (size_t i = 0; i < v.blocks.size(); ++i) {
+      w.put(v.blocks[i]);
+      w.put(v.ach[i]);
+    }
+  }
+  return std::move(w.bytes());
+}
+
+std::vector<uint8_t> serializeImpostors(const CellTables& t) {
+  core::ByteWriter w;
+  w.put<uint32_t>(1);
+  w.put(t.threshold_px);
+  w.put(t.display_fov_y_deg);
+  w.put(t.display_width);
+  w.put(t.display_height);
+  w.put<uint32_t>(static_cast<uint32_t>(t.impostors.size()));
+  for (const CellImpostors& c : t.impostors) {
+    putLayers(w, c.layered);
+    putLayers(w, c.single);
+  }
+  return std::move(w.bytes());
+}
+
+void parseVisibility(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
+                     CellTables& t) {
+  core::ByteReader r(data, size, "visibility section PVSA", file_offset);
+  if (r.get<uint32_t>() != 1) r.fail("unknown visibility version");
+  const uint32_t n = r.get<uint32_t>();
+  if (n != cells) r.fail("visibility lists " + std::to_string(n) + " cells, the graph has " + std::to_string(cells));
+  t.visibility.resize(n);
+  for (CellVisibility& v : t.visibility) {
+    const uint32_t k = r.getCount(8);
+    v.blocks.resize(k);
+    v.ach.resize(k);
+    for (uint32_t i = 0; i < k; ++i) {
+      v.blocks[i] = r.get<uint32_t>();
+      v.ach[i] = r.get<float>();
+      if (v.blocks[i] >= blocks) r.fail("visible block index out of range");
+      if (!(v.ach[i] >= 0.f && v.ach[i] <= 1.f)) r.fail("coverage hint outside [0, 1]");
+    }
+  }
+}
+
+void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
+                    uint32_t blobs, CellTables& t) {
+  core::ByteReader r(data, size, "impostor section IMPO", file_offset);
+  if (r.get<uint32_t>() != 1) r.fail("unknown impostor version");
+  t.threshold_px = r.get<float>();
+  t.display_fov_y_deg = r.get<float>();
+  t.display_width = r.get<uint16_t>();
+  t.display_height = r.get<uint16_t>();
+  const uint32_t n = r.get<uint32_t>();
+  if (n != cells) r.fail("impostors list " + std::to_string(n) + " cells, the graph has " + std::to_string(cells));
+  t.impostors.resize(n);
+  for (CellImpostors& c : t.impostors) {
+    getLayers(r, c.layered, blocks, blobs);
+    getLayers(r, c.single, blocks, blobs);
+  }
+}
+
+}  // namespace blvd::graph

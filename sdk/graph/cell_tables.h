@@ -1,0 +1,46 @@
+// Per-cell data the bake computes beyond the graph: the potentially visible
+// set with coverage hints (PVSA section: Décoret 99 §5.3 item buffers, Marvie's
+// Average Coverage Hints) and the impostor layers (IMPO section: one textured
+// depth mesh per layer, Sillion 97 §4.2 / Décoret 99 §4).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace blvd::graph {
+
+struct CellVisibility {
+  std::vector<uint32_t> blocks;  // blocks seen from the cell (local ones included), ascending
+  std::vector<float> ach;        // per block: mean pixel share over the cell's samples × 6 directions
+};
+
+struct ImpostorLayer {
+  uint32_t blob = 0;             // GLB with the textured depth mesh and its texture
+  uint32_t triangles = 0;
+  uint16_t texture_width = 0, texture_height = 0;
+  std::vector<uint32_t> blocks;  // the far blocks it stands for (never drawn with it, K06 §3.1.2)
+};
+
+struct CellImpostors {
+  std::vector<ImpostorLayer> layered;  // multi-layer impostor (D99), may be empty
+  std::vector<ImpostorLayer> single;   // one mesh for all far blocks (S97), 0 or 1 entries
+};
+
+struct CellTables {
+  std::vector<CellVisibility> visibility;  // per cell, or empty if not baked
+  std::vector<CellImpostors> impostors;    // per cell, or empty if not baked
+  float threshold_px = 0;                  // D99 layer threshold T used
+  float display_fov_y_deg = 0;
+  uint16_t display_width = 0, display_height = 0;
+};
+
+std::vector<uint8_t> serializeVisibility(const CellTables& t);
+std::vector<uint8_t> serializeImpostors(const CellTables& t);
+// Throw core::Error(Corrupt) naming the section and offset; every index is
+// checked against cells / blocks / blobs.
+void parseVisibility(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
+                     CellTables& t);
+void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
+                    uint32_t blobs, CellTables& t);
+
+}  // namespace blvd::graph
