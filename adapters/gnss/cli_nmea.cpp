@@ -126,7 +126,12 @@ int decode(const DecodeArgs& a) {
   }
 
   Printer out(a, name);
-  gnss::NmeaDecoder dec;
+  // A log is read as fast as the disk allows, so nothing is gained by
+  // emitting an epoch before the next one starts: one line per epoch. Live
+  // sources keep the early emission (one cycle less latency).
+  gnss::NmeaDecoder::Options opt;
+  opt.assembler.early_emit = a.log.empty();
+  gnss::NmeaDecoder dec(opt);
   char buf[8192];
   while (!out.done()) {
     const gnss::ReadResult r = src->read(buf, sizeof buf, -1);

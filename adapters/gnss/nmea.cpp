@@ -700,6 +700,19 @@ uint16_t FixAssembler::countOf(std::string_view address) {
   return 0;  // too many distinct addresses in one epoch: not usable as an ender
 }
 
+bool FixAssembler::onePerCycle(SentenceType t) {
+  return t == SentenceType::RMC || t == SentenceType::GGA || t == SentenceType::GNS || t == SentenceType::GLL ||
+         t == SentenceType::VTG || t == SentenceType::ZDA;
+}
+
+bool FixAssembler::seenInEpoch(std::string_view address) const {
+  char a[9];
+  copyAddress(a, address);
+  for (size_t i = 0; i < seen_n_; ++i)
+    if (std::strcmp(seen_[i].address, a) == 0) return true;
+  return false;
+}
+
 void FixAssembler::startEpoch() {
   cur_ = Epoch{};
   cur_.open = true;
@@ -1023,6 +1036,11 @@ void FixAssembler::add(const Sentence& s, const NmeaRecord* rec, Handler& h) {
   // time is its own, so they do not open epochs; they still carry one).
   const bool opens = rec && rec->has_tod && rec->type != SentenceType::GST;
   if (opens && cur_.open && cur_.has_tod && cur_.tod_ms != rec->tod_ms) closeEpoch(h, true);
+  // Without a time (a receiver still searching sends empty RMC/GGA/GLL
+  // cycle after cycle) the repetition of a once-per-cycle sentence marks the
+  // next cycle; otherwise those cycles would pile up into one epoch and taint
+  // the first real fix (bt451: GLL,...,152504.50,A right after such cycles).
+  if (rec && cur_.open && !cur_.has_tod && onePerCycle(rec->type) && seenInEpoch(s.address)) closeEpoch(h, false);
   if (emitted_ && cur_.open && rec) {
     // Data after the learned ender that belongs to the same epoch (same time,
     // or no time): the ender was wrong. Keep merging; closeEpoch() emits the

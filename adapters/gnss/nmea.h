@@ -209,8 +209,10 @@ bool decodeSentence(const Sentence& s, NmeaRecord* rec, NmeaDiagnostic* diag);
 // An epoch is the run of sentences that share one time of day: a receiver
 // emits its RMC, GGA, GSA, GST, ZDA ... of one solution together. Sentences
 // without a time (GSA, VTG, HDT, a Quectel RMC with an empty time field)
-// belong to the epoch in progress. The epoch closes, and its Fix is emitted,
-// when a sentence with another time arrives, on finish(), or - once the
+// belong to the epoch in progress (until a time arrives, a second RMC, GGA,
+// GNS, GLL, VTG or ZDA of the same talker starts a new one). The epoch
+// closes, and its Fix is emitted, when a sentence with another time
+// arrives, on finish(), or - once the
 // assembler has learned the receiver's cycle - right after the sentence that
 // always ends it (gpsd's "cycle ender"): an address and occurrence count seen
 // last before the time changed on two consecutive epochs. That removes one
@@ -305,6 +307,8 @@ class FixAssembler {
   Fix build(const Epoch& e) const;
   void emit(Handler& h, const Fix& f);
   uint16_t countOf(std::string_view address);
+  bool seenInEpoch(std::string_view address) const;
+  static bool onePerCycle(SentenceType t);
   void startEpoch();
 
   Options opt_;

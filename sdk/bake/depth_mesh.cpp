@@ -14,10 +14,11 @@
 #include <cmath>
 #include <cstdint>
 #include <exception>
-#include <glm/geometric.hpp>
 #include <limits>
 #include <numeric>
 #include <utility>
+
+#include <glm/geometric.hpp>
 
 namespace blvd::bake {
 

@@ -19,10 +19,11 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
-#include <glm/vec2.hpp>
-#include <glm/vec3.hpp>
 #include <string>
 #include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
 
 #include "bake/triangulate.h"
 #include "geo/mesh.h"

@@ -227,7 +227,14 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
       objs.push_back({b, info[b].hull, info[b].top >= opt.landmark_height_m ? opt.landmark_scale : 1.0});
     std::vector<std::pair<bool, std::vector<uint32_t>>> jobs;  // (single?, blocks)
     if (opt.mode == ImpostorMode::Layered || opt.mode == ImpostorMode::Both) {
-      const LayerAssignment la = assignLayers(P, Q, objs, T);
+      LayerAssignment la = assignLayers(P, Q, objs, T);
+      if (la.layers.size() > size_t(opt.max_layers)) {
+        // Each layer costs a texture and a capture; past max_layers the
+        // extra layers merge where they add the least parallax error, and
+        // the report says how much that was.
+        ++res.capped_cells;
+        res.capped_worst_px = std::max(res.capped_worst_px, capLayers(la, objs.size(), opt.max_layers) / T * opt.threshold_px);
+      }
       for (const auto& layer : la.layers) {
         std::vector<uint32_t> blocks;
         for (uint32_t i : layer) blocks.push_back(far[i]);

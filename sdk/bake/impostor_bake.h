@@ -24,6 +24,7 @@ struct ImpostorOptions {
   ImpostorMode mode = ImpostorMode::Layered;
   int texture_max = 512;          // largest texture side, pixels
   double threshold_px = 10.0;     // D99's T, pixels at the display below
+  int max_layers = 4;             // layers beyond this merge (capLayers); counted in the result
   int display_width = 800, display_height = 480;
   double display_fov_y_deg = 45.0;
   int grid_px = 24;               // S97 grid spacing inside the contour, texture pixels
@@ -52,6 +53,8 @@ struct ImpostorBakeResult {
   std::vector<ImpostorRecord> records;
   double pvs_seconds = 0, impostor_seconds = 0;
   size_t samples = 0;
+  size_t capped_cells = 0;          // cells whose D99 layering needed more than max_layers
+  double capped_worst_px = 0;       // largest weight a merge admitted, in display pixels
 };
 
 // block_meshes: per block (face) its full geometry, glTF axes. Blobs go into

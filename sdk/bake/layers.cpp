@@ -175,6 +175,26 @@ LayerAssignment assignLayers(glm::dvec2 P, glm::dvec2 Q, const std::vector<Layer
   return out;
 }
 
+double capLayers(LayerAssignment& la, size_t n, size_t max_layers) {
+  double worst = 0;
+  if (max_layers == 0) max_layers = 1;
+  while (la.layers.size() > max_layers) {
+    std::vector<uint32_t> last = std::move(la.layers.back());
+    la.layers.pop_back();
+    size_t best = 0;
+    double best_w = 1e300;
+    for (size_t l = 0; l < la.layers.size(); ++l) {
+      double w = 0;
+      for (uint32_t i : last)
+        for (uint32_t j : la.layers[l]) w = std::max(w, la.weights[i * n + j]);
+      if (w < best_w) best_w = w, best = l;
+    }
+    worst = std::max(worst, best_w);
+    la.layers[best].insert(la.layers[best].end(), last.begin(), last.end());
+  }
+  return worst;
+}
+
 double pixelsToRadians(double pixels, double width_px, double fov_x_deg) {
   return pixels * (fov_x_deg * kPi / 180.0) / width_px;
 }

@@ -49,6 +49,12 @@ struct LayerAssignment {
 LayerAssignment assignLayers(glm::dvec2 P, glm::dvec2 Q, const std::vector<LayerObject>& objects,
                              double threshold_rad);
 
+// Caps the layer count at `max_layers` by merging, one at a time, the last
+// layer into the earlier one whose largest cross weight with it is smallest
+// (the merge that adds the least visibility-event error). Returns the largest
+// weight a merge admitted (0 when nothing had to merge).
+double capLayers(LayerAssignment& la, size_t n_objects, size_t max_layers);
+
 // The threshold T given in pixels at a display of `width_px` pixels across a
 // horizontal field of view of `fov_x_deg`, in radians (D99 §6 uses 10 px at 512²).
 double pixelsToRadians(double pixels, double width_px, double fov_x_deg);

@@ -75,6 +75,8 @@ void writeBakeReport(const std::string& dir, const std::string& source, const gr
   rows.push_back({"mean triangles per impostor", fmt(tri / n, 0)});
   rows.push_back({"mean bytes per impostor (GLB: Draco mesh + JPEG)", fmt(bytes / n, 0)});
   rows.push_back({"mean bake time per impostor, ms", fmt(1000 * secs / n, 1)});
+  rows.push_back({"cells whose layering exceeded the cap (merged)", std::to_string(r.capped_cells)});
+  rows.push_back({"largest visibility-event weight admitted by a merge, px", fmt(r.capped_worst_px, 1)});
   for (const auto& [layers, cells] : layer_hist)
     rows.push_back({"cells with " + std::to_string(layers) + " layer(s)", std::to_string(cells)});
   page.table(rows);

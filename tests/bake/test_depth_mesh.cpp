@@ -9,12 +9,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <glm/common.hpp>
-#include <glm/geometric.hpp>
 #include <limits>
 #include <random>
 #include <string>
 #include <vector>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include "bake/depth_mesh.h"
 

@@ -105,3 +105,24 @@ TEST(Layers, PixelThreshold) {
   // 10 px at 800 px across 69.39° (45° vertical at 800x480).
   EXPECT_NEAR(pixelsToRadians(10, 800, 69.3903) / kDeg, 0.8674, 1e-3);
 }
+
+TEST(Layers, CapMergesTheCheapestLayers) {
+  // Five objects in a row far down the street: every pair conflicts, so D99
+  // gives five layers; capping at 2 keeps every object exactly once.
+  const glm::dvec2 P(0, 0), Q(50, 0);
+  std::vector<LayerObject> objs;
+  for (int i = 0; i < 5; ++i) {
+    const double x = 100 + 60 * i;
+    objs.push_back({0, convexHull({{x, -5}, {x + 10, -5}, {x + 10, 5}, {x, 5}}), 1.0});
+  }
+  LayerAssignment la = assignLayers(P, Q, objs, 1e-4);
+  ASSERT_EQ(la.layers.size(), 5u);
+  const double worst = capLayers(la, objs.size(), 2);
+  EXPECT_EQ(la.layers.size(), 2u);
+  EXPECT_GT(worst, 1e-4);
+  std::vector<int> seen(objs.size(), 0);
+  for (const auto& l : la.layers)
+    for (uint32_t i : l) ++seen[i];
+  for (int s : seen) EXPECT_EQ(s, 1);
+  EXPECT_EQ(capLayers(la, objs.size(), 2), 0.0);  // already within the cap
+}
