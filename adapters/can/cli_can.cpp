@@ -3,6 +3,7 @@
 //   blvd can decode LOG --dbc DBC [--json] [--iface can0] [-o FILE]
 //     one line per frame whose id the DBC knows; with --json one object per line:
 //     {"t":46408.584959,"id":37,"iface":"can0","name":"STEER_ANGLE_SENSOR","signals":{"STEER_ANGLE":0,...}}
+//     ("extended":true follows "id" for 29-bit ids; t is the log's timestamp text, exactly)
 //   blvd can odometry LOG --dbc DBC --vehicle toyota|vw_mqb|hyundai [--json] [--iface can0] [-o FILE]
 //     one line per Odometry update of the vehicle profile.
 //

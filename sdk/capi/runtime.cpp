@@ -7,6 +7,9 @@
 #include "core/log.h"
 
 namespace blvd::capi {
+namespace {
+constexpr size_t kImpostorCacheCells = 16;
+}
 using core::Error;
 using core::Status;
 
@@ -20,7 +23,11 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   render::RendererDesc rd;
   rd.width = static_cast<int>(desc.width);
   rd.height = static_cast<int>(desc.height);
-  rd.mesh_capacity = static_cast<uint32_t>(city_.blocks().size() + 16);
+  // Every block, plus the impostor cache: kImpostorCacheCells cells of at
+  // most the package's largest per-cell impostor count.
+  size_t per_cell = 0;
+  for (const auto& c : city_.cellTables().impostors) per_cell = std::max(per_cell, c.layered.size() + c.single.size());
+  rd.mesh_capacity = static_cast<uint32_t>(city_.blocks().size() + kImpostorCacheCells * per_cell + 1);
   renderer_ = render::Renderer::create(*ctx_, rd, err);
   if (!renderer_) throw Error(Status::Backend, err);
 
@@ -36,7 +43,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
       throw Error(Status::Internal, "block " + std::to_string(b) + ": " + renderer_->lastError());
   }
   draw_.reserve(block_meshes_.size() + 64);
-  cache_.resize(16);
+  cache_.resize(kImpostorCacheCells);
   setMode(desc.mode, desc.radius_m);
   cam_.fov_y_deg = desc.fov_y_deg;
   cam_.far_m = desc.far_m;

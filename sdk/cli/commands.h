@@ -16,6 +16,7 @@ using Runner = std::function<int()>;
 void addBake(CLI::App& app, Runner& run);
 void addPack(CLI::App& app, Runner& run);
 void addView(CLI::App& app, Runner& run);
+void addBench(CLI::App& app, Runner& run);
 // "full", "local", "radius:R", "single", "layered"/"blvd" -> mode (+ radius).
 bool parseMode(const std::string& s, blvd_render_mode& mode, float& radius);
 // Defined in adapters/<x>/cli_<x>.cpp, compiled into the CLI when the adapter exists.

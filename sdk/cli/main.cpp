@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   blvd::cli::addBake(app, run);
   blvd::cli::addPack(app, run);
   blvd::cli::addView(app, run);
+  blvd::cli::addBench(app, run);
 #ifdef BLVD_HAVE_GNSS_ADAPTER
   blvd::cli::addNmea(app, run);
 #endif
