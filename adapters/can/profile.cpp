@@ -1,5 +1,6 @@
 #include "can/profile.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace blvd::can {
@@ -125,18 +126,20 @@ blvd_status Profile::create(const ProfileDesc& desc, const Database& dbc, std::s
     case Vehicle::VwMqb: begin = kVwMqb, n = std::size(kVwMqb); break;
     case Vehicle::Hyundai: begin = kHyundai, n = std::size(kHyundai); break;
   }
-  std::string missing;
+  std::vector<std::string> missing;  // each named once
+  const auto noteMissing = [&](std::string what) {
+    if (std::find(missing.begin(), missing.end(), what) == missing.end()) missing.push_back(std::move(what));
+  };
   const auto lookup = [&](const Message* m, const char* name, bool required) -> const Signal* {
     if (!name || !m) return nullptr;
     const Signal* s = m->signal(name);
-    if ((!s || !s->supported) && required)
-      missing += std::string(missing.empty() ? "" : ", ") + m->name + "." + name + (s ? " (unsupported)" : "");
+    if ((!s || !s->supported) && required) noteMissing(m->name + "." + name + (s ? " (unsupported)" : ""));
     return s && s->supported ? s : nullptr;
   };
   for (const Spec* s = begin; s != begin + n; ++s) {
     const Message* m = dbc.findByName(s->message);
     if (!m) {
-      if (s->required) missing += std::string(missing.empty() ? "" : ", ") + s->message;
+      if (s->required) noteMissing(s->message);
       continue;
     }
     Item it{s->target, lookup(m, s->signal, s->required), lookup(m, s->add, s->required),
@@ -147,7 +150,8 @@ blvd_status Profile::create(const ProfileDesc& desc, const Database& dbc, std::s
     b.items.push_back(it);
   }
   if (!missing.empty()) {
-    err = std::string("profile ") + vehicleName(desc.vehicle) + ": " + dbc.source() + " lacks " + missing;
+    err = std::string("profile ") + vehicleName(desc.vehicle) + ": " + dbc.source() + " lacks ";
+    for (size_t i = 0; i < missing.size(); ++i) err += (i ? ", " : "") + missing[i];
     bound_.clear();
     return BLVD_ERR_NOT_FOUND;
   }

@@ -17,6 +17,7 @@ bool GlApi::load(Context& ctx, std::string& missing) {
   }
   BLVD_GL_FUNCTIONS(BLVD_GL_LOAD)
 #undef BLVD_GL_LOAD
+  ClearDepthf = reinterpret_cast<PFNGLCLEARDEPTHFPROC>(ctx.getProcAddress("glClearDepthf"));
   return missing.empty();
 }
 

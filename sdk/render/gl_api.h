@@ -95,6 +95,9 @@ struct GlApi {
   BLVD_GL_FUNCTIONS(BLVD_GL_MEMBER)
 #undef BLVD_GL_MEMBER
 
+  // Optional: GLES 3 and GL 4.1 have it, a GL 3.3 host context may not.
+  PFNGLCLEARDEPTHFPROC ClearDepthf = nullptr;
+
   // Loads every entry point through ctx.getProcAddress (ctx must be current).
   // False when any is missing; `missing` then lists them, e.g.
   // "glGenVertexArrays glBufferSubData".

@@ -33,6 +33,7 @@ void GlStateSnapshot::capture(const GlApi& gl) {
   gl.GetIntegerv(GL_TEXTURE_BINDING_2D, &texture0_2d);
   gl.ActiveTexture(static_cast<GLenum>(active_texture));
   gl.GetFloatv(GL_COLOR_CLEAR_VALUE, clear_color);
+  gl.GetFloatv(GL_DEPTH_CLEAR_VALUE, &clear_depth);
   gl.GetIntegerv(GL_DEPTH_FUNC, &depth_func);
   gl.GetIntegerv(GL_CULL_FACE_MODE, &cull_face_mode);
   gl.GetIntegerv(GL_FRONT_FACE, &front_face);
@@ -65,6 +66,7 @@ void GlStateSnapshot::restore(const GlApi& gl) const {
   gl.BindTexture(GL_TEXTURE_2D, static_cast<GLuint>(texture0_2d));
   gl.ActiveTexture(static_cast<GLenum>(active_texture));
   gl.ClearColor(clear_color[0], clear_color[1], clear_color[2], clear_color[3]);
+  if (gl.ClearDepthf) gl.ClearDepthf(clear_depth);
   gl.DepthFunc(static_cast<GLenum>(depth_func));
   gl.CullFace(static_cast<GLenum>(cull_face_mode));
   gl.FrontFace(static_cast<GLenum>(front_face));

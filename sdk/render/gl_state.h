@@ -19,6 +19,7 @@ struct GlStateSnapshot {
   GLint viewport[4];
   GLint active_texture, texture0_2d, depth_func, cull_face_mode, front_face;
   GLfloat clear_color[4];
+  GLfloat clear_depth;
   GLint pack_alignment, pack_row_length, pack_skip_rows, pack_skip_pixels;
   GLboolean depth_test, depth_mask, cull_face, blend, polygon_offset_fill, scissor_test,
       stencil_test, rasterizer_discard;

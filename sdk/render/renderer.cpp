@@ -1,7 +1,8 @@
 // Renderer: GL resources, the mesh pool, and the frame.
 //
-// Frame order: background (sky + ground, writes depth 1.0 everywhere) then
-// the culled meshes with depth test. The ground is part of the background
+// Frame order: the culled meshes front to back (so llvmpipe's early depth
+// test rejects hidden fragments), then the background (sky + ground) only
+// where the depth is still 1.0. The ground is part of the background
 // pass rather than a big quad: a quad at y = 0 would z-fight with street
 // ribbons a few centimetres above it at every distance beyond ~100 m with a
 // 24-bit depth buffer, and polygon offset cannot fix that at the grazing
@@ -81,6 +82,10 @@ struct Renderer::Impl {
   std::vector<MeshSlot> slots;  // grows up to capacity, reserved once
   std::vector<uint32_t> free_slots;
   uint32_t capacity = 0;
+
+  // render() scratch: visible list entries with their distance, reserved at
+  // init so a frame does not allocate.
+  std::vector<std::pair<float, uint32_t>> order;
 
   // upload() scratch, kept to avoid reallocating for every mesh.
   std::vector<Vertex> vertices;
@@ -276,6 +281,7 @@ bool Renderer::init(const RendererDesc& desc) {
 
   impl_->capacity = desc.mesh_capacity;
   impl_->slots.reserve(impl_->capacity);
+  impl_->order.reserve(impl_->capacity * 2);
   impl_->free_slots.reserve(impl_->capacity);
   setLook(look_);
   if (!shared_) {
@@ -601,9 +607,9 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
     };
 
     const glm::mat4 clip_f(clip);
-    if (opt.pass == Pass::Shaded) {
-      // Background: sky and ground in one full-screen triangle. GL_ALWAYS with
-      // depth writes lays down the far depth, replacing a depth clear.
+    // Sky and ground go last, only where no mesh landed (depth still 1.0):
+    // llvmpipe then shades each covered pixel once instead of twice.
+    auto drawBackground = [&] {
       // Camera-to-world rotation is the transpose of the view rotation; its
       // columns are right, up and back in world axes.
       const glm::dmat3 cam_to_world = glm::transpose(glm::dmat3(view));
@@ -618,13 +624,20 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
       gl.Uniform3f(m.bg.ground, m.ground.x, m.ground.y, m.ground.z);
       gl.Uniform1f(m.bg.eye_height, static_cast<float>(eye.y));
       gl.Disable(GL_CULL_FACE);
-      gl.DepthFunc(GL_ALWAYS);
+      gl.DepthFunc(GL_LEQUAL);  // the triangle sits exactly on the far plane
+      gl.DepthMask(GL_FALSE);
       gl.BindVertexArray(m.empty_vao);
       gl.DrawArrays(GL_TRIANGLES, 0, 3);
+      gl.DepthMask(GL_TRUE);
       ++fs.draw_calls;
+    };
+    if (opt.pass == Pass::Shaded) {
+      if (gl.ClearDepthf) gl.ClearDepthf(1.0f);
+      gl.Clear(GL_DEPTH_BUFFER_BIT);
     } else {
       // Bake captures start from nothing: transparent black, far depth.
       gl.ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+      if (gl.ClearDepthf) gl.ClearDepthf(1.0f);
       gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     }
 
@@ -654,6 +667,7 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
         u = &m.tex;
       }
       bool bound = false;
+      m.order.clear();
       for (size_t i = 0; i < n; ++i) {
         const uint32_t index = (list[i].id & kIndexMask) - 1;
         if (!isValid(list[i])) {
@@ -667,6 +681,15 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
           ++fs.meshes_culled;
           continue;
         }
+        // Reserved for twice the pool; only a list longer than that grows it.
+        m.order.emplace_back(static_cast<float>(glm::length(rel) - glm::length(s.half)), static_cast<uint32_t>(i));
+      }
+      std::sort(m.order.begin(), m.order.end());
+      for (const auto& entry : m.order) {
+        const size_t i = entry.second;
+        const uint32_t index = (list[i].id & kIndexMask) - 1;
+        const MeshSlot& s = m.slots[index];
+        const glm::dvec3 rel = s.center - eye;
         if (!bound) {
           bound = true;
           gl.UseProgram(program);
@@ -697,6 +720,7 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
         fs.triangles += static_cast<uint64_t>(s.index_count / 3);
       }
     }
+    if (opt.pass == Pass::Shaded) drawBackground();
     gl.BindVertexArray(0);
     gl.BindTexture(GL_TEXTURE_2D, 0);
   }

@@ -229,6 +229,8 @@ TEST(Profile, MissingSignalsAreNamed) {
   // A DBC for another make is refused, not silently half-used.
   const Database vw = loadDbc("vw_mqb.dbc");
   EXPECT_EQ(p.create(ProfileDesc{}, vw, err), BLVD_ERR_NOT_FOUND);
+  EXPECT_EQ(err, "profile toyota: " + test::dataPath("dbc/vw_mqb.dbc") +
+                     " lacks WHEEL_SPEEDS, SPEED, KINEMATICS, STEER_ANGLE_SENSOR");
   Vehicle v;
   EXPECT_TRUE(parseVehicle("vw_mqb", v));
   EXPECT_EQ(v, Vehicle::VwMqb);
