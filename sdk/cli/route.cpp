@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
-#include <unordered_set>
+#include <unordered_map>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -30,28 +30,29 @@ std::vector<uint32_t> autoRoute(const graph::StreetGraph& g, uint32_t cells, uin
         !(g.halfedges[h].flags & graph::kTunnel) && g.successors.count(h) > 0)
       starts.push_back(h);
   if (starts.empty()) starts.push_back(0);
-  // Try a few starts; keep the longest route (a dead end can cut one short).
-  for (int attempt = 0; attempt < 16 && route.size() < cells; ++attempt) {
-    std::vector<uint32_t> r{starts[rng() % starts.size()]};
-    std::unordered_set<uint32_t> used{r[0], g.halfedges[r[0]].twin};
-    while (r.size() < cells) {
-      const uint32_t h = r.back();
-      const glm::dvec2 d = direction(g, h, true);
-      uint32_t best = graph::kNone;
-      double best_score = -1e9;
-      for (const uint32_t* s = g.successors.begin(h); s != g.successors.end(h); ++s) {
-        if (used.count(*s) || (g.halfedges[*s].flags & graph::kTunnel)) continue;
-        // Straight on scores highest; a little seeded noise picks among turns.
-        const double score = glm::dot(d, direction(g, *s, false)) + 0.6 * std::uniform_real_distribution<>(0, 1)(rng);
-        if (score > best_score) best_score = score, best = *s;
-      }
-      if (best == graph::kNone) break;
-      r.push_back(best);
-      used.insert(best);
-      used.insert(g.halfedges[best].twin);
+  // Straight on scores highest and seeded noise picks among turns. A cell
+  // already driven is allowed again (a long route in a small city must loop)
+  // but costs a penalty per earlier visit, and a U-turn only at a dead end.
+  std::unordered_map<uint32_t, int> visits;
+  std::vector<uint32_t> r{starts[rng() % starts.size()]};
+  visits[r[0]] = 1;
+  while (r.size() < cells) {
+    const uint32_t h = r.back();
+    const glm::dvec2 d = direction(g, h, true);
+    uint32_t best = graph::kNone;
+    double best_score = -1e9;
+    for (const uint32_t* s = g.successors.begin(h); s != g.successors.end(h); ++s) {
+      if (g.halfedges[*s].flags & graph::kTunnel) continue;
+      const bool uturn = *s == g.halfedges[h].twin;
+      const double score = glm::dot(d, direction(g, *s, false)) + 0.6 * std::uniform_real_distribution<>(0, 1)(rng) -
+                           3.0 * visits[*s] - (uturn ? 10.0 : 0.0);
+      if (score > best_score) best_score = score, best = *s;
     }
-    if (r.size() > route.size()) route = r;
+    if (best == graph::kNone) break;  // only tunnels ahead
+    r.push_back(best);
+    ++visits[best];
   }
+  route = r;
   return route;
 }
 

@@ -16,8 +16,9 @@ struct Pose {
   uint32_t cell = 0;
 };
 
-// N connected cells from a seeded start: prefers going straight on at
-// junctions, never re-enters a cell, and starts on a street of at least 30 m.
+// N connected cells from a seeded start (a street of at least 30 m): prefers
+// going straight on at junctions and cells not yet driven; U-turns only at
+// dead ends. Deterministic for a graph and seed.
 std::vector<uint32_t> autoRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed);
 
 // Poses every `step_m` metres along the route, heading toward a point

@@ -20,7 +20,7 @@ struct View {
   float heading, pitch;
 };
 // A street in Monaco-Ville on the fixture's seed-7 route (auto:40), whose cells have impostors.
-constexpr View kView{43.733256, 7.417362, 24.0f, 0.0f};
+constexpr View kView{43.735370, 7.417288, 211.0f, 0.0f};
 
 std::vector<uint8_t> renderView(const View& v, blvd_backend backend, blvd_render_mode mode = BLVD_MODE_FULL,
                                 blvd_frame_stats* stats = nullptr) {
