@@ -48,7 +48,7 @@ enum FixFlag : uint32_t {
   kFixHasPdop = 1u << 10,     // pdop, vdop (GSA)
   // Provenance.
   kFixNoChecksum = 1u << 16,  // a sentence merged into this fix had no checksum
-  kFixUpdate = 1u << 17,      // supersedes an earlier fix with the same time (see nmea.h)
+  kFixUpdate = 1u << 17,      // supersedes the fix emitted just before it: same epoch, completed late (nmea.h)
 };
 
 struct Fix {

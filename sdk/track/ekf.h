@@ -1,0 +1,127 @@
+// Fusion of GNSS and vehicle odometry: an extended Kalman filter over
+// x = [east, north, heading, speed, yaw-rate bias] in the local frame.
+//
+// Motion model (Thrun, Burgard & Fox, "Probabilistic Robotics" §3.3 and §5.3;
+// the unicycle used by most automotive dead reckoning):
+//   d(east)/dt  = v sin(psi),  d(north)/dt = v cos(psi)      psi clockwise from north
+//   d(psi)/dt   = -(omega - b)                               omega: measured yaw rate, positive left
+//   dv/dt = 0 + noise,  db/dt = 0 + noise
+// integrated with the heading at the middle of the step. With no yaw-rate
+// sensor, omega = 0 and b becomes the turn rate itself (a constant-turn-rate
+// model), with more process noise.
+//
+// Measurements: GNSS position (weighted by the fix's reported accuracy: GST
+// sigma, else HDOP x UERE, else a default), GNSS speed and course, odometry
+// speed (CAN speed or the mean wheel speed) and an absolute heading when one is
+// given. Every update passes a chi-square gate on its normalised innovation
+// (Bar-Shalom, Li & Kirubarajan 2001, §5.4.2: validation gate) so an outlier fix
+// is rejected; a run of rejected fixes (the filter, not the fixes, is wrong)
+// resets the position. Outages are prediction only: the covariance grows.
+//
+// Contract: plain value type, no allocation, no threads, deterministic.
+#pragma once
+#include <cstdint>
+
+namespace blvd::track {
+
+// Zero means "default" for every field (see ekfDefaults()).
+struct EkfDesc {
+  double uere_m = 0;               // user equivalent range error: per-axis sigma = HDOP x UERE / sqrt(2); default 4 m
+  double default_sigma_m = 0;      // per-axis sigma of a fix with neither GST nor HDOP; default 5 m
+  double min_sigma_m = 0;          // floor of a fix's per-axis sigma (receivers claim too much); default 0.5 m
+  double gate_chi2_2dof = 0;       // position gate; default 13.82 (99.9 %)
+  double gate_chi2_1dof = 0;       // speed / heading gate; default 10.83 (99.9 %)
+  uint32_t reset_after_rejects = 0;  // consecutive rejected fixes that reset the position; default 5
+  double q_pos = 0;                // position process noise (slip, model error), m^2/s; default 0.05
+  double q_speed = 0;              // speed random walk, (m/s)^2/s; default 4 (2 m/s^2)
+  double q_heading = 0;            // heading noise with a gyro, rad^2/s; default (0.5 deg)^2/s
+  double q_bias = 0;               // yaw-rate bias random walk, (rad/s)^2/s; default (0.01 deg/s)^2/s
+  double q_turn = 0;               // turn-rate random walk without a gyro, (rad/s)^2/s; default (20 deg/s)^2/s
+  double odo_speed_sigma = 0;      // odometry speed, m/s; default 0.1
+  double gnss_speed_sigma = 0;     // GNSS speed over ground, m/s; default 0.3
+  double heading_sigma_deg = 0;    // an absolute heading (kOdoHeading); default 2
+  double track_min_speed = 0;      // GNSS course is used above this speed, m/s; default 3
+  double init_bias_sigma_dps = 0;  // initial yaw-rate bias sigma, deg/s; default 1
+  double gyro_timeout_s = 0;       // a yaw rate older than this is not used; default 0.5
+  double track_width_m = 0;        // rear track for a yaw rate from wheel speeds; default 1.6
+};
+
+EkfDesc ekfDefaults(const EkfDesc& desc);
+
+class Ekf {
+ public:
+  enum : int { kE = 0, kN = 1, kPsi = 2, kV = 3, kB = 4, kDim = 5 };
+
+  explicit Ekf(const EkfDesc& desc = EkfDesc{});
+
+  void reset();
+
+  // Advances the state to time t (no-op for t <= time()).
+  void predict(double t);
+
+  // A GNSS position (local frame, metres) with its per-axis sigma, valid at t_fix.
+  // A fix older than time() is applied to the state moved back along the current
+  // velocity (a late fix). Returns false when gated out.
+  bool updatePosition(double t_fix, double e, double n, double sigma_m);
+  // Ground speed (GNSS or odometry), m/s.
+  bool updateSpeed(double v, double sigma);
+  // Absolute heading (GNSS course or a heading sensor), clockwise from north, radians.
+  bool updateHeading(double psi, double sigma);
+  // The yaw rate used by the following predictions, rad/s positive left; t its time.
+  void setYawRate(double t, double omega);
+  // Drops the yaw-rate input (no gyro: constant-turn-rate model).
+  void clearYawRate() { gyro_t_ = -1e300; }
+  // Sets the heading (first course from GNSS, or from displacement).
+  void initHeading(double psi, double sigma);
+
+  bool initialized() const { return initialized_; }
+  bool headingValid() const { return heading_valid_; }
+  double time() const { return t_; }
+  const double* state() const { return x_; }
+  double cov(int i, int j) const { return P_[i][j]; }
+  double e() const { return x_[kE]; }
+  double n() const { return x_[kN]; }
+  double heading() const { return x_[kPsi]; }  // radians, [0, 2 pi)
+  double speed() const { return x_[kV]; }
+  double bias() const { return x_[kB]; }
+  // 1-sigma of the position along its worst axis.
+  double positionSigma() const;
+  // Distance travelled (integral of |v| dt) since reset.
+  double odometer() const { return odometer_; }
+
+  // The state moved ahead to t without changing the filter (for the pose between
+  // measurements). out: [e, n, psi, v, b]; sigma_out: position sigma.
+  void extrapolate(double t, double out[kDim], double* sigma_out) const;
+
+  uint32_t rejectedFixes() const { return rejected_total_; }
+  uint32_t resets() const { return resets_; }
+
+ private:
+  // One prediction step of dt seconds on (x, P); `now` picks the yaw-rate input.
+  void propagate(double x[kDim], double P[kDim][kDim], double dt, double now) const;
+  bool scalarUpdate(int idx, double residual, double r, double gate);
+  void initPosition(double t, double e, double n, double sigma_m);
+
+  EkfDesc d_;
+  double x_[kDim] = {};
+  double P_[kDim][kDim] = {};
+  double t_ = 0;
+  bool initialized_ = false;
+  bool heading_valid_ = false;
+  double omega_ = 0;        // last yaw rate, rad/s positive left
+  double gyro_t_ = -1e300;  // its time
+  double odometer_ = 0;
+  uint32_t consecutive_rejects_ = 0;
+  uint32_t scalar_rejects_[kDim] = {};  // consecutive gated speed / heading updates
+  // First fix, for a heading from displacement when no course is reported.
+  double anchor_e_ = 0, anchor_n_ = 0, anchor_t_ = 0, anchor_sigma_ = 0;
+  uint32_t rejected_total_ = 0;
+  uint32_t resets_ = 0;
+};
+
+// Wraps an angle to (-pi, pi].
+double wrapPi(double a);
+// Wraps an angle to [0, 2 pi).
+double wrapTwoPi(double a);
+
+}  // namespace blvd::track

@@ -1,0 +1,391 @@
+#include "track/map_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace blvd::track {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+constexpr uint8_t kNoBack = 0xff;
+constexpr uint32_t kMaxK = 32;
+
+double orDefault(double v, double d) { return v > 0 ? v : d; }
+
+// Bearing of a direction vector, clockwise from north.
+double bearing(double dx, double dy) {
+  const double a = std::atan2(dx, dy);
+  return a < 0 ? a + 2 * kPi : a;
+}
+}  // namespace
+
+MatcherDesc matcherDefaults(const MatcherDesc& in) {
+  MatcherDesc d = in;
+  if (d.max_candidates == 0) d.max_candidates = 8;
+  d.max_candidates = std::min(d.max_candidates, kMaxK);
+  if (d.lag == 0) d.lag = 4;
+  d.grid_cell_m = orDefault(d.grid_cell_m, 50);
+  d.search_min_m = orDefault(d.search_min_m, 25);
+  d.search_max_m = orDefault(d.search_max_m, 200);
+  d.search_sigmas = orDefault(d.search_sigmas, 4);
+  d.road_sigma_m = orDefault(d.road_sigma_m, 2.5);
+  d.heading_sigma_deg = orDefault(d.heading_sigma_deg, 15);
+  d.beta_m = orDefault(d.beta_m, 2);
+  d.beta_sigma_factor = orDefault(d.beta_sigma_factor, 1);
+  d.route_slack_m = orDefault(d.route_slack_m, 60);
+  d.route_factor = orDefault(d.route_factor, 2);
+  if (d.max_expansions == 0) d.max_expansions = 256;
+  d.backward_tolerance_m = orDefault(d.backward_tolerance_m, 5);
+  return d;
+}
+
+MapMatcher::MapMatcher(const graph::StreetGraph& g, const MatcherDesc& desc) : g_(g), d_(matcherDefaults(desc)) {
+  grid_.build(g_, d_.grid_cell_m);
+  const size_t K = d_.max_candidates, W = d_.lag + 1, H = g_.halfedges.size();
+  cols_.resize(W);
+  cand_store_.resize(K * W);
+  delta_store_.resize(K * W);
+  alpha_store_.resize(K * W);
+  back_store_.resize(K * W);
+  dist_store_.resize(K * K);
+  for (size_t w = 0; w < W; ++w) {
+    cols_[w].cand = &cand_store_[w * K];
+    cols_[w].delta = &delta_store_[w * K];
+    cols_[w].alpha = &alpha_store_[w * K];
+    cols_[w].back = &back_store_[w * K];
+  }
+  seen_stamp_.assign(H, 0);
+  seen_dist_.assign(H, 0);
+  seen_point_.assign(H, 0);
+  seen_t_.assign(H, 0);
+  touched_.assign(H, 0);
+  route_stamp_.assign(H, 0);
+  route_dist_.assign(H, 0);
+  target_stamp_.assign(H, 0);
+  target_idx_.assign(H, 0);
+  heap_.resize(d_.max_expansions);
+}
+
+size_t MapMatcher::bytes() const {
+  return grid_.bytes() + cols_.capacity() * sizeof(Column) + cand_store_.capacity() * sizeof(Candidate) +
+         (delta_store_.capacity() + alpha_store_.capacity() + dist_store_.capacity()) * sizeof(double) +
+         back_store_.capacity() + (seen_stamp_.capacity() + seen_point_.capacity() + touched_.capacity()) * 4 +
+         (seen_dist_.capacity() + seen_t_.capacity()) * 4 + (route_stamp_.capacity() + target_stamp_.capacity()) * 4 +
+         route_dist_.capacity() * 4 + target_idx_.capacity() + heap_.capacity() * sizeof(HeapItem);
+}
+
+void MapMatcher::reset() {
+  steps_ = 0;
+  head_ = settled_ = CellPoint{};
+  confidence_ = settled_t_ = 0;
+}
+
+CellPoint MapMatcher::project(uint32_t h, double e, double n) const {
+  CellPoint best;
+  if (h >= g_.halfedges.size()) return best;
+  const auto& he = g_.halfedges[h];
+  const glm::dvec2 p(e, n);
+  double best_d2 = 1e300, along = 0;
+  for (uint32_t i = 0; i + 1 < he.pts_count; ++i) {
+    const glm::dvec2 a = g_.points[he.pts_begin + i], b = g_.points[he.pts_begin + i + 1];
+    const glm::dvec2 d = b - a;
+    const double len2 = d.x * d.x + d.y * d.y;
+    const double len = std::sqrt(len2);
+    if (len < 1e-9) continue;
+    const double t = std::clamp(((p.x - a.x) * d.x + (p.y - a.y) * d.y) / len2, 0.0, 1.0);
+    const glm::dvec2 q = a + d * t;
+    const double d2 = (p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y);
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best.cell = h;
+      best.arc_m = along + t * len;
+      best.dist_m = std::sqrt(d2);
+      best.lateral_m = ((p.x - q.x) * d.y - (p.y - q.y) * d.x) / len;  // right = (dy, -dx)
+      best.heading_rad = bearing(d.x, d.y);
+      best.e = q.x;
+      best.n = q.y;
+    }
+    along += len;
+  }
+  return best;
+}
+
+void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
+  const uint32_t K = d_.max_candidates;
+  const double r = std::clamp(d_.search_sigmas * obs.sigma_m, d_.search_min_m, d_.search_max_m);
+  if (++stamp_ == 0) {
+    std::fill(seen_stamp_.begin(), seen_stamp_.end(), 0);
+    stamp_ = 1;
+  }
+  size_t touched = 0;
+  const double px = obs.e, py = obs.n;
+  const auto& pts = g_.points;
+  grid_.query(px, py, r, [&](const SegmentGrid::Entry& en) {
+    const glm::dvec2 a = pts[en.point], b = pts[en.point + 1];
+    const double dx = b.x - a.x, dy = b.y - a.y;
+    const double len2 = dx * dx + dy * dy;
+    const double t = len2 > 1e-18 ? std::clamp(((px - a.x) * dx + (py - a.y) * dy) / len2, 0.0, 1.0) : 0.0;
+    const double qx = a.x + dx * t - px, qy = a.y + dy * t - py;
+    const double dist = std::sqrt(qx * qx + qy * qy);
+    if (dist > r) return;
+    const uint32_t h = en.halfedge;
+    if (seen_stamp_[h] != stamp_) {
+      seen_stamp_[h] = stamp_;
+      touched_[touched++] = h;
+    } else if (dist >= seen_dist_[h]) {
+      return;
+    }
+    seen_dist_[h] = static_cast<float>(dist);
+    seen_point_[h] = en.point;
+    seen_t_[h] = static_cast<float>(t);
+  });
+
+  // Emission log-likelihoods; keep the K best (sorted, ties to the lower cell id).
+  const double se = std::sqrt(obs.sigma_m * obs.sigma_m + d_.road_sigma_m * d_.road_sigma_m);
+  const double inv_2se2 = 0.5 / (se * se);
+  const bool use_heading = obs.heading_sigma_rad > 0;
+  const double sh = obs.heading_sigma_rad * obs.heading_sigma_rad + (d_.heading_sigma_deg * kDeg) * (d_.heading_sigma_deg * kDeg);
+  const double kappa = use_heading ? 1.0 / sh : 0.0;
+  uint32_t count = 0;
+  auto insert = [&](uint32_t h, double log_e, uint32_t listed, bool reversed, double heading) {
+    if (count == K && !(log_e > col.cand[K - 1].log_e || (log_e == col.cand[K - 1].log_e && h < col.cand[K - 1].p.cell)))
+      return;
+    uint32_t pos = count < K ? count++ : K - 1;
+    while (pos > 0 && (col.cand[pos - 1].log_e < log_e || (col.cand[pos - 1].log_e == log_e && col.cand[pos - 1].p.cell > h))) {
+      col.cand[pos] = col.cand[pos - 1];
+      --pos;
+    }
+    Candidate& c = col.cand[pos];
+    c.log_e = log_e;
+    c.p.cell = h;
+    c.p.heading_rad = heading;
+    // Stash which listed segment it came from; arc and lateral are filled below.
+    c.p.arc_m = listed;
+    c.p.lateral_m = reversed ? -1 : 1;
+  };
+  for (size_t k = 0; k < touched; ++k) {
+    const uint32_t h = touched_[k];
+    const glm::dvec2 a = pts[seen_point_[h]], b = pts[seen_point_[h] + 1];
+    const double hd = bearing(b.x - a.x, b.y - a.y);
+    const double dist = seen_dist_[h];
+    const double base = -dist * dist * inv_2se2;
+    const auto& he = g_.halfedges[h];
+    if (!(he.flags & graph::kReverseOfOneway))
+      insert(h, base + (use_heading ? kappa * (std::cos(hd - obs.heading_rad) - 1) : 0), h, false, hd);
+    const uint32_t tw = he.twin;
+    if (tw < g_.halfedges.size() && !(g_.halfedges[tw].flags & graph::kReverseOfOneway)) {
+      const double ht = hd >= kPi ? hd - kPi : hd + kPi;
+      insert(tw, base + (use_heading ? kappa * (std::cos(ht - obs.heading_rad) - 1) : 0), h, true, ht);
+    }
+  }
+  // Arc length and lateral offset for the K kept.
+  for (uint32_t j = 0; j < count; ++j) {
+    Candidate& c = col.cand[j];
+    const uint32_t listed = static_cast<uint32_t>(c.p.arc_m);
+    const bool reversed = c.p.lateral_m < 0;
+    const auto& he = g_.halfedges[listed];
+    double along = 0, total = 0;
+    const uint32_t seg = seen_point_[listed];
+    for (uint32_t i = he.pts_begin; i + 1 < he.pts_begin + he.pts_count; ++i) {
+      const double l = glm::length(pts[i + 1] - pts[i]);
+      if (i < seg) along += l;
+      else if (i == seg) along += l * seen_t_[listed];
+      total += l;
+    }
+    const glm::dvec2 a = pts[seg], b = pts[seg + 1];
+    const glm::dvec2 q = a + (b - a) * static_cast<double>(seen_t_[listed]);
+    const double len = glm::length(b - a);
+    const double lat = len > 1e-9 ? ((px - q.x) * (b.y - a.y) - (py - q.y) * (b.x - a.x)) / len : 0.0;
+    c.p.arc_m = reversed ? std::max(0.0, total - along) : along;
+    c.p.lateral_m = reversed ? -lat : lat;
+    c.p.dist_m = seen_dist_[listed];
+    c.p.e = q.x;
+    c.p.n = q.y;
+  }
+  col.count = count;
+}
+
+void MapMatcher::routeDistances(const Candidate& from, const Column& to, double cap, double* out) {
+  ++stats_.route_searches;
+  for (uint32_t j = 0; j < to.count; ++j) out[j] = -1;
+  if (route_run_ >= 0x7ffffff0u) {
+    std::fill(route_stamp_.begin(), route_stamp_.end(), 0);
+    std::fill(target_stamp_.begin(), target_stamp_.end(), 0);
+    route_run_ = 0;
+  }
+  ++route_run_;
+  const uint32_t tentative = route_run_ * 2, done = route_run_ * 2 + 1;
+  uint32_t remaining = 0;
+  for (uint32_t j = 0; j < to.count; ++j) {
+    const uint32_t c = to.cand[j].p.cell;
+    target_stamp_[c] = route_run_;
+    target_idx_[c] = static_cast<uint8_t>(j);
+    ++remaining;
+  }
+  const uint32_t src = from.p.cell;
+  if (target_stamp_[src] == route_run_) {
+    const uint32_t j = target_idx_[src];
+    const double da = to.cand[j].p.arc_m - from.p.arc_m;
+    if (da >= -d_.backward_tolerance_m) {
+      out[j] = std::max(0.0, da);
+      --remaining;
+    }
+  }
+  if (remaining == 0) return;
+  // A min-heap on distance, ties to the lower cell id (deterministic).
+  const auto heapGreater = [](const HeapItem& a, const HeapItem& b) { return a.d > b.d || (a.d == b.d && a.cell > b.cell); };
+  size_t hs = 0;
+  const size_t hcap = heap_.size();
+  auto push = [&](uint32_t c, double d) {
+    if (route_stamp_[c] == done || (route_stamp_[c] == tentative && route_dist_[c] <= d)) return;
+    if (hs == hcap) {
+      ++stats_.route_truncated;
+      return;
+    }
+    route_stamp_[c] = tentative;
+    route_dist_[c] = static_cast<float>(d);
+    heap_[hs++] = HeapItem{static_cast<float>(d), c};
+    std::push_heap(heap_.begin(), heap_.begin() + hs, heapGreater);
+  };
+  const double d0 = std::max(0.0, static_cast<double>(g_.halfedges[src].length) - from.p.arc_m);
+  if (d0 <= cap)
+    for (const uint32_t* s = g_.successors.begin(src); s != g_.successors.end(src); ++s) push(*s, d0);
+  while (hs > 0 && remaining > 0) {
+    std::pop_heap(heap_.begin(), heap_.begin() + hs, heapGreater);
+    const HeapItem it = heap_[--hs];
+    if (route_stamp_[it.cell] == done || it.d > route_dist_[it.cell]) continue;
+    route_stamp_[it.cell] = done;
+    ++stats_.route_expansions;
+    if (target_stamp_[it.cell] == route_run_) {
+      const uint32_t j = target_idx_[it.cell];
+      if (out[j] < 0) {
+        out[j] = it.d + to.cand[j].p.arc_m;
+        --remaining;
+      }
+    }
+    const double nd = it.d + g_.halfedges[it.cell].length;
+    if (nd > cap) continue;
+    for (const uint32_t* s = g_.successors.begin(it.cell); s != g_.successors.end(it.cell); ++s) push(*s, nd);
+  }
+}
+
+bool MapMatcher::step(const MatchObservation& obs) {
+  ++stats_.steps;
+  Column& cur = column(steps_);
+  cur.t = obs.t;
+  cur.e = obs.e;
+  cur.n = obs.n;
+  findCandidates(obs, cur);
+  if (cur.count == 0) {
+    ++stats_.empty_steps;
+    reset();
+    return false;
+  }
+  double max_le = kNegInf;
+  for (uint32_t j = 0; j < cur.count; ++j) max_le = std::max(max_le, cur.cand[j].log_e);
+
+  bool chained = false;
+  if (steps_ > 0) {
+    const Column& prev = column(steps_ - 1);
+    const double d_obs = std::hypot(cur.e - prev.e, cur.n - prev.n);
+    const double beta = d_.beta_m + d_.beta_sigma_factor * obs.sigma_m;
+    const double cap = d_.route_factor * d_obs + d_.route_slack_m;
+    const uint32_t K = d_.max_candidates;
+    for (uint32_t i = 0; i < prev.count; ++i) routeDistances(prev.cand[i], cur, cap, &dist_store_[i * K]);
+    double asum = 0;
+    for (uint32_t j = 0; j < cur.count; ++j) {
+      double best = kNegInf, fsum = 0;
+      uint8_t bi = kNoBack;
+      for (uint32_t i = 0; i < prev.count; ++i) {
+        const double d = dist_store_[i * K + j];
+        if (d < 0 || prev.delta[i] == kNegInf) continue;
+        const double lt = -std::fabs(d_obs - d) / beta;
+        const double v = prev.delta[i] + lt;
+        if (v > best) best = v, bi = static_cast<uint8_t>(i);
+        fsum += prev.alpha[i] * std::exp(lt);
+      }
+      cur.delta[j] = best == kNegInf ? kNegInf : best + cur.cand[j].log_e;
+      cur.back[j] = bi;
+      cur.alpha[j] = fsum * std::exp(cur.cand[j].log_e - max_le);
+      asum += cur.alpha[j];
+      if (bi != kNoBack) chained = true;
+    }
+    if (!chained) ++stats_.breaks;
+    else if (!(asum > 0)) chained = false;  // the forward filter underflowed: restart it with the chain
+    if (chained) {
+      for (uint32_t j = 0; j < cur.count; ++j) cur.alpha[j] /= asum;
+      double mx = kNegInf;
+      for (uint32_t j = 0; j < cur.count; ++j) mx = std::max(mx, cur.delta[j]);
+      for (uint32_t j = 0; j < cur.count; ++j) cur.delta[j] -= mx;
+    }
+  }
+  if (!chained) {
+    // A chain start (N&K §5.1 break): emissions only.
+    double asum = 0;
+    for (uint32_t j = 0; j < cur.count; ++j) {
+      cur.delta[j] = cur.cand[j].log_e - max_le;
+      cur.back[j] = kNoBack;
+      cur.alpha[j] = std::exp(cur.delta[j]);
+      asum += cur.alpha[j];
+    }
+    for (uint32_t j = 0; j < cur.count; ++j) cur.alpha[j] /= asum;
+  }
+
+  uint32_t best = 0;
+  for (uint32_t j = 1; j < cur.count; ++j)
+    if (cur.delta[j] > cur.delta[best]) best = j;
+  head_ = cur.cand[best].p;
+  confidence_ = cur.alpha[best];
+
+  // Fixed-lag decision: back along the best path to the step `lag` ago.
+  settled_ = CellPoint{};
+  settled_t_ = 0;
+  if (steps_ >= d_.lag) {
+    uint32_t idx = best;
+    bool ok = true;
+    for (uint64_t s = steps_; s > steps_ - d_.lag; --s) {
+      const uint8_t b = column(s).back[idx];
+      if (b == kNoBack) {
+        ok = false;
+        break;
+      }
+      idx = b;
+    }
+    if (ok) {
+      const Column& old = column(steps_ - d_.lag);
+      settled_ = old.cand[idx].p;
+      settled_t_ = old.t;
+    }
+  }
+  ++steps_;
+  return true;
+}
+
+CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double heading_rad,
+                             double heading_sigma_rad) const {
+  if (from.cell >= g_.halfedges.size()) return from;
+  const double s2 = d_.road_sigma_m * d_.road_sigma_m;
+  const double kappa = heading_sigma_rad > 0 ? 1.0 / (heading_sigma_rad * heading_sigma_rad +
+                                                       (d_.heading_sigma_deg * kDeg) * (d_.heading_sigma_deg * kDeg))
+                                             : 0.0;
+  auto cost = [&](const CellPoint& p) { return 0.5 * p.dist_m * p.dist_m / s2 + kappa * (1 - std::cos(p.heading_rad - heading_rad)); };
+  CellPoint cur = project(from.cell, e, n);
+  for (int hop = 0; hop < 2; ++hop) {
+    const double len = g_.halfedges[cur.cell].length;
+    if (cur.arc_m < len - 0.01) break;
+    CellPoint best = cur;
+    double best_cost = cost(cur);
+    for (const uint32_t* s = g_.successors.begin(cur.cell); s != g_.successors.end(cur.cell); ++s) {
+      const CellPoint p = project(*s, e, n);
+      const double c = cost(p);
+      if (p.cell != graph::kNone && c < best_cost) best = p, best_cost = c;
+    }
+    if (best.cell == cur.cell) break;
+    cur = best;
+  }
+  return cur;
+}
+
+}  // namespace blvd::track

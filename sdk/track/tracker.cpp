@@ -1,0 +1,262 @@
+#include "track/tracker.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace blvd::track {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+constexpr double kSqrtHalf = 0.70710678118654752440;
+
+double orDefault(double v, double d) { return v > 0 ? v : d; }
+bool finite(double v) { return std::isfinite(v); }
+}  // namespace
+
+TrackerDesc trackerDefaults(const TrackerDesc& in) {
+  TrackerDesc d = in;
+  if (d.ring_capacity == 0) d.ring_capacity = 512;
+  if (!(d.gnss_latency_s >= 0)) d.gnss_latency_s = 0;
+  d.match_interval_s = orDefault(d.match_interval_s, 1.0);
+  d.outage_s = orDefault(d.outage_s, 2.5);
+  d.max_extrapolate_s = orDefault(d.max_extrapolate_s, 1.0);
+  d.eye_height_m = orDefault(d.eye_height_m, 1.5);
+  if (!finite(d.camera_pitch_deg)) d.camera_pitch_deg = 0;
+  d.ekf = ekfDefaults(d.ekf);
+  d.matcher = matcherDefaults(d.matcher);
+  return d;
+}
+
+Tracker::Tracker(const geo::LocalFrame& frame, const graph::StreetGraph* graph, const TrackerDesc& desc)
+    : d_(trackerDefaults(desc)), frame_(frame), graph_(graph), ekf_(d_.ekf) {
+  if (graph_ && !graph_->halfedges.empty()) matcher_ = std::make_unique<MapMatcher>(*graph_, d_.matcher);
+  ring_.resize(d_.ring_capacity);
+  batch_.resize(d_.ring_capacity);
+}
+
+Tracker::~Tracker() = default;
+
+size_t Tracker::bytes() const {
+  return sizeof(*this) + (ring_.capacity() + batch_.capacity()) * sizeof(Event) + (matcher_ ? matcher_->bytes() : 0);
+}
+
+bool Tracker::push(const Event& ev) {
+  std::lock_guard<std::mutex> lock(mu_);
+  bool ok = true;
+  if (ring_count_ == ring_.size()) {
+    ring_head_ = (ring_head_ + 1) % ring_.size();
+    --ring_count_;
+    ++dropped_;
+    ok = false;
+  }
+  Event& slot = ring_[(ring_head_ + ring_count_) % ring_.size()];
+  slot = ev;
+  slot.seq = seq_++;
+  ++ring_count_;
+  high_water_ = std::max(high_water_, static_cast<uint32_t>(ring_count_));
+  if (ev.is_gnss) ++gnss_fed_;
+  else ++odo_fed_;
+  return ok;
+}
+
+bool Tracker::feedGnss(const GnssFix& fix) {
+  Event ev;
+  ev.is_gnss = true;
+  ev.gnss = fix;
+  ev.t = fix.t - d_.gnss_latency_s;
+  return push(ev);
+}
+
+bool Tracker::feedOdometry(const Odometry& odo) {
+  Event ev;
+  ev.is_gnss = false;
+  ev.odo = odo;
+  ev.t = odo.t;
+  return push(ev);
+}
+
+void Tracker::reset() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    ring_head_ = ring_count_ = 0;
+  }
+  ekf_.reset();
+  if (matcher_) matcher_->reset();
+  pose_ = Pose{};
+  cur_ = CellPoint{};
+  confidence_ = 0;
+  last_step_t_ = last_fix_t_ = last_fix_event_t_ = last_gyro_t_ = last_odo_speed_t_ = -1e300;
+  st_ = TrackerStats{};
+}
+
+TrackerStats Tracker::stats() const {
+  TrackerStats s = st_;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    s.gnss_fed = gnss_fed_;
+    s.odometry_fed = odo_fed_;
+    s.ring_dropped = dropped_;
+    s.ring_high_water = high_water_;
+  }
+  s.filter_resets = ekf_.resets();
+  if (matcher_) s.match = matcher_->stats();
+  return s;
+}
+
+void Tracker::matchStep() {
+  if (!matcher_ || !ekf_.initialized()) return;
+  MatchObservation obs;
+  obs.t = ekf_.time();
+  obs.e = ekf_.e();
+  obs.n = ekf_.n();
+  obs.sigma_m = ekf_.positionSigma();
+  obs.heading_rad = ekf_.heading();
+  obs.heading_sigma_rad =
+      ekf_.headingValid() && std::fabs(ekf_.speed()) > 1.0 ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi))) : 0.0;
+  if (matcher_->step(obs)) {
+    cur_ = matcher_->head();
+    confidence_ = matcher_->confidence();
+  } else {
+    cur_ = CellPoint{};
+    confidence_ = 0;
+  }
+  last_step_t_ = obs.t;
+}
+
+void Tracker::processGnss(const GnssFix& f, double t) {
+  if (!(f.flags & kGnssHasLatLon) || f.mode == kGnssModeNoFix || !finite(t) || !finite(f.lat) || !finite(f.lon) ||
+      std::fabs(f.lat) > 90 || std::fabs(f.lon) > 180) {
+    ++st_.gnss_ignored;
+    return;
+  }
+  if (ekf_.initialized() && t < ekf_.time()) ++st_.late_events;
+  ekf_.predict(t);
+  const geo::Enu p = frame_.forward(f.lat, f.lon, frame_.h0());
+  double sigma = d_.ekf.default_sigma_m;
+  if ((f.flags & kGnssHasHAcc) && f.h_acc_m > 0 && finite(f.h_acc_m)) sigma = f.h_acc_m * kSqrtHalf;
+  else if ((f.flags & kGnssHasHdop) && f.hdop > 0 && finite(f.hdop)) sigma = f.hdop * d_.ekf.uere_m * kSqrtHalf;
+  if (ekf_.updatePosition(t, p.e, p.n, sigma)) {
+    ++st_.gnss_used;
+    last_fix_t_ = t;
+  } else {
+    ++st_.gnss_rejected;
+  }
+  const bool has_speed = (f.flags & kGnssHasSpeed) && finite(f.speed_mps) && f.speed_mps >= 0;
+  // CAN speed is better than GNSS speed; without it, GNSS speed drives the filter.
+  if (has_speed && t - last_odo_speed_t_ > 1.0) ekf_.updateSpeed(f.speed_mps, d_.ekf.gnss_speed_sigma);
+  if (has_speed && (f.flags & kGnssHasTrack) && finite(f.track_deg) && f.speed_mps >= d_.ekf.track_min_speed) {
+    // Course sigma from the velocity noise across the track, plus a floor.
+    const double sigma_track = std::atan2(d_.ekf.gnss_speed_sigma, f.speed_mps) + 0.5 * kDeg;
+    ekf_.updateHeading(f.track_deg * kDeg, sigma_track);
+  }
+  last_fix_event_t_ = t;
+  if (ekf_.time() - last_step_t_ >= 0.5 * d_.match_interval_s) matchStep();
+}
+
+void Tracker::processOdometry(const Odometry& o) {
+  if (!finite(o.t)) {
+    ++st_.odometry_ignored;
+    return;
+  }
+  if (ekf_.initialized() && o.t < ekf_.time()) ++st_.late_events;
+  ekf_.predict(o.t);
+  if ((o.flags & kOdoYawRate) && finite(o.yaw_rate_dps)) {
+    ekf_.setYawRate(o.t, o.yaw_rate_dps * kDeg);
+    last_gyro_t_ = o.t;
+  } else if ((o.flags & kOdoWheelSpeeds) && o.t - last_gyro_t_ > d_.ekf.gyro_timeout_s &&
+             finite(o.wheel_speeds_mps[2]) && finite(o.wheel_speeds_mps[3])) {
+    // No yaw-rate sensor: the rear axle's wheel-speed difference over its
+    // track (the rear wheels are not steered).
+    double omega = (o.wheel_speeds_mps[3] - o.wheel_speeds_mps[2]) / d_.ekf.track_width_m;
+    if ((o.flags & kOdoGear) && o.reverse) omega = -omega;
+    ekf_.setYawRate(o.t, omega);
+  }
+  double v = NAN;
+  if ((o.flags & kOdoSpeed) && finite(o.speed_mps)) {
+    v = std::fabs(o.speed_mps);
+  } else if (o.flags & kOdoWheelSpeeds) {
+    const double* w = o.wheel_speeds_mps;
+    v = 0.25 * (std::fabs(w[0]) + std::fabs(w[1]) + std::fabs(w[2]) + std::fabs(w[3]));
+  }
+  if (finite(v)) {
+    if ((o.flags & kOdoGear) && o.reverse) v = -v;
+    ekf_.updateSpeed(v, d_.ekf.odo_speed_sigma);
+    last_odo_speed_t_ = o.t;
+  }
+  if ((o.flags & kOdoHeading) && finite(o.heading_deg)) ekf_.updateHeading(o.heading_deg * kDeg, d_.ekf.heading_sigma_deg * kDeg);
+  // Dead reckoning through an outage still moves along the graph.
+  const double now = ekf_.time();
+  if (ekf_.initialized() && now - last_step_t_ >= d_.match_interval_s && now - last_fix_event_t_ >= 1.5 * d_.match_interval_s)
+    matchStep();
+}
+
+void Tracker::process(const Event& ev) {
+  if (ev.is_gnss) processGnss(ev.gnss, ev.t);
+  else processOdometry(ev.odo);
+}
+
+const Pose& Tracker::update(double t) {
+  size_t n = 0;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    for (; n < ring_count_; ++n) batch_[n] = ring_[(ring_head_ + n) % ring_.size()];
+    ring_head_ = ring_count_ = 0;
+  }
+  // Time order, ties in feed order (insertion sort: batches are short and nearly sorted).
+  for (size_t i = 1; i < n; ++i) {
+    for (size_t j = i; j > 0; --j) {
+      const Event& a = batch_[j - 1];
+      const Event& b = batch_[j];
+      if (a.t < b.t || (a.t == b.t && a.seq < b.seq) || !(b.t == b.t)) break;
+      std::swap(batch_[j - 1], batch_[j]);
+    }
+  }
+  for (size_t i = 0; i < n; ++i) process(batch_[i]);
+
+  Pose& p = pose_;
+  p = Pose{};
+  p.t = t;
+  if (!ekf_.initialized()) return p;
+  double x[Ekf::kDim], sigma = 0;
+  const double te = finite(t) ? std::min(t, ekf_.time() + d_.max_extrapolate_s) : ekf_.time();
+  ekf_.extrapolate(te, x, &sigma);
+  p.e = x[Ekf::kE];
+  p.n = x[Ekf::kN];
+  p.heading_deg = x[Ekf::kPsi] / kDeg;
+  p.speed_mps = x[Ekf::kV];
+  p.pos_sigma_m = sigma;
+  p.flags = kPoseValid | (ekf_.headingValid() ? kPoseHeadingValid : 0);
+  if (ekf_.time() - last_fix_t_ > d_.outage_s) p.flags |= kPoseDeadReckoning;
+
+  const double hsig = ekf_.headingValid() && std::fabs(x[Ekf::kV]) > 1.0
+                          ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi)))
+                          : 0.0;
+  if (matcher_ && cur_.cell != graph::kNone) {
+    cur_ = matcher_->follow(cur_, p.e, p.n, x[Ekf::kPsi], hsig);
+    p.cell = cur_.cell;
+    p.arc_m = cur_.arc_m;
+    p.lateral_m = cur_.lateral_m;
+    p.confidence = confidence_;
+    p.flags |= kPoseMatched;
+    // The eye on the matched street, keeping the lateral offset within the carriageway.
+    const double half = std::max(2.0, 0.5 * static_cast<double>(graph_->halfedges[cur_.cell].width));
+    const double lat = std::clamp(cur_.lateral_m, -half, half);
+    const double hr = cur_.heading_rad;
+    p.camera.eye_e = cur_.e + lat * std::cos(hr);  // right of a bearing h is (cos h, -sin h)
+    p.camera.eye_n = cur_.n - lat * std::sin(hr);
+    p.camera.heading_deg = ekf_.headingValid() ? p.heading_deg : hr / kDeg;
+  } else {
+    p.camera.eye_e = p.e;
+    p.camera.eye_n = p.n;
+    p.camera.heading_deg = p.heading_deg;
+  }
+  p.camera.eye_u = d_.eye_height_m;
+  p.camera.pitch_deg = d_.camera_pitch_deg;
+  if (matcher_) {
+    p.settled_cell = matcher_->settled().cell;
+    p.settled_t = matcher_->settledTime();
+  }
+  return p;
+}
+
+}  // namespace blvd::track

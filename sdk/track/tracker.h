@@ -1,0 +1,145 @@
+// The tracking pipeline of the runtime (DESIGN.md, "track/"): GNSS fixes and
+// odometry in, matched pose out.
+//
+//   feedGnss / feedOdometry   any thread: copy into a fixed ring (mutex, no allocation)
+//   update(t)                 the tracking thread (the render thread in the runtime):
+//                             drain the ring in time order -> GNSS to the local frame
+//                             (GeographicLib, geo::LocalFrame) -> EKF (ekf.h) -> an HMM
+//                             step per fix, or per match interval in an outage
+//                             (map_matcher.h) -> the pose at t (the filter extrapolated
+//                             to t, followed along the graph from the last match)
+//   pose()                    the last update's result
+//
+// Lifecycle:
+//   blvd::track::Tracker tr(city.frame(), &city.graph(), desc);  // allocates everything
+//   // producer threads:
+//   tr.feedGnss(fix);  tr.feedOdometry(odo);
+//   // tracking thread, e.g. once per frame:
+//   const blvd::track::Pose& p = tr.update(now);
+//
+// Contract:
+// - Threads: feedGnss / feedOdometry may be called from any thread, concurrently
+//   with each other and with update(). update(), pose(), reset(), stats() and
+//   the accessors belong to one thread at a time.
+// - Memory: the constructor allocates the ring, the filter, the matcher's
+//   spatial index and every scratch buffer; nothing allocates afterwards
+//   (checked by tests/track: zero operator new per feed and per update).
+//   bytes() reports what was allocated.
+// - Ordering: events drained by one update() are processed in timestamp order
+//   (ties in feed order). An event older than the filter's time is "late": a
+//   late fix is compared with the state moved back along the velocity, a late
+//   odometry sample is applied as if current. Events are never dropped for
+//   being late; a full ring drops its oldest event and the feed returns false.
+// - Determinism: the same sequence of feed and update calls gives the same
+//   poses, bit for bit (no clocks, no randomness, no hashing).
+// - Errors: bad input never throws: a fix without a position, a NaN or an
+//   out-of-range value is counted and ignored.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "geo/local_frame.h"
+#include "graph/street_graph.h"
+#include "track/ekf.h"
+#include "track/map_matcher.h"
+#include "track/types.h"
+
+namespace blvd::track {
+
+// Zero means "default" for every field (see trackerDefaults()).
+struct TrackerDesc {
+  uint32_t ring_capacity = 0;   // events buffered between two update() calls; default 512
+  double gnss_latency_s = 0;    // a fix is taken as valid at GnssFix::t - gnss_latency_s; default 0
+  double match_interval_s = 0;  // HMM step period without GNSS (dead reckoning); default 1
+  double outage_s = 0;          // no accepted fix for this long sets kPoseDeadReckoning; default 2.5
+  double max_extrapolate_s = 0; // the pose is predicted at most this far past the last input; default 1
+  double eye_height_m = 0;      // camera height above the street; default 1.5
+  double camera_pitch_deg = 0;  // camera pitch, up positive (0 is level)
+  EkfDesc ekf;
+  MatcherDesc matcher;
+};
+
+TrackerDesc trackerDefaults(const TrackerDesc& desc);
+
+struct TrackerStats {
+  uint64_t gnss_fed = 0, odometry_fed = 0;
+  uint64_t ring_dropped = 0;     // events lost to a full ring
+  uint32_t ring_high_water = 0;  // most events waiting at once
+  uint64_t gnss_used = 0, gnss_rejected = 0;  // position updates accepted / gated out
+  uint64_t gnss_ignored = 0;     // no position, no fix, or not finite
+  uint64_t odometry_ignored = 0; // not finite
+  uint64_t late_events = 0;      // older than the filter when processed
+  uint64_t filter_resets = 0;    // position resets after a run of rejected fixes
+  MatchStats match;
+};
+
+class Tracker {
+ public:
+  // `graph` may be null (fusion only, no map matching); it must outlive the
+  // tracker. The frame is copied.
+  Tracker(const geo::LocalFrame& frame, const graph::StreetGraph* graph, const TrackerDesc& desc = TrackerDesc{});
+  ~Tracker();
+  Tracker(const Tracker&) = delete;
+  Tracker& operator=(const Tracker&) = delete;
+
+  // Any thread. False when the ring was full and its oldest event was dropped
+  // to make room (this event is kept).
+  bool feedGnss(const GnssFix& fix);
+  bool feedOdometry(const Odometry& odo);
+
+  // Tracking thread: processes what was fed and returns the pose at time t.
+  const Pose& update(double t);
+  const Pose& pose() const { return pose_; }
+
+  // Tracking thread: forgets the filter, the match and anything still in the ring.
+  void reset();
+
+  TrackerStats stats() const;
+  const TrackerDesc& desc() const { return d_; }
+  const Ekf& filter() const { return ekf_; }
+  const MapMatcher* matcher() const { return matcher_.get(); }
+  // Bytes allocated by the constructor (ring, matcher, index, scratch).
+  size_t bytes() const;
+
+ private:
+  struct Event {
+    double t = 0;
+    uint64_t seq = 0;
+    bool is_gnss = false;
+    GnssFix gnss;
+    Odometry odo;
+  };
+
+  bool push(const Event& ev);
+  void process(const Event& ev);
+  void processGnss(const GnssFix& f, double t);
+  void processOdometry(const Odometry& o);
+  void matchStep();
+
+  TrackerDesc d_;
+  geo::LocalFrame frame_;
+  const graph::StreetGraph* graph_;
+  std::unique_ptr<MapMatcher> matcher_;
+  Ekf ekf_;
+
+  // Feed side (guarded by mu_).
+  mutable std::mutex mu_;
+  std::vector<Event> ring_;
+  size_t ring_head_ = 0, ring_count_ = 0;
+  uint64_t seq_ = 0, gnss_fed_ = 0, odo_fed_ = 0, dropped_ = 0;
+  uint32_t high_water_ = 0;
+
+  // Tracking side.
+  std::vector<Event> batch_;
+  Pose pose_;
+  CellPoint cur_;            // the match, followed between HMM steps
+  double confidence_ = 0;
+  double last_step_t_ = -1e300, last_fix_t_ = -1e300, last_fix_event_t_ = -1e300;
+  double last_gyro_t_ = -1e300, last_odo_speed_t_ = -1e300;
+  TrackerStats st_;
+};
+
+}  // namespace blvd::track
