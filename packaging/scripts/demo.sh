@@ -8,7 +8,7 @@ bash packaging/scripts/deps.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DBLVD_BUILD_TESTS=OFF
 cmake --build build --target blvd_cli
 mkdir -p out
-./build/sdk/cli/blvd bake data/osm/monaco-geofabrik-2026.osm.pbf -o out/monaco.blvd
+./build/sdk/cli/blvd bake data/osm/monaco-geofabrik-2026.osm.pbf -o out/monaco.blvd --report out/bake-report
 ./build/sdk/cli/blvd pack info out/monaco.blvd
 ./build/sdk/cli/blvd view out/monaco.blvd --path auto:12 --seed 7 --step 12 -o out/drive
-echo "open out/drive/index.html"
+echo "open out/drive/index.html (frames) and out/bake-report/index.html (bake report)"

@@ -123,7 +123,9 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
       }
       samples.push_back(&it->second);
     }
-    const int n_in = static_cast<int>(std::floor(e.length / opt.sample_spacing_m));
+    // Marvie's ACH: 8 positions along the cell (its two ends, shared with
+    // the neighbouring streets, and 6 between) × 6 directions.
+    const int n_in = std::max(0, opt.positions_per_cell - 2);
     interior.reserve(n_in);
     for (int i = 1; i <= n_in; ++i) {
       const double s = e.length * i / (n_in + 1);

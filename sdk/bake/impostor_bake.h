@@ -28,7 +28,7 @@ struct ImpostorOptions {
   int display_width = 800, display_height = 480;
   double display_fov_y_deg = 45.0;
   int grid_px = 24;               // S97 grid spacing inside the contour, texture pixels
-  double sample_spacing_m = 30.0; // item-buffer sample points along a street
+  int positions_per_cell = 8;     // item-buffer positions along a street, ends included (Marvie: 8 × 6 directions)
   int item_resolution = 128;      // item buffer size per direction (square, 90°)
   double pullback_m = 6.0;        // capture eye behind the cell start
   double landmark_height_m = 60.0;  // blocks with a building at least this tall ...

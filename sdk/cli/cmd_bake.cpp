@@ -37,6 +37,12 @@ void addBake(CLI::App& app, Runner& run) {
       ->capture_default_str()->check(CLI::Range(0.5, 500.0));
   cmd->add_option("--max-layers", o->bake.impostor.max_layers, "most impostor layers per cell (extra layers merge)")
       ->capture_default_str()->check(CLI::Range(1, 64));
+  cmd->add_option("--landmark-height", o->bake.impostor.landmark_height_m,
+                  "blocks with a building at least this tall are landmarks (metres)")
+      ->capture_default_str()->check(CLI::Range(1.0, 1000.0));
+  cmd->add_option("--landmark-scale", o->bake.impostor.landmark_scale,
+                  "factor on a landmark's layer weights (Decoret 99 section 4.2)")
+      ->capture_default_str()->check(CLI::Range(1.0, 100.0));
   cmd->add_option("--grid", o->bake.impostor.grid_px, "impostor grid spacing in texture pixels (Sillion 97 section 4.2)")
       ->capture_default_str()->check(CLI::Range(4, 256));
   cmd->add_option("--display-size", o->bake.impostor.display_width, "display width the threshold is given at")

@@ -37,6 +37,7 @@ EkfDesc ekfDefaults(const EkfDesc& in) {
   d.uere_m = orDefault(d.uere_m, 4.0);
   d.default_sigma_m = orDefault(d.default_sigma_m, 5.0);
   d.min_sigma_m = orDefault(d.min_sigma_m, 0.5);
+  d.adapt_rate = orDefault(d.adapt_rate, 0.05);
   d.gate_chi2_2dof = orDefault(d.gate_chi2_2dof, 13.82);
   d.gate_chi2_1dof = orDefault(d.gate_chi2_1dof, 10.83);
   if (d.reset_after_rejects == 0) d.reset_after_rejects = 5;
@@ -50,6 +51,8 @@ EkfDesc ekfDefaults(const EkfDesc& in) {
   d.heading_sigma_deg = orDefault(d.heading_sigma_deg, 2.0);
   d.track_min_speed = orDefault(d.track_min_speed, 3.0);
   d.init_bias_sigma_dps = orDefault(d.init_bias_sigma_dps, 1.0);
+  d.init_scale_sigma = orDefault(d.init_scale_sigma, 0.05);
+  d.q_scale = orDefault(d.q_scale, 1e-8);
   d.gyro_timeout_s = orDefault(d.gyro_timeout_s, 0.5);
   d.track_width_m = orDefault(d.track_width_m, 1.6);
   return d;
@@ -65,6 +68,7 @@ void Ekf::reset() {
   omega_ = 0;
   gyro_t_ = -1e300;
   odometer_ = 0;
+  r_hat_ = d_.default_sigma_m * d_.default_sigma_m;
   consecutive_rejects_ = rejected_total_ = resets_ = 0;
   std::memset(scalar_rejects_, 0, sizeof scalar_rejects_);
 }
@@ -81,6 +85,7 @@ void Ekf::propagate(double x[kDim], double P[kDim][kDim], double dt, double now)
     P[kN][kN] += grow;
     P[kV][kV] += d_.q_speed * dt;
     P[kB][kB] += (gyro ? d_.q_bias : d_.q_turn) * dt;
+    P[kK][kK] += d_.q_scale * dt;
     return;
   }
   const double psidot = -(omega - x[kB]);
@@ -118,6 +123,7 @@ void Ekf::propagate(double x[kDim], double P[kDim][kDim], double dt, double now)
   P[kPsi][kPsi] += d_.q_heading * dt;
   P[kV][kV] += d_.q_speed * dt;
   P[kB][kB] += (gyro ? d_.q_bias : d_.q_turn) * dt;
+  P[kK][kK] += d_.q_scale * dt;
   symmetrize(P);
 }
 
@@ -165,10 +171,12 @@ void Ekf::initPosition(double t, double e, double n, double sigma_m) {
   P_[kE][kE] = P_[kN][kN] = sigma_m * sigma_m;
   if (!initialized_) {
     x_[kPsi] = x_[kV] = x_[kB] = 0;
+    x_[kK] = 1;
     P_[kPsi][kPsi] = kPi * kPi;
     P_[kV][kV] = 100.0;
     const double sb = d_.init_bias_sigma_dps * kDeg;
     P_[kB][kB] = sb * sb;
+    P_[kK][kK] = d_.init_scale_sigma * d_.init_scale_sigma;
     t_ = t;
     initialized_ = true;
   }
@@ -187,8 +195,9 @@ void Ekf::initHeading(double psi, double sigma) {
   scalar_rejects_[kPsi] = 0;
 }
 
-bool Ekf::updatePosition(double t_fix, double ze, double zn, double sigma_m) {
-  sigma_m = std::max(sigma_m, d_.min_sigma_m);
+bool Ekf::updatePosition(double t_fix, double ze, double zn, double sigma_in) {
+  const bool adaptive = !(sigma_in > 0);
+  const double sigma_m = std::max(adaptive ? std::sqrt(r_hat_) : sigma_in, d_.min_sigma_m);
   if (!initialized_) {
     initPosition(t_fix, ze, zn, sigma_m);
     return true;
@@ -234,6 +243,12 @@ bool Ekf::updatePosition(double t_fix, double ze, double zn, double sigma_m) {
     return false;
   }
   consecutive_rejects_ = 0;
+  if (adaptive) {
+    // One sample of the fix variance per axis: innovation power minus the prior's share.
+    const double sample = 0.5 * (ye * ye + yn * yn) - 0.5 * (P_[kE][kE] + P_[kN][kN]);
+    const double lo = d_.min_sigma_m * d_.min_sigma_m, hi = d_.default_sigma_m * d_.default_sigma_m;
+    r_hat_ = std::clamp((1 - d_.adapt_rate) * r_hat_ + d_.adapt_rate * sample, lo, hi);
+  }
   // K = P H^T S^-1 with H = [I2 0].
   double K[kDim][2];
   for (int i = 0; i < kDim; ++i) {
@@ -263,34 +278,49 @@ bool Ekf::updatePosition(double t_fix, double ze, double zn, double sigma_m) {
   return true;
 }
 
-bool Ekf::scalarUpdate(int idx, double residual, double r, double gate) {
-  const double S = P_[idx][idx] + r;
+bool Ekf::scalarUpdate(const double H[kDim], int idx, double residual, double r, double gate) {
+  double PH[kDim];  // P H^T
+  for (int i = 0; i < kDim; ++i) {
+    double acc = 0;
+    for (int k = 0; k < kDim; ++k) acc += P_[i][k] * H[k];
+    PH[i] = acc;
+  }
+  double S = r;
+  for (int i = 0; i < kDim; ++i) S += H[i] * PH[i];
   if (!(S > 0)) return false;
   if (residual * residual / S > gate) {
-    if (++scalar_rejects_[idx] < kScalarResetAfter) return false;
+    if (++scalar_rejects_[idx] < kScalarResetAfter || !(H[idx] != 0)) return false;
     // Persistently disagreeing: our value is the wrong one.
     for (int i = 0; i < kDim; ++i) P_[idx][i] = P_[i][idx] = 0;
-    x_[idx] += residual;
-    P_[idx][idx] = r;
+    x_[idx] += residual / H[idx];
+    P_[idx][idx] = r / (H[idx] * H[idx]);
     scalar_rejects_[idx] = 0;
     return true;
   }
   scalar_rejects_[idx] = 0;
   double K[kDim];
-  for (int i = 0; i < kDim; ++i) K[i] = P_[i][idx] / S;
+  for (int i = 0; i < kDim; ++i) K[i] = PH[i] / S;
   for (int i = 0; i < kDim; ++i) x_[i] += K[i] * residual;
-  // Joseph form for H = e_idx.
-  double Prow[kDim];
-  for (int j = 0; j < kDim; ++j) Prow[j] = P_[idx][j];
+  // Joseph form: (I - K H) P (I - K H)^T + K r K^T = P - K PH^T - PH K^T + K S K^T.
   for (int i = 0; i < kDim; ++i)
-    for (int j = 0; j < kDim; ++j) P_[i][j] += -K[i] * Prow[j] - Prow[i] * K[j] + K[i] * K[j] * S;
+    for (int j = 0; j < kDim; ++j) P_[i][j] += -K[i] * PH[j] - PH[i] * K[j] + K[i] * K[j] * S;
   symmetrize(P_);
   return true;
 }
 
 bool Ekf::updateSpeed(double v, double sigma) {
   if (!initialized_) return false;
-  return scalarUpdate(kV, v - x_[kV], sigma * sigma, d_.gate_chi2_1dof);
+  double H[kDim] = {};
+  H[kV] = 1;
+  return scalarUpdate(H, kV, v - x_[kV], sigma * sigma, d_.gate_chi2_1dof);
+}
+
+bool Ekf::updateOdometrySpeed(double v, double sigma) {
+  if (!initialized_) return false;
+  double H[kDim] = {};
+  H[kV] = x_[kK];
+  H[kK] = x_[kV];
+  return scalarUpdate(H, kV, v - x_[kK] * x_[kV], sigma * sigma, d_.gate_chi2_1dof);
 }
 
 bool Ekf::updateHeading(double psi, double sigma) {
@@ -299,7 +329,9 @@ bool Ekf::updateHeading(double psi, double sigma) {
     initHeading(psi, sigma);
     return true;
   }
-  const bool ok = scalarUpdate(kPsi, wrapPi(psi - x_[kPsi]), sigma * sigma, d_.gate_chi2_1dof);
+  double H[kDim] = {};
+  H[kPsi] = 1;
+  const bool ok = scalarUpdate(H, kPsi, wrapPi(psi - x_[kPsi]), sigma * sigma, d_.gate_chi2_1dof);
   x_[kPsi] = wrapTwoPi(x_[kPsi]);
   return ok;
 }

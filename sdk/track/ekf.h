@@ -1,12 +1,19 @@
 // Fusion of GNSS and vehicle odometry: an extended Kalman filter over
-// x = [east, north, heading, speed, yaw-rate bias] in the local frame.
+// x = [east, north, heading, speed, yaw-rate bias, odometry speed scale] in the
+// local frame.
 //
 // Motion model (Thrun, Burgard & Fox, "Probabilistic Robotics" §3.3 and §5.3;
 // the unicycle used by most automotive dead reckoning):
 //   d(east)/dt  = v sin(psi),  d(north)/dt = v cos(psi)      psi clockwise from north
 //   d(psi)/dt   = -(omega - b)                               omega: measured yaw rate, positive left
-//   dv/dt = 0 + noise,  db/dt = 0 + noise
-// integrated with the heading at the middle of the step. With no yaw-rate
+//   dv/dt = 0 + noise,  db/dt = 0 + noise,  dk/dt = 0 + noise
+// integrated with the heading at the middle of the step. Odometry measures
+// k * v: wheel speeds read a little off the ground speed (tyre radius, wear,
+// pressure; 0.9 % low on the comma2k19 RAV4), and an uncalibrated scale makes
+// the filter trail the fixes by the speed error times its time constant. GNSS
+// speed and position calibrate k (the classic odometer scale state, Groves,
+// "Principles of GNSS, Inertial, and Multisensor Integrated Navigation Systems",
+// 2nd ed., §16.2.1), so dead reckoning through an outage uses calibrated speed. With no yaw-rate
 // sensor, omega = 0 and b becomes the turn rate itself (a constant-turn-rate
 // model), with more process noise.
 //
@@ -20,6 +27,7 @@
 //
 // Contract: plain value type, no allocation, no threads, deterministic.
 #pragma once
+#include <cmath>
 #include <cstdint>
 
 namespace blvd::track {
@@ -27,7 +35,9 @@ namespace blvd::track {
 // Zero means "default" for every field (see ekfDefaults()).
 struct EkfDesc {
   double uere_m = 0;               // user equivalent range error: per-axis sigma = HDOP x UERE / sqrt(2); default 4 m
-  double default_sigma_m = 0;      // per-axis sigma of a fix with neither GST nor HDOP; default 5 m
+  double default_sigma_m = 0;      // per-axis sigma of a fix with neither GST nor HDOP, before the
+                                   // innovations have estimated it (see updatePosition); default 5 m
+  double adapt_rate = 0;           // weight of one fix in that estimate; default 0.05
   double min_sigma_m = 0;          // floor of a fix's per-axis sigma (receivers claim too much); default 0.5 m
   double gate_chi2_2dof = 0;       // position gate; default 13.82 (99.9 %)
   double gate_chi2_1dof = 0;       // speed / heading gate; default 10.83 (99.9 %)
@@ -42,6 +52,8 @@ struct EkfDesc {
   double heading_sigma_deg = 0;    // an absolute heading (kOdoHeading); default 2
   double track_min_speed = 0;      // GNSS course is used above this speed, m/s; default 3
   double init_bias_sigma_dps = 0;  // initial yaw-rate bias sigma, deg/s; default 1
+  double init_scale_sigma = 0;     // initial odometry scale sigma; default 0.05
+  double q_scale = 0;              // odometry scale random walk, 1/s; default 1e-8
   double gyro_timeout_s = 0;       // a yaw rate older than this is not used; default 0.5
   double track_width_m = 0;        // rear track for a yaw rate from wheel speeds; default 1.6
 };
@@ -50,7 +62,7 @@ EkfDesc ekfDefaults(const EkfDesc& desc);
 
 class Ekf {
  public:
-  enum : int { kE = 0, kN = 1, kPsi = 2, kV = 3, kB = 4, kDim = 5 };
+  enum : int { kE = 0, kN = 1, kPsi = 2, kV = 3, kB = 4, kK = 5, kDim = 6 };
 
   explicit Ekf(const EkfDesc& desc = EkfDesc{});
 
@@ -62,9 +74,16 @@ class Ekf {
   // A GNSS position (local frame, metres) with its per-axis sigma, valid at t_fix.
   // A fix older than time() is applied to the state moved back along the current
   // velocity (a late fix). Returns false when gated out.
+  // sigma_m <= 0 means the receiver did not say: the sigma is then estimated from
+  // the innovations, R = E[y y^T] - H P H^T (innovation-based adaptive
+  // estimation, Mehra 1970; Mohamed & Schwarz 1999, J. Geodesy 73 §3), as an
+  // exponential average starting at default_sigma_m and kept within
+  // [min_sigma_m, default_sigma_m].
   bool updatePosition(double t_fix, double e, double n, double sigma_m);
-  // Ground speed (GNSS or odometry), m/s.
+  // Ground speed over ground (GNSS), m/s.
   bool updateSpeed(double v, double sigma);
+  // Speed from the vehicle's odometry (measures k * v), m/s.
+  bool updateOdometrySpeed(double v, double sigma);
   // Absolute heading (GNSS course or a heading sensor), clockwise from north, radians.
   bool updateHeading(double psi, double sigma);
   // The yaw rate used by the following predictions, rad/s positive left; t its time.
@@ -84,22 +103,27 @@ class Ekf {
   double heading() const { return x_[kPsi]; }  // radians, [0, 2 pi)
   double speed() const { return x_[kV]; }
   double bias() const { return x_[kB]; }
+  double odometryScale() const { return x_[kK]; }
   // 1-sigma of the position along its worst axis.
   double positionSigma() const;
   // Distance travelled (integral of |v| dt) since reset.
   double odometer() const { return odometer_; }
 
   // The state moved ahead to t without changing the filter (for the pose between
-  // measurements). out: [e, n, psi, v, b]; sigma_out: position sigma.
+  // measurements). out: the state; sigma_out: position sigma.
   void extrapolate(double t, double out[kDim], double* sigma_out) const;
 
   uint32_t rejectedFixes() const { return rejected_total_; }
+  // The estimated per-axis sigma of fixes that carry no accuracy.
+  double adaptiveSigma() const { return std::sqrt(r_hat_); }
   uint32_t resets() const { return resets_; }
 
  private:
   // One prediction step of dt seconds on (x, P); `now` picks the yaw-rate input.
   void propagate(double x[kDim], double P[kDim][kDim], double dt, double now) const;
-  bool scalarUpdate(int idx, double residual, double r, double gate);
+  // Scalar measurement with Jacobian row H; idx names the state forced on a long
+  // run of gated updates.
+  bool scalarUpdate(const double H[kDim], int idx, double residual, double r, double gate);
   void initPosition(double t, double e, double n, double sigma_m);
 
   EkfDesc d_;
@@ -112,6 +136,7 @@ class Ekf {
   double gyro_t_ = -1e300;  // its time
   double odometer_ = 0;
   uint32_t consecutive_rejects_ = 0;
+  double r_hat_ = 25;  // adaptive fix variance, m^2 (reset to default_sigma_m^2)
   uint32_t scalar_rejects_[kDim] = {};  // consecutive gated speed / heading updates
   // First fix, for a heading from displacement when no course is reported.
   double anchor_e_ = 0, anchor_n_ = 0, anchor_t_ = 0, anchor_sigma_ = 0;

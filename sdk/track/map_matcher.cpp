@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <glm/geometric.hpp>
+
 namespace blvd::track {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
@@ -75,6 +77,12 @@ size_t MapMatcher::bytes() const {
          (seen_dist_.capacity() + seen_t_.capacity()) * 4 + (route_stamp_.capacity() + target_stamp_.capacity()) * 4 +
          route_dist_.capacity() * 4 + target_idx_.capacity() + heap_.capacity() * sizeof(HeapItem);
 }
+
+uint32_t MapMatcher::candidateCount() const { return steps_ ? cols_[(steps_ - 1) % cols_.size()].count : 0; }
+const CellPoint& MapMatcher::candidate(uint32_t i) const { return cols_[(steps_ - 1) % cols_.size()].cand[i].p; }
+double MapMatcher::candidateEmission(uint32_t i) const { return cols_[(steps_ - 1) % cols_.size()].cand[i].log_e; }
+double MapMatcher::candidateScore(uint32_t i) const { return cols_[(steps_ - 1) % cols_.size()].delta[i]; }
+double MapMatcher::candidatePosterior(uint32_t i) const { return cols_[(steps_ - 1) % cols_.size()].alpha[i]; }
 
 void MapMatcher::reset() {
   steps_ = 0;
@@ -273,6 +281,7 @@ void MapMatcher::routeDistances(const Candidate& from, const Column& to, double 
 
 bool MapMatcher::step(const MatchObservation& obs) {
   ++stats_.steps;
+  last_obs_ = obs;
   Column& cur = column(steps_);
   cur.t = obs.t;
   cur.e = obs.e;

@@ -114,6 +114,17 @@ class MapMatcher {
   // Projects (e, n) on cell h.
   CellPoint project(uint32_t h, double e, double n) const;
 
+  // The candidates of the last step: point, emission log-likelihood, Viterbi
+  // score (0 for the best, -inf when unreachable) and forward posterior.
+  uint32_t candidateCount() const;
+  const CellPoint& candidate(uint32_t i) const;
+  double candidateEmission(uint32_t i) const;
+  double candidateScore(uint32_t i) const;
+  double candidatePosterior(uint32_t i) const;
+
+  // The observation of the last step (to replay a drive through another matcher).
+  const MatchObservation& lastObservation() const { return last_obs_; }
+
   const MatcherDesc& desc() const { return d_; }
   const MatchStats& stats() const { return stats_; }
   const SegmentGrid& grid() const { return grid_; }
@@ -165,6 +176,7 @@ class MapMatcher {
   uint32_t stamp_ = 0, route_run_ = 0;
 
   uint64_t steps_ = 0;  // steps in the current chain window (column index of the next step)
+  MatchObservation last_obs_;
   CellPoint head_, settled_;
   double confidence_ = 0, settled_t_ = 0;
   MatchStats stats_;

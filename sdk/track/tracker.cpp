@@ -132,7 +132,7 @@ void Tracker::processGnss(const GnssFix& f, double t) {
   if (ekf_.initialized() && t < ekf_.time()) ++st_.late_events;
   ekf_.predict(t);
   const geo::Enu p = frame_.forward(f.lat, f.lon, frame_.h0());
-  double sigma = d_.ekf.default_sigma_m;
+  double sigma = 0;  // unknown: the filter estimates it
   if ((f.flags & kGnssHasHAcc) && f.h_acc_m > 0 && finite(f.h_acc_m)) sigma = f.h_acc_m * kSqrtHalf;
   else if ((f.flags & kGnssHasHdop) && f.hdop > 0 && finite(f.hdop)) sigma = f.hdop * d_.ekf.uere_m * kSqrtHalf;
   if (ekf_.updatePosition(t, p.e, p.n, sigma)) {
@@ -142,8 +142,8 @@ void Tracker::processGnss(const GnssFix& f, double t) {
     ++st_.gnss_rejected;
   }
   const bool has_speed = (f.flags & kGnssHasSpeed) && finite(f.speed_mps) && f.speed_mps >= 0;
-  // CAN speed is better than GNSS speed; without it, GNSS speed drives the filter.
-  if (has_speed && t - last_odo_speed_t_ > 1.0) ekf_.updateSpeed(f.speed_mps, d_.ekf.gnss_speed_sigma);
+  // With odometry, GNSS speed calibrates the odometry scale; without, it drives the speed.
+  if (has_speed) ekf_.updateSpeed(f.speed_mps, d_.ekf.gnss_speed_sigma);
   if (has_speed && (f.flags & kGnssHasTrack) && finite(f.track_deg) && f.speed_mps >= d_.ekf.track_min_speed) {
     // Course sigma from the velocity noise across the track, plus a floor.
     const double sigma_track = std::atan2(d_.ekf.gnss_speed_sigma, f.speed_mps) + 0.5 * kDeg;
@@ -180,7 +180,7 @@ void Tracker::processOdometry(const Odometry& o) {
   }
   if (finite(v)) {
     if ((o.flags & kOdoGear) && o.reverse) v = -v;
-    ekf_.updateSpeed(v, d_.ekf.odo_speed_sigma);
+    ekf_.updateOdometrySpeed(v, d_.ekf.odo_speed_sigma);
     last_odo_speed_t_ = o.t;
   }
   if ((o.flags & kOdoHeading) && finite(o.heading_deg)) ekf_.updateHeading(o.heading_deg * kDeg, d_.ekf.heading_sigma_deg * kDeg);
@@ -225,7 +225,7 @@ const Pose& Tracker::update(double t) {
   p.heading_deg = x[Ekf::kPsi] / kDeg;
   p.speed_mps = x[Ekf::kV];
   p.pos_sigma_m = sigma;
-  p.flags = kPoseValid | (ekf_.headingValid() ? kPoseHeadingValid : 0);
+  p.flags = kPoseValid | (ekf_.headingValid() ? static_cast<uint32_t>(kPoseHeadingValid) : 0u);
   if (ekf_.time() - last_fix_t_ > d_.outage_s) p.flags |= kPoseDeadReckoning;
 
   const double hsig = ekf_.headingValid() && std::fabs(x[Ekf::kV]) > 1.0

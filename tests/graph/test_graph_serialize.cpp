@@ -1,24 +1,91 @@
 #include <gtest/gtest.h>
 
-#include "bake/street_map.h"
+#include <glm/geometric.hpp>
+
 #include "core/status.h"
 #include "graph/block_table.h"
-#include "graph_test_util.h"
+#include "graph/cell_tables.h"
+#include "graph/street_graph.h"
 
 using namespace blvd;
-using blvd::test::street;
 
 namespace {
+// A triangle of streets built by hand (no CGAL, so this parser test stays
+// light enough to run under ASan + UBSan in CI): A(0,0) B(100,0) C(0,100);
+// half-edges AB BA BC CB CA AC; face 1 is the block inside, face 0 outside.
 graph::StreetGraph smallGraph() {
-  std::vector<bake::OsmStreet> s = {
-      street(1, {1, 9, 2}, {{-100, 0}, {0, 0}, {100, 0}}),
-      street(2, {3, 9, 4}, {{0, -100}, {0, 0}, {0, 100}}),
-      street(3, {1, 3}, {{-100, 0}, {0, -100}}),
-  };
-  bake::StreetMap map(s);
-  return map.graph();
+  graph::StreetGraph g;
+  g.vertices = {{{0, 0}, graph::VertexKind::Junction, 0},
+                {{100, 0}, graph::VertexKind::Junction, 2},
+                {{0, 100}, graph::VertexKind::Junction, 4}};
+  const uint32_t origin[6] = {0, 1, 1, 2, 2, 0}, next[6] = {2, 5, 4, 1, 0, 3}, face[6] = {1, 0, 1, 0, 1, 0};
+  for (uint32_t h = 0; h < 6; ++h) {
+    graph::HalfEdge e;
+    e.origin = origin[h];
+    e.twin = h ^ 1u;
+    e.next = next[h];
+    e.face = face[h];
+    e.pts_begin = static_cast<uint32_t>(g.points.size());
+    e.pts_count = 2;
+    e.road_class = graph::RoadClass::Residential;
+    e.width = 7;
+    e.osm_way = 100 + h / 2;
+    g.points.push_back(g.vertices[origin[h]].p);
+    g.points.push_back(g.vertices[origin[h ^ 1u]].p);
+    e.length = static_cast<float>(glm::length(g.points.back() - g.points[e.pts_begin]));
+    g.halfedges.push_back(e);
+  }
+  g.faces = {{1, true, 0}, {0, false, 5000}};
+  for (uint32_t h = 0; h < 6; ++h) {
+    g.successors.push({g.halfedges[h].next});
+    g.local_blocks.push({0, 1});
+  }
+  std::vector<std::vector<uint32_t>> pred(6);
+  for (uint32_t h = 0; h < 6; ++h) pred[g.halfedges[h].next].push_back(h);
+  for (const auto& p : pred) g.predecessors.push(p);
+  return g;
 }
 }  // namespace
+
+TEST(GraphSerialize, HandMadeGraphIsValid) {
+  const auto bad = graph::checkInvariants(smallGraph());
+  EXPECT_TRUE(bad.empty()) << bad.front();
+}
+
+TEST(GraphSerialize, CellTablesRoundTripAndRejectBadIndices) {
+  graph::CellTables t;
+  t.threshold_px = 10;
+  t.display_fov_y_deg = 45;
+  t.display_width = 800;
+  t.display_height = 480;
+  t.visibility.resize(6);
+  t.impostors.resize(6);
+  t.visibility[2] = {{0, 1}, {0.25f, 0.5f}};
+  graph::ImpostorLayer layer;
+  layer.blob = 3;
+  layer.triangles = 77;
+  layer.texture_width = 512;
+  layer.texture_height = 128;
+  layer.blocks = {0};
+  t.impostors[2].layered = {layer};
+  t.impostors[4].single = {layer};
+  const auto vb = graph::serializeVisibility(t), ib = graph::serializeImpostors(t);
+  graph::CellTables r;
+  graph::parseVisibility(vb.data(), vb.size(), 0, 6, 2, r);
+  graph::parseImpostors(ib.data(), ib.size(), 0, 6, 2, 4, r);
+  EXPECT_EQ(r.visibility[2].blocks, t.visibility[2].blocks);
+  EXPECT_EQ(r.visibility[2].ach, t.visibility[2].ach);
+  ASSERT_EQ(r.impostors[2].layered.size(), 1u);
+  EXPECT_EQ(r.impostors[2].layered[0].triangles, 77u);
+  EXPECT_EQ(r.impostors[4].single[0].texture_width, 512);
+  EXPECT_EQ(r.threshold_px, 10.f);
+  // A blob index past the package's blobs, a block past its blocks, and every truncation.
+  EXPECT_THROW(graph::parseImpostors(ib.data(), ib.size(), 0, 6, 2, 3, r), core::Error);
+  EXPECT_THROW(graph::parseVisibility(vb.data(), vb.size(), 0, 6, 1, r), core::Error);
+  EXPECT_THROW(graph::parseVisibility(vb.data(), vb.size(), 0, 7, 2, r), core::Error);
+  for (size_t n = 0; n < ib.size(); ++n) EXPECT_THROW(graph::parseImpostors(ib.data(), n, 0, 6, 2, 4, r), core::Error);
+  for (size_t n = 0; n < vb.size(); ++n) EXPECT_THROW(graph::parseVisibility(vb.data(), n, 0, 6, 2, r), core::Error);
+}
 
 TEST(GraphSerialize, RoundTrip) {
   const graph::StreetGraph g = smallGraph();

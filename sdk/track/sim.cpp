@@ -1,0 +1,274 @@
+#include "track/sim.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <glm/geometric.hpp>
+
+namespace blvd::track {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+// Portable random numbers: mt19937_64's output sequence is fixed by the
+// standard; the distributions are not, so they are written out here.
+class Rng {
+ public:
+  explicit Rng(uint64_t seed) : g_(seed) {}
+  double uniform() { return static_cast<double>(g_() >> 11) * (1.0 / 9007199254740992.0); }
+  double gauss() {  // Box-Muller
+    double u1 = uniform();
+    if (u1 < 1e-300) u1 = 1e-300;
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * kPi * uniform());
+  }
+  uint64_t next() { return g_(); }
+
+ private:
+  std::mt19937_64 g_;
+};
+
+double wrap(double a) {
+  a = std::fmod(a + kPi, 2 * kPi);
+  if (a < 0) a += 2 * kPi;
+  return a - kPi;
+}
+double bearing(glm::dvec2 d) {
+  const double a = std::atan2(d.x, d.y);
+  return a < 0 ? a + 2 * kPi : a;
+}
+
+glm::dvec2 direction(const graph::StreetGraph& g, uint32_t h, bool at_end) {
+  const auto& e = g.halfedges[h];
+  const glm::dvec2* p = &g.points[e.pts_begin];
+  const glm::dvec2 d = at_end ? p[e.pts_count - 1] - p[e.pts_count - 2] : p[1] - p[0];
+  const double l = glm::length(d);
+  return l > 0 ? d / l : glm::dvec2(1, 0);
+}
+
+// The route as one polyline with the cell of each segment (segment i ends at point i).
+struct Path {
+  std::vector<glm::dvec2> pts;
+  std::vector<uint32_t> cell_of;
+  std::vector<double> arc;
+  std::vector<double> cell_start;  // arc at the start of the segment's cell, per point
+
+  double length() const { return arc.empty() ? 0 : arc.back(); }
+  size_t segmentAt(double s) const {
+    size_t i = std::upper_bound(arc.begin(), arc.end(), s) - arc.begin();
+    return std::clamp<size_t>(i, 1, pts.size() - 1);
+  }
+  glm::dvec2 at(double s) const {
+    s = std::clamp(s, 0.0, length());
+    const size_t i = segmentAt(s);
+    const double seg = arc[i] - arc[i - 1];
+    const double t = seg > 0 ? (s - arc[i - 1]) / seg : 0;
+    return pts[i - 1] + (pts[i] - pts[i - 1]) * t;
+  }
+  glm::dvec2 dirAt(double s) const {
+    s = std::clamp(s, 0.0, length());
+    size_t i = segmentAt(s);
+    // Skip degenerate segments.
+    while (i + 1 < pts.size() && glm::length(pts[i] - pts[i - 1]) < 1e-6) ++i;
+    const glm::dvec2 d = pts[i] - pts[i - 1];
+    const double l = glm::length(d);
+    return l > 0 ? d / l : glm::dvec2(0, 1);
+  }
+};
+
+Path flatten(const graph::StreetGraph& g, const std::vector<uint32_t>& route) {
+  Path p;
+  for (uint32_t h : route) {
+    const auto& e = g.halfedges[h];
+    const double start = p.pts.empty() ? 0 : p.arc.back();
+    for (uint32_t i = p.pts.empty() ? 0 : 1; i < e.pts_count; ++i) {
+      const glm::dvec2 q = g.points[e.pts_begin + i];
+      p.arc.push_back(p.pts.empty() ? 0 : p.arc.back() + glm::length(q - p.pts.back()));
+      p.pts.push_back(q);
+      p.cell_of.push_back(h);
+      p.cell_start.push_back(start);
+    }
+  }
+  return p;
+}
+
+struct State {
+  double e, n, psi, v, psidot, s;
+};
+}  // namespace
+
+std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed) {
+  std::vector<uint32_t> route;
+  if (g.halfedges.empty() || cells == 0) return route;
+  Rng rng(seed);
+  std::vector<uint32_t> starts;
+  for (uint32_t h = 0; h < g.halfedges.size(); ++h)
+    if (g.halfedges[h].length >= 30 && g.halfedges[h].road_class <= graph::RoadClass::Residential &&
+        !(g.halfedges[h].flags & graph::kTunnel) && g.successors.count(h) > 0)
+      starts.push_back(h);
+  if (starts.empty()) starts.push_back(0);
+  std::vector<uint8_t> used(g.halfedges.size(), 0);
+  for (int attempt = 0; attempt < 16 && route.size() < cells; ++attempt) {
+    std::fill(used.begin(), used.end(), 0);
+    std::vector<uint32_t> r{starts[rng.next() % starts.size()]};
+    auto use = [&](uint32_t h) {
+      used[h] = 1;
+      if (g.halfedges[h].twin < used.size()) used[g.halfedges[h].twin] = 1;
+    };
+    use(r[0]);
+    while (r.size() < cells) {
+      const uint32_t h = r.back();
+      const glm::dvec2 d = direction(g, h, true);
+      uint32_t best = graph::kNone;
+      double best_score = -1e9;
+      for (const uint32_t* s = g.successors.begin(h); s != g.successors.end(h); ++s) {
+        if (used[*s] || (g.halfedges[*s].flags & graph::kTunnel) || g.halfedges[*s].pts_count < 2) continue;
+        // Straight on scores highest; a little seeded noise picks among turns.
+        const double score = glm::dot(d, direction(g, *s, false)) + 0.6 * rng.uniform();
+        if (score > best_score) best_score = score, best = *s;
+      }
+      if (best == graph::kNone) break;
+      r.push_back(best);
+      use(best);
+    }
+    if (r.size() > route.size()) route = r;
+  }
+  return route;
+}
+
+SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame, const SimDesc& d) {
+  SimTrace out;
+  out.route = simRoute(g, d.route_cells, d.seed);
+  const Path path = flatten(g, out.route);
+  if (path.pts.size() < 2 || path.length() < 20 || d.dt <= 0) return out;
+  const double L = path.length();
+
+  // Speed profile on a 1 m grid: curvature over +-3 m limits the speed, then
+  // braking and acceleration limits (backward and forward passes).
+  const size_t ns = static_cast<size_t>(L) + 1;
+  std::vector<double> vmax(ns);
+  for (size_t k = 0; k < ns; ++k) {
+    const double s = static_cast<double>(k);
+    const double turn = std::fabs(wrap(bearing(path.dirAt(s + 3)) - bearing(path.dirAt(s - 3))));
+    const double kappa = turn / 6.0;
+    vmax[k] = std::clamp(kappa > 1e-6 ? std::sqrt(d.lat_accel / kappa) : d.cruise_mps, d.min_speed_mps, d.cruise_mps);
+  }
+  vmax.back() = d.min_speed_mps;
+  for (size_t k = ns - 1; k-- > 0;) vmax[k] = std::min(vmax[k], std::sqrt(vmax[k + 1] * vmax[k + 1] + 2 * d.decel));
+  vmax[0] = std::min(vmax[0], 0.6 * d.cruise_mps);
+  for (size_t k = 1; k < ns; ++k) vmax[k] = std::min(vmax[k], std::sqrt(vmax[k - 1] * vmax[k - 1] + 2 * d.accel));
+  auto profile = [&](double s) {
+    const double f = std::clamp(s, 0.0, static_cast<double>(ns - 1));
+    const size_t k = std::min(static_cast<size_t>(f), ns - 2);  // ns >= 21: L >= 20
+    const double u = f - static_cast<double>(k);
+    return vmax[k] * (1 - u) + vmax[k + 1] * u;
+  };
+  auto offsetAt = [&](double s) {
+    const glm::dvec2 dir = path.dirAt(s);
+    return path.at(s) + glm::dvec2(dir.y, -dir.x) * d.lateral_m;
+  };
+
+  // Integrate the vehicle: pure pursuit (Coulter 1992) toward a point a speed-
+  // dependent distance ahead on the lane.
+  std::vector<State> states;
+  {
+    State st{};
+    const glm::dvec2 p0 = offsetAt(0);
+    st.e = p0.x;
+    st.n = p0.y;
+    st.psi = bearing(path.dirAt(0));
+    st.v = profile(0);
+    st.s = 0;
+    size_t seg = 1;
+    const size_t max_steps = static_cast<size_t>(3600.0 / d.dt);
+    while (st.s < L - 1.0 && states.size() < max_steps) {
+      states.push_back(st);
+      const double vt = profile(st.s);
+      st.v += std::clamp(vt - st.v, -d.decel * d.dt, d.accel * d.dt);
+      const double look = std::max(6.0, 1.0 * st.v);
+      const glm::dvec2 target = offsetAt(st.s + look);
+      const double alpha = wrap(bearing(target - glm::dvec2(st.e, st.n)) - st.psi);
+      st.psidot = st.v * 2 * std::sin(alpha) / look;
+      const double psim = st.psi + 0.5 * st.psidot * d.dt;
+      st.e += st.v * d.dt * std::sin(psim);
+      st.n += st.v * d.dt * std::cos(psim);
+      st.psi = std::fmod(st.psi + st.psidot * d.dt + 2 * kPi, 2 * kPi);
+      // Progress: nearest point of the route, searching forward from the last segment.
+      const glm::dvec2 p(st.e, st.n);
+      double best = 1e300, best_s = st.s;
+      size_t best_seg = seg;
+      for (size_t i = seg; i < path.pts.size() && path.arc[i - 1] <= st.s + 30; ++i) {
+        const glm::dvec2 a = path.pts[i - 1], b = path.pts[i];
+        const glm::dvec2 ab = b - a;
+        const double l2 = glm::dot(ab, ab);
+        const double t = l2 > 0 ? std::clamp(glm::dot(p - a, ab) / l2, 0.0, 1.0) : 0.0;
+        const double dist = glm::length(a + ab * t - p);
+        if (dist < best - 1e-9) best = dist, best_s = path.arc[i - 1] + t * std::sqrt(l2), best_seg = i;
+      }
+      if (best_s > st.s) st.s = best_s, seg = best_seg;
+    }
+    states.push_back(st);
+  }
+  out.duration_s = static_cast<double>(states.size() - 1) * d.dt;
+  for (size_t i = 1; i < states.size(); ++i)
+    out.distance_m += std::hypot(states[i].e - states[i - 1].e, states[i].n - states[i - 1].n);
+
+  if (d.outage_s > 0 && out.duration_s > d.outage_s + 20) {
+    out.outage_begin = std::floor(d.outage_at * out.duration_s);
+    out.outage_end = out.outage_begin + d.outage_s;
+  }
+
+  Rng rng_gnss(d.seed * 0x9E3779B97F4A7C15ull + 1), rng_drop(d.seed * 0x9E3779B97F4A7C15ull + 2),
+      rng_odo(d.seed * 0x9E3779B97F4A7C15ull + 3);
+  const size_t odo_every = std::max<size_t>(1, static_cast<size_t>(std::lround(1.0 / (d.odo_rate_hz * d.dt))));
+  const size_t gnss_every = std::max<size_t>(1, static_cast<size_t>(std::lround(1.0 / (d.gnss_rate_hz * d.dt))));
+  for (size_t k = 0; k < states.size(); ++k) {
+    const State& st = states[k];
+    const double t = static_cast<double>(k) * d.dt;
+    if (k % odo_every == 0) {
+      Odometry o;
+      o.t = t;
+      o.speed_mps = std::max(0.0, st.v * d.speed_scale + d.speed_noise * rng_odo.gauss());
+      o.yaw_rate_dps = -st.psidot / kDeg + d.yaw_bias_dps + d.yaw_noise_dps * rng_odo.gauss();
+      o.flags = kOdoSpeed | kOdoYawRate;
+      out.odometry.push_back(o);
+    }
+    if (k > 0 && k % gnss_every == 0) {
+      SimSample smp;
+      smp.t = t;
+      smp.e = st.e;
+      smp.n = st.n;
+      smp.heading_deg = st.psi / kDeg;
+      smp.speed_mps = st.v;
+      const size_t i = path.segmentAt(st.s);
+      smp.cell = path.cell_of[i];
+      smp.arc_m = st.s - path.cell_start[i];
+      out.epochs.push_back(smp);
+      // Draw every random number whether or not the fix is kept, so dropping
+      // one fix does not change the noise of the others.
+      const double ne = d.gnss_sigma_m * rng_gnss.gauss(), nn = d.gnss_sigma_m * rng_gnss.gauss();
+      const double ve = st.v * std::sin(st.psi) + d.gnss_speed_sigma * rng_gnss.gauss();
+      const double vn = st.v * std::cos(st.psi) + d.gnss_speed_sigma * rng_gnss.gauss();
+      const bool dropped = rng_drop.uniform() < d.drop_fraction;
+      const bool in_outage = t >= out.outage_begin && t < out.outage_end;
+      const bool keep = !dropped && !in_outage;
+      out.epoch_has_fix.push_back(keep ? 1 : 0);
+      if (!keep) continue;
+      GnssFix f;
+      f.t = t;
+      double h = 0;
+      frame.reverse(geo::Enu{st.e + ne, st.n + nn, 0}, f.lat, f.lon, h);
+      f.alt = h;
+      f.speed_mps = static_cast<float>(std::hypot(ve, vn));
+      f.track_deg = static_cast<float>(bearing(glm::dvec2(ve, vn)) / kDeg);
+      f.hdop = 1.0f;
+      f.h_acc_m = static_cast<float>(d.gnss_sigma_m * std::sqrt(2.0));
+      f.mode = kGnssMode3D;
+      f.flags = kGnssHasTime | kGnssHasLatLon | kGnssHasAlt | kGnssHasSpeed | kGnssHasTrack | kGnssHasHdop | kGnssHasHAcc;
+      out.fixes.push_back(f);
+    }
+  }
+  return out;
+}
+
+}  // namespace blvd::track
