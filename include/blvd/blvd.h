@@ -174,6 +174,85 @@ BLVD_API blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats /* ma
  * (at least width*height*4 bytes). Errors: BLVD_ERR_INVALID_ARG if too small. */
 BLVD_API blvd_status blvd_read_pixels(blvd_runtime* rt, void* rgba, size_t rgba_bytes);
 
+
+/* ---- position tracking ---------------------------------------------------------
+ * Feed GNSS fixes and odometry from any thread; blvd fuses them (EKF), matches
+ * the vehicle onto the street graph (HMM, fixed-lag Viterbi) and, once a pose
+ * is matched, blvd_render() uses it as the camera unless blvd_set_pose_*() was
+ * called later. Times are seconds on one clock the host chooses. */
+
+/* Bits of blvd_gnss_fix.flags: which fields hold a value. */
+#define BLVD_GNSS_HAS_TIME 0x01u
+#define BLVD_GNSS_HAS_LATLON 0x02u
+#define BLVD_GNSS_HAS_ALT 0x04u
+#define BLVD_GNSS_HAS_SPEED 0x08u
+#define BLVD_GNSS_HAS_TRACK 0x10u
+#define BLVD_GNSS_HAS_HDOP 0x20u
+#define BLVD_GNSS_HAS_HACC 0x40u
+
+typedef struct blvd_gnss_fix {
+  uint32_t struct_size; /* sizeof(blvd_gnss_fix) */
+  double t;             /* host clock, seconds, when the position was valid */
+  double lat, lon, alt; /* WGS 84 degrees; metres above mean sea level */
+  float speed_mps;      /* over ground */
+  float track_deg;      /* course over ground, degrees true */
+  float hdop;
+  float h_acc_m;        /* horizontal accuracy (GST), metres */
+  int32_t mode;         /* 1 no fix, 2 2D, 3 3D (as gpsd) */
+  uint32_t flags;       /* BLVD_GNSS_HAS_* */
+} blvd_gnss_fix;
+
+/* Bits of blvd_odometry.flags. */
+#define BLVD_ODO_SPEED 0x001u
+#define BLVD_ODO_YAW_RATE 0x004u
+#define BLVD_ODO_WHEEL_SPEEDS 0x010u
+#define BLVD_ODO_GEAR 0x020u
+#define BLVD_ODO_HEADING 0x100u
+
+typedef struct blvd_odometry {
+  uint32_t struct_size;       /* sizeof(blvd_odometry) */
+  double t;                   /* host clock, seconds */
+  double speed_mps;           /* ground speed, unsigned */
+  double yaw_rate_dps;        /* positive to the left (ISO 8855) */
+  double wheel_speeds_mps[4]; /* FL, FR, RL, RR */
+  double heading_deg;         /* absolute heading, clockwise from north */
+  int32_t reverse;            /* gear is reverse (with BLVD_ODO_GEAR) */
+  uint32_t flags;             /* BLVD_ODO_* */
+} blvd_odometry;
+
+/* Bits of blvd_pose.flags. */
+#define BLVD_POSE_VALID 0x01u
+#define BLVD_POSE_HEADING_VALID 0x02u
+#define BLVD_POSE_MATCHED 0x04u
+#define BLVD_POSE_DEAD_RECKONING 0x08u
+
+typedef struct blvd_pose {
+  uint32_t struct_size;      /* set by the caller */
+  double t;                  /* the time it was computed for */
+  double x, y;               /* local east / north metres */
+  double lat, lon;           /* WGS 84 degrees */
+  double heading_deg;        /* clockwise from north */
+  double speed_mps;
+  uint32_t cell;             /* matched cell (UINT32_MAX: none) */
+  double arc_m;              /* distance along the cell */
+  double lateral_m;          /* offset from the cell's centre line, right positive */
+  double confidence;         /* posterior probability of the matched cell, 0..1 */
+  uint32_t flags;            /* BLVD_POSE_* */
+} blvd_pose;
+
+/* Queues a GNSS fix. Any thread; no allocation. Errors: BLVD_ERR_INVALID_ARG
+ * for a NULL fix. A full queue drops its oldest entry (counted). */
+BLVD_API blvd_status blvd_feed_gnss(blvd_runtime* rt, const blvd_gnss_fix* fix);
+
+/* Queues an odometry sample (speed, yaw rate, wheel speeds, gear, heading from
+ * CAN or a simulator). Any thread; no allocation. */
+BLVD_API blvd_status blvd_feed_odometry(blvd_runtime* rt, const blvd_odometry* odo);
+
+/* Processes what was fed up to time t and returns the tracked pose. Call on the
+ * render thread (blvd_render calls it with the last fed time when tracking is
+ * active). */
+BLVD_API blvd_status blvd_get_pose(blvd_runtime* rt, double t, blvd_pose* pose);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

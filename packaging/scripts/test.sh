@@ -16,4 +16,10 @@ cmake --build build-asan -j"$jobs" --target test_package test_graph_serialize te
 # 2. Everything, warnings as errors.
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBLVD_WERROR=ON > /dev/null
 cmake --build build -j"$jobs"
-cd build && ctest --output-on-failure -j"$jobs" --timeout 900
+cd build
+set +e
+ctest --output-on-failure -j"$jobs" --timeout 900 2>&1 | tee ctest.log
+rc=${PIPESTATUS[0]}
+# CTest prints skipped tests after its summary; repeat the summary so it is the last line.
+grep -E "tests passed|tests failed" ctest.log | tail -n 1
+exit "$rc"

@@ -149,6 +149,32 @@ blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mode, float 
   return guarded(rt, [&] { rt->impl->setMode(mode, radius_m); });
 }
 
+blvd_status blvd_feed_gnss(blvd_runtime* rt, const blvd_gnss_fix* fix) {
+  if (!rt) return BLVD_ERR_MISUSE;  // no last error: feeds may run on any thread
+  if (!fix) return BLVD_ERR_INVALID_ARG;
+  try {
+    return rt->impl->feedGnss(*fix);
+  } catch (...) {
+    return BLVD_ERR_INTERNAL;
+  }
+}
+
+blvd_status blvd_feed_odometry(blvd_runtime* rt, const blvd_odometry* odo) {
+  if (!rt) return BLVD_ERR_MISUSE;
+  if (!odo) return BLVD_ERR_INVALID_ARG;
+  try {
+    return rt->impl->feedOdometry(*odo);
+  } catch (...) {
+    return BLVD_ERR_INTERNAL;
+  }
+}
+
+blvd_status blvd_get_pose(blvd_runtime* rt, double t, blvd_pose* pose) {
+  if (!rt) return misuse(nullptr, "blvd_get_pose: rt is NULL");
+  if (!pose) return misuse(rt, "blvd_get_pose: pose is NULL");
+  return guarded(rt, [&] { rt->impl->getPose(t, pose); });
+}
+
 blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats) {
   if (!rt) return misuse(nullptr, "blvd_render: rt is NULL");
   return guarded(rt, [&] { rt->impl->render(stats); });

@@ -50,6 +50,9 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   cam_.width = static_cast<int>(desc.width);
   cam_.height = static_cast<int>(desc.height);
   cam_.eye_enu = {0, 0, desc.eye_height_m};
+  track::TrackerDesc td;
+  td.eye_height_m = desc.eye_height_m;
+  tracker_ = std::make_unique<track::Tracker>(city_.frame(), &city_.graph(), td);
   BLVD_LOG_INFO("runtime: %s, %zu blocks on %s (%s)", desc.package_path, block_meshes_.size(), ctx_->name(),
                 renderer_->glRenderer());
 }
@@ -73,6 +76,86 @@ void Runtime::setPoseLocal(double x, double y, double heading_deg, double pitch_
   cam_.eye_enu = {x, y, desc_.eye_height_m};
   cam_.heading_deg = std::fmod(heading_deg, 360.0);
   cam_.pitch_deg = pitch_deg;
+  manual_pose_ = true;
+}
+
+// The C flags are the tracker's bits, so they pass through unchanged.
+static_assert(BLVD_GNSS_HAS_LATLON == track::kGnssHasLatLon && BLVD_GNSS_HAS_HACC == track::kGnssHasHAcc &&
+                  BLVD_GNSS_HAS_TRACK == track::kGnssHasTrack && BLVD_GNSS_HAS_HDOP == track::kGnssHasHdop,
+              "GNSS flag bits");
+static_assert(BLVD_ODO_SPEED == track::kOdoSpeed && BLVD_ODO_YAW_RATE == track::kOdoYawRate &&
+                  BLVD_ODO_WHEEL_SPEEDS == track::kOdoWheelSpeeds && BLVD_ODO_GEAR == track::kOdoGear &&
+                  BLVD_ODO_HEADING == track::kOdoHeading,
+              "odometry flag bits");
+static_assert(BLVD_POSE_VALID == track::kPoseValid && BLVD_POSE_MATCHED == track::kPoseMatched &&
+                  BLVD_POSE_DEAD_RECKONING == track::kPoseDeadReckoning &&
+                  BLVD_POSE_HEADING_VALID == track::kPoseHeadingValid,
+              "pose flag bits");
+
+namespace {
+template <typename T>
+T sized(const T& in) {
+  // Structs only grow at the end: copy what the caller's version has.
+  T out{};
+  const size_t n = in.struct_size && in.struct_size < sizeof(T) ? in.struct_size : sizeof(T);
+  std::memcpy(&out, &in, n);
+  return out;
+}
+}  // namespace
+
+blvd_status Runtime::feedGnss(const blvd_gnss_fix& in) {
+  const blvd_gnss_fix f = sized(in);
+  track::GnssFix g;
+  g.t = f.t;
+  g.lat = f.lat;
+  g.lon = f.lon;
+  g.alt = f.alt;
+  g.speed_mps = f.speed_mps;
+  g.track_deg = f.track_deg;
+  g.hdop = f.hdop;
+  g.h_acc_m = f.h_acc_m;
+  g.mode = f.mode;
+  g.flags = f.flags;  // BLVD_GNSS_HAS_* == track::GnssFlag bits
+  tracker_->feedGnss(g);
+  last_feed_t_ = std::max(last_feed_t_.load(), f.t);
+  manual_pose_ = false;
+  return BLVD_OK;
+}
+
+blvd_status Runtime::feedOdometry(const blvd_odometry& in) {
+  const blvd_odometry o = sized(in);
+  track::Odometry d;
+  d.t = o.t;
+  d.speed_mps = o.speed_mps;
+  d.yaw_rate_dps = o.yaw_rate_dps;
+  for (int i = 0; i < 4; ++i) d.wheel_speeds_mps[i] = o.wheel_speeds_mps[i];
+  d.heading_deg = o.heading_deg;
+  d.reverse = o.reverse != 0;
+  d.flags = o.flags;  // BLVD_ODO_* == track::OdometryFlag bits
+  tracker_->feedOdometry(d);
+  last_feed_t_ = std::max(last_feed_t_.load(), o.t);
+  manual_pose_ = false;
+  return BLVD_OK;
+}
+
+void Runtime::getPose(double t, blvd_pose* out) {
+  if (!std::isfinite(t)) throw Error(Status::InvalidArg, "blvd_get_pose: t is not finite");
+  const track::Pose& p = tracker_->update(t);
+  blvd_pose r{};
+  r.struct_size = out->struct_size ? out->struct_size : sizeof r;
+  r.t = p.t;
+  r.x = p.e;
+  r.y = p.n;
+  double h = 0;
+  city_.frame().reverse({p.e, p.n, 0}, r.lat, r.lon, h);
+  r.heading_deg = p.heading_deg;
+  r.speed_mps = p.speed_mps;
+  r.cell = p.cell;
+  r.arc_m = p.arc_m;
+  r.lateral_m = p.lateral_m;
+  r.confidence = p.confidence;
+  r.flags = p.flags;  // BLVD_POSE_* == track::PoseFlag bits
+  std::memcpy(out, &r, std::min<size_t>(r.struct_size, sizeof r));
 }
 
 void Runtime::setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg) {
@@ -172,7 +255,18 @@ void Runtime::buildDrawList(uint32_t cell) {
 void Runtime::render(blvd_frame_stats* stats) {
   if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
   ++frame_;
-  const uint32_t cell = city_.nearestCell({cam_.eye_enu.x, cam_.eye_enu.y}, cam_.heading_deg);
+  uint32_t cell = graph::kNone;
+  if (!manual_pose_) {
+    // Tracking drives the camera: the pose at the newest fed time.
+    const track::Pose& p = tracker_->update(last_feed_t_.load());
+    if (p.flags & track::kPoseValid) {
+      cam_.eye_enu = {p.camera.eye_e, p.camera.eye_n, p.camera.eye_u};
+      cam_.heading_deg = p.camera.heading_deg;
+      cam_.pitch_deg = p.camera.pitch_deg;
+      if (p.flags & track::kPoseMatched) cell = p.cell;
+    }
+  }
+  if (cell == graph::kNone) cell = city_.nearestCell({cam_.eye_enu.x, cam_.eye_enu.y}, cam_.heading_deg);
   buildDrawList(cell);
   render::FrameStats fs;
   if (!renderer_->render(cam_, draw_.data(), draw_.size(), &fs))

@@ -1,6 +1,7 @@
 // The object behind blvd_runtime*: the city, the GL context and renderer, the
 // pose, and the last error. sdk/capi/blvd_capi.cpp maps the C API onto it.
 #pragma once
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 #include "render/context.h"
 #include "render/renderer.h"
 #include "stream/city.h"
+#include "track/tracker.h"
 
 namespace blvd::capi {
 
@@ -25,6 +27,12 @@ class Runtime {
   void readPixels(void* rgba, size_t bytes);
   void info(blvd_runtime_info* out) const;
   void setMode(blvd_render_mode mode, float radius_m);
+
+  // Tracking. The feeds are safe from any thread and never touch last_error
+  // (another thread may be reading it); getPose runs on the render thread.
+  blvd_status feedGnss(const blvd_gnss_fix& fix);
+  blvd_status feedOdometry(const blvd_odometry& odo);
+  void getPose(double t, blvd_pose* out);
 
   std::string last_error;
 
@@ -52,6 +60,11 @@ class Runtime {
   uint32_t impostors_drawn_ = 0, blocks_drawn_ = 0;
   render::Camera cam_;
   bool rendered_ = false;
+  // The tracker drives the camera once it has a pose, until the host places
+  // the camera itself (blvd_set_pose_*); the next feed hands it back.
+  std::unique_ptr<track::Tracker> tracker_;
+  std::atomic<bool> manual_pose_{true};
+  std::atomic<double> last_feed_t_{0.0};
 };
 
 }  // namespace blvd::capi

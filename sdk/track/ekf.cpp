@@ -41,7 +41,7 @@ EkfDesc ekfDefaults(const EkfDesc& in) {
   d.gate_chi2_2dof = orDefault(d.gate_chi2_2dof, 13.82);
   d.gate_chi2_1dof = orDefault(d.gate_chi2_1dof, 10.83);
   if (d.reset_after_rejects == 0) d.reset_after_rejects = 5;
-  d.q_pos = orDefault(d.q_pos, 0.05);
+  d.q_pos = orDefault(d.q_pos, 0.002);
   d.q_speed = orDefault(d.q_speed, 4.0);
   d.q_heading = orDefault(d.q_heading, (0.5 * kDeg) * (0.5 * kDeg));
   d.q_bias = orDefault(d.q_bias, (0.01 * kDeg) * (0.01 * kDeg));
@@ -187,6 +187,12 @@ void Ekf::initPosition(double t, double e, double n, double sigma_m) {
   consecutive_rejects_ = 0;
 }
 
+void Ekf::addPositionVariance(double var) {
+  if (!(var > 0)) return;
+  P_[kE][kE] += var;
+  P_[kN][kN] += var;
+}
+
 void Ekf::initHeading(double psi, double sigma) {
   for (int i = 0; i < kDim; ++i) P_[kPsi][i] = P_[i][kPsi] = 0;
   x_[kPsi] = wrapTwoPi(psi);
@@ -289,7 +295,7 @@ bool Ekf::scalarUpdate(const double H[kDim], int idx, double residual, double r,
   for (int i = 0; i < kDim; ++i) S += H[i] * PH[i];
   if (!(S > 0)) return false;
   if (residual * residual / S > gate) {
-    if (++scalar_rejects_[idx] < kScalarResetAfter || !(H[idx] != 0)) return false;
+    if (idx < 0 || ++scalar_rejects_[idx] < kScalarResetAfter || !(H[idx] != 0)) return false;
     // Persistently disagreeing: our value is the wrong one.
     for (int i = 0; i < kDim; ++i) P_[idx][i] = P_[i][idx] = 0;
     x_[idx] += residual / H[idx];
@@ -297,7 +303,7 @@ bool Ekf::scalarUpdate(const double H[kDim], int idx, double residual, double r,
     scalar_rejects_[idx] = 0;
     return true;
   }
-  scalar_rejects_[idx] = 0;
+  if (idx >= 0) scalar_rejects_[idx] = 0;
   double K[kDim];
   for (int i = 0; i < kDim; ++i) K[i] = PH[i] / S;
   for (int i = 0; i < kDim; ++i) x_[i] += K[i] * residual;
@@ -321,6 +327,15 @@ bool Ekf::updateOdometrySpeed(double v, double sigma) {
   H[kV] = x_[kK];
   H[kK] = x_[kV];
   return scalarUpdate(H, kV, v - x_[kK] * x_[kV], sigma * sigma, d_.gate_chi2_1dof);
+}
+
+bool Ekf::updateLine(double qe, double qn, double ne, double nn, double offset, double sigma) {
+  if (!initialized_) return false;
+  double H[kDim] = {};
+  H[kE] = ne;
+  H[kN] = nn;
+  const double predicted = ne * (x_[kE] - qe) + nn * (x_[kN] - qn);
+  return scalarUpdate(H, -1, offset - predicted, sigma * sigma, d_.gate_chi2_1dof);
 }
 
 bool Ekf::updateHeading(double psi, double sigma) {

@@ -42,7 +42,7 @@ struct EkfDesc {
   double gate_chi2_2dof = 0;       // position gate; default 13.82 (99.9 %)
   double gate_chi2_1dof = 0;       // speed / heading gate; default 10.83 (99.9 %)
   uint32_t reset_after_rejects = 0;  // consecutive rejected fixes that reset the position; default 5
-  double q_pos = 0;                // position process noise (slip, model error), m^2/s; default 0.05
+  double q_pos = 0;                // position process noise (slip, model error), m^2/s; default 0.002
   double q_speed = 0;              // speed random walk, (m/s)^2/s; default 4 (2 m/s^2)
   double q_heading = 0;            // heading noise with a gyro, rad^2/s; default (0.5 deg)^2/s
   double q_bias = 0;               // yaw-rate bias random walk, (rad/s)^2/s; default (0.01 deg/s)^2/s
@@ -84,12 +84,19 @@ class Ekf {
   bool updateSpeed(double v, double sigma);
   // Speed from the vehicle's odometry (measures k * v), m/s.
   bool updateOdometrySpeed(double v, double sigma);
+  // The position lies `offset` metres along the unit normal (ne, nn) from the
+  // line through (qe, qn): a map constraint ("the vehicle is on this street"),
+  // one dimension only, so it says nothing about the position along the street.
+  bool updateLine(double qe, double qn, double ne, double nn, double offset, double sigma);
   // Absolute heading (GNSS course or a heading sensor), clockwise from north, radians.
   bool updateHeading(double psi, double sigma);
   // The yaw rate used by the following predictions, rad/s positive left; t its time.
   void setYawRate(double t, double omega);
   // Drops the yaw-rate input (no gyro: constant-turn-rate model).
   void clearYawRate() { gyro_t_ = -1e300; }
+  // Adds variance to the position (east and north), e.g. when a constraint applied
+  // earlier turns out to be wrong.
+  void addPositionVariance(double var);
   // Sets the heading (first course from GNSS, or from displacement).
   void initHeading(double psi, double sigma);
 
@@ -122,7 +129,7 @@ class Ekf {
   // One prediction step of dt seconds on (x, P); `now` picks the yaw-rate input.
   void propagate(double x[kDim], double P[kDim][kDim], double dt, double now) const;
   // Scalar measurement with Jacobian row H; idx names the state forced on a long
-  // run of gated updates.
+  // run of gated updates (-1: never forced).
   bool scalarUpdate(const double H[kDim], int idx, double residual, double r, double gate);
   void initPosition(double t, double e, double n, double sigma_m);
 

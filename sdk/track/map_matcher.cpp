@@ -33,13 +33,14 @@ MatcherDesc matcherDefaults(const MatcherDesc& in) {
   d.search_max_m = orDefault(d.search_max_m, 200);
   d.search_sigmas = orDefault(d.search_sigmas, 4);
   d.road_sigma_m = orDefault(d.road_sigma_m, 2.5);
-  d.heading_sigma_deg = orDefault(d.heading_sigma_deg, 15);
+  d.heading_sigma_deg = orDefault(d.heading_sigma_deg, 10);
   d.beta_m = orDefault(d.beta_m, 2);
   d.beta_sigma_factor = orDefault(d.beta_sigma_factor, 1);
   d.route_slack_m = orDefault(d.route_slack_m, 60);
   d.route_factor = orDefault(d.route_factor, 2);
   if (d.max_expansions == 0) d.max_expansions = 256;
   d.backward_tolerance_m = orDefault(d.backward_tolerance_m, 5);
+  d.score_floor = orDefault(d.score_floor, 20);
   return d;
 }
 
@@ -153,6 +154,8 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
   // Emission log-likelihoods; keep the K best (sorted, ties to the lower cell id).
   const double se = std::sqrt(obs.sigma_m * obs.sigma_m + d_.road_sigma_m * d_.road_sigma_m);
   const double inv_2se2 = 0.5 / (se * se);
+  const double sa = std::max(0.5, obs.sigma_m);
+  const double inv_2sa2 = 0.5 / (sa * sa);
   const bool use_heading = obs.heading_sigma_rad > 0;
   const double sh = obs.heading_sigma_rad * obs.heading_sigma_rad + (d_.heading_sigma_deg * kDeg) * (d_.heading_sigma_deg * kDeg);
   const double kappa = use_heading ? 1.0 / sh : 0.0;
@@ -178,8 +181,20 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
     const glm::dvec2 a = pts[seen_point_[h]], b = pts[seen_point_[h] + 1];
     const double hd = bearing(b.x - a.x, b.y - a.y);
     const double dist = seen_dist_[h];
-    const double base = -dist * dist * inv_2se2;
     const auto& he = g_.halfedges[h];
+    // Past either end of the street, the distance has an along-street part
+    // (the overshoot) that the lane offset does not explain: it is weighed with
+    // the position's own sigma, so a position just past a junction belongs to
+    // the next street rather than to the end of this one.
+    double overshoot = 0;
+    const float t = seen_t_[h];
+    if ((t <= 0.0f && seen_point_[h] == he.pts_begin) || (t >= 1.0f && seen_point_[h] + 2 == he.pts_begin + he.pts_count)) {
+      const glm::dvec2 d = b - a;
+      const double len = glm::length(d);
+      if (len > 1e-9) overshoot = std::min(dist, std::fabs(((px - (t <= 0 ? a.x : b.x)) * d.x + (py - (t <= 0 ? a.y : b.y)) * d.y) / len));
+    }
+    const double lateral2 = dist * dist - overshoot * overshoot;
+    const double base = -lateral2 * inv_2se2 - overshoot * overshoot * inv_2sa2;
     if (!(he.flags & graph::kReverseOfOneway))
       insert(h, base + (use_heading ? kappa * (std::cos(hd - obs.heading_rad) - 1) : 0), h, false, hd);
     const uint32_t tw = he.twin;
@@ -211,6 +226,13 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
     c.p.dist_m = seen_dist_[listed];
     c.p.e = q.x;
     c.p.n = q.y;
+  }
+  if (obs.fix_sigma_m > 0) {
+    const double sf2 = obs.fix_sigma_m * obs.fix_sigma_m + d_.road_sigma_m * d_.road_sigma_m;
+    for (uint32_t j = 0; j < count; ++j) {
+      const CellPoint f = project(col.cand[j].p.cell, obs.fix_e, obs.fix_n);
+      col.cand[j].log_e -= 0.5 * f.dist_m * f.dist_m / sf2;
+    }
   }
   col.count = count;
 }
@@ -327,7 +349,10 @@ bool MapMatcher::step(const MatchObservation& obs) {
       for (uint32_t j = 0; j < cur.count; ++j) cur.alpha[j] /= asum;
       double mx = kNegInf;
       for (uint32_t j = 0; j < cur.count; ++j) mx = std::max(mx, cur.delta[j]);
-      for (uint32_t j = 0; j < cur.count; ++j) cur.delta[j] -= mx;
+      // Scores are relative to the best; a floor bounds how much past evidence a
+      // live alternative must overcome, so a wrong early choice is not forever.
+      for (uint32_t j = 0; j < cur.count; ++j)
+        if (cur.delta[j] != kNegInf) cur.delta[j] = std::max(cur.delta[j] - mx, -d_.score_floor);
     }
   }
   if (!chained) {
@@ -383,15 +408,17 @@ CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double h
   CellPoint cur = project(from.cell, e, n);
   for (int hop = 0; hop < 2; ++hop) {
     const double len = g_.halfedges[cur.cell].length;
-    if (cur.arc_m < len - 0.01) break;
-    CellPoint best = cur;
-    double best_cost = cost(cur);
+    if (cur.arc_m < len - 0.01) break;  // within the cell
+    // Past its end: onto the successor that fits best, when the position lies
+    // along it (or at least nearer to it).
+    CellPoint best;
+    double best_cost = 1e300;
     for (const uint32_t* s = g_.successors.begin(cur.cell); s != g_.successors.end(cur.cell); ++s) {
       const CellPoint p = project(*s, e, n);
       const double c = cost(p);
       if (p.cell != graph::kNone && c < best_cost) best = p, best_cost = c;
     }
-    if (best.cell == cur.cell) break;
+    if (best.cell == graph::kNone || !(best.arc_m > 0.01 || best.dist_m < cur.dist_m)) break;
     cur = best;
   }
   return cur;

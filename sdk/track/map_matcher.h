@@ -48,13 +48,14 @@ struct MatcherDesc {
   double search_max_m = 0;       // default 200
   double search_sigmas = 0;      // default 4
   double road_sigma_m = 0;       // lane offset / road width in the emission; default 2.5
-  double heading_sigma_deg = 0;  // road direction vs vehicle heading, added to the observed sigma; default 15
+  double heading_sigma_deg = 0;  // road direction vs vehicle heading, added to the observed sigma; default 10
   double beta_m = 0;             // transition scale: beta = beta_m + beta_sigma_factor x sigma_obs; default 2
   double beta_sigma_factor = 0;  // default 1
   double route_slack_m = 0;      // route search cap = route_factor x d_obs + route_slack_m; default 60
   double route_factor = 0;       // default 2
   uint32_t max_expansions = 0;   // route search heap capacity per source; default 256
   double backward_tolerance_m = 0;  // a small step back on the same cell counts as standing still; default 5
+  double score_floor = 0;        // Viterbi scores are kept within this many nats of the best; default 20
 };
 
 MatcherDesc matcherDefaults(const MatcherDesc& desc);
@@ -65,6 +66,13 @@ struct MatchObservation {
   double sigma_m = 5;         // 1-sigma position error
   double heading_rad = 0;     // clockwise from north
   double heading_sigma_rad = 0;  // <= 0: no heading (standing still, not yet known)
+  // The raw GNSS fix of this step, when there is one (fix_sigma_m > 0). The
+  // filtered position above is precise but its errors are correlated from step
+  // to step (and pulled toward the matched street by the map aid); the fixes'
+  // errors are independent, so their distances add evidence that accumulates
+  // honestly, e.g. between two parallel streets.
+  double fix_e = 0, fix_n = 0;
+  double fix_sigma_m = 0;
 };
 
 // A point on a cell.

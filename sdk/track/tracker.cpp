@@ -22,6 +22,10 @@ TrackerDesc trackerDefaults(const TrackerDesc& in) {
   d.max_extrapolate_s = orDefault(d.max_extrapolate_s, 1.0);
   d.eye_height_m = orDefault(d.eye_height_m, 1.5);
   if (!finite(d.camera_pitch_deg)) d.camera_pitch_deg = 0;
+  d.map_aid_min_confidence = orDefault(d.map_aid_min_confidence, 0.9);
+  if (!(d.map_aid_sigma_m < 0)) d.map_aid_sigma_m = orDefault(d.map_aid_sigma_m, 2.0);
+  d.lane_offset_m = orDefault(d.lane_offset_m, 1.75);
+  d.ambiguity_sigmas = orDefault(d.ambiguity_sigmas, 2.5);
   d.ekf = ekfDefaults(d.ekf);
   d.matcher = matcherDefaults(d.matcher);
   return d;
@@ -85,6 +89,9 @@ void Tracker::reset() {
   pose_ = Pose{};
   cur_ = CellPoint{};
   confidence_ = 0;
+  lateral_mean_ = 0;
+  agreement_fixes_ = 0;
+  street_agrees_ = false;
   last_step_t_ = last_fix_t_ = last_fix_event_t_ = last_gyro_t_ = last_odo_speed_t_ = -1e300;
   st_ = TrackerStats{};
 }
@@ -103,7 +110,7 @@ TrackerStats Tracker::stats() const {
   return s;
 }
 
-void Tracker::matchStep() {
+void Tracker::matchStep(const double* fix_en, double fix_sigma) {
   if (!matcher_ || !ekf_.initialized()) return;
   MatchObservation obs;
   obs.t = ekf_.time();
@@ -113,14 +120,75 @@ void Tracker::matchStep() {
   obs.heading_rad = ekf_.heading();
   obs.heading_sigma_rad =
       ekf_.headingValid() && std::fabs(ekf_.speed()) > 1.0 ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi))) : 0.0;
+  if (fix_en && fix_sigma > 0) {
+    obs.fix_e = fix_en[0];
+    obs.fix_n = fix_en[1];
+    obs.fix_sigma_m = fix_sigma;
+  }
   if (matcher_->step(obs)) {
     cur_ = matcher_->head();
     confidence_ = matcher_->confidence();
+    if (d_.map_aid_sigma_m > 0 && confidence_ >= d_.map_aid_min_confidence && street_agrees_ && !ambiguous()) {
+      // Right of a bearing h is (cos h, -sin h).
+      if (ekf_.updateLine(cur_.e, cur_.n, std::cos(cur_.heading_rad), -std::sin(cur_.heading_rad),
+                          expectedOffset(cur_.cell), d_.map_aid_sigma_m))
+        ++st_.map_aids;
+      else
+        ++st_.map_aids_rejected;
+    }
   } else {
     cur_ = CellPoint{};
     confidence_ = 0;
   }
   last_step_t_ = obs.t;
+}
+
+bool Tracker::ambiguous() const {
+  // Another street running the same way within reach of the fixes' noise: the
+  // fixes cannot tell the two apart yet, so the map aid would only pick one.
+  const graph::StreetGraph& g = *graph_;
+  const uint32_t head = cur_.cell;
+  const uint32_t twin = g.halfedges[head].twin;
+  const double reach = d_.ambiguity_sigmas * last_fix_sigma_;
+  for (uint32_t i = 0; i < matcher_->candidateCount(); ++i) {
+    const CellPoint& c = matcher_->candidate(i);
+    if (c.cell == head || c.cell == twin) continue;
+    if (std::cos(c.heading_rad - cur_.heading_rad) < 0.8) continue;  // not parallel (> 37 deg)
+    // Streets meeting the head's ends continue it rather than run beside it.
+    if (g.halfedges[c.cell].origin == g.halfedges[head].origin || g.endVertex(c.cell) == g.endVertex(head) ||
+        g.halfedges[c.cell].origin == g.endVertex(head) || g.endVertex(c.cell) == g.halfedges[head].origin)
+      continue;
+    if (std::fabs(c.lateral_m - cur_.lateral_m) < reach) return true;
+  }
+  return false;
+}
+
+double Tracker::expectedOffset(uint32_t cell) const {
+  if (graph_->halfedges[cell].flags & graph::kOneway) return 0.0;
+  return d_.left_hand_traffic ? -d_.lane_offset_m : d_.lane_offset_m;
+}
+
+void Tracker::checkStreetAgreement(double e, double n, double sigma) {
+  if (!matcher_ || cur_.cell == graph::kNone || !(d_.map_aid_sigma_m > 0)) return;
+  // Each fix's offset from where the vehicle should be on the matched street,
+  // averaged (a running mean over the first fixes, then exponential); the
+  // exponential mean of white noise of sigma s has sigma s * sqrt(a / (2 - a)).
+  constexpr double kAlpha = 0.2;
+  constexpr uint32_t kMinFixes = 5;
+  const CellPoint q = matcher_->follow(cur_, e, n, ekf_.heading(), 0.0);
+  const double r = q.lateral_m - expectedOffset(q.cell);
+  ++agreement_fixes_;
+  lateral_mean_ += (r - lateral_mean_) * std::max(kAlpha, 1.0 / agreement_fixes_);
+  const double s = std::sqrt((sigma * sigma + d_.map_aid_sigma_m * d_.map_aid_sigma_m) * kAlpha / (2 - kAlpha));
+  const bool was = street_agrees_;
+  if (agreement_fixes_ < kMinFixes || std::fabs(lateral_mean_) > 3 * s) street_agrees_ = false;
+  else if (std::fabs(lateral_mean_) < 2 * s) street_agrees_ = true;
+  if (was && !street_agrees_) {
+    // The fixes say we are not on this street: stop pinning the filter to it and
+    // give back the certainty the constraint had lent.
+    ++st_.map_aid_suspensions;
+    ekf_.addPositionVariance(sigma * sigma);
+  }
 }
 
 void Tracker::processGnss(const GnssFix& f, double t) {
@@ -135,6 +203,8 @@ void Tracker::processGnss(const GnssFix& f, double t) {
   double sigma = 0;  // unknown: the filter estimates it
   if ((f.flags & kGnssHasHAcc) && f.h_acc_m > 0 && finite(f.h_acc_m)) sigma = f.h_acc_m * kSqrtHalf;
   else if ((f.flags & kGnssHasHdop) && f.hdop > 0 && finite(f.hdop)) sigma = f.hdop * d_.ekf.uere_m * kSqrtHalf;
+  last_fix_sigma_ = sigma > 0 ? sigma : ekf_.adaptiveSigma();
+  checkStreetAgreement(p.e, p.n, last_fix_sigma_);
   if (ekf_.updatePosition(t, p.e, p.n, sigma)) {
     ++st_.gnss_used;
     last_fix_t_ = t;
@@ -150,7 +220,10 @@ void Tracker::processGnss(const GnssFix& f, double t) {
     ekf_.updateHeading(f.track_deg * kDeg, sigma_track);
   }
   last_fix_event_t_ = t;
-  if (ekf_.time() - last_step_t_ >= 0.5 * d_.match_interval_s) matchStep();
+  if (ekf_.time() - last_step_t_ >= 0.5 * d_.match_interval_s) {
+    const double en[2] = {p.e, p.n};
+    matchStep(en, sigma > 0 ? sigma : ekf_.adaptiveSigma());
+  }
 }
 
 void Tracker::processOdometry(const Odometry& o) {

@@ -6,8 +6,10 @@
 //                             drain the ring in time order -> GNSS to the local frame
 //                             (GeographicLib, geo::LocalFrame) -> EKF (ekf.h) -> an HMM
 //                             step per fix, or per match interval in an outage
-//                             (map_matcher.h) -> the pose at t (the filter extrapolated
-//                             to t, followed along the graph from the last match)
+//                             (map_matcher.h) -> map aid back into the EKF when the
+//                             match is confident and the fixes agree -> the pose at t
+//                             (the filter extrapolated to t, followed along the graph
+//                             from the last match)
 //   pose()                    the last update's result
 //
 // Lifecycle:
@@ -58,6 +60,21 @@ struct TrackerDesc {
   double max_extrapolate_s = 0; // the pose is predicted at most this far past the last input; default 1
   double eye_height_m = 0;      // camera height above the street; default 1.5
   double camera_pitch_deg = 0;  // camera pitch, up positive (0 is level)
+  // Map aiding: after an HMM step whose head has at least this posterior, the
+  // filter is told the vehicle is on that street (a cross-track measurement of
+  // sigma map_aid_sigma_m about the lane), provided the last fixes agree with
+  // that street (their mean lateral offset) and no parallel street is within
+  // ambiguity_sigmas fix sigmas; a lock onto the wrong street would otherwise
+  // feed itself. Default 0.9 and 2 m; map_aid_sigma_m < 0 turns it off.
+  double map_aid_min_confidence = 0;
+  double map_aid_sigma_m = 0;
+  // Where vehicles drive on a two-way street: this far right of the centre line
+  // (the map aid's expected offset; one-way streets: the centre). Default 1.75 m.
+  double lane_offset_m = 0;
+  bool left_hand_traffic = false;  // the offset is to the left
+  // No map aid while another street runs alongside within this many fix sigmas
+  // (the fixes cannot yet tell which one the vehicle is on); default 2.5.
+  double ambiguity_sigmas = 0;
   EkfDesc ekf;
   MatcherDesc matcher;
 };
@@ -73,6 +90,8 @@ struct TrackerStats {
   uint64_t odometry_ignored = 0; // not finite
   uint64_t late_events = 0;      // older than the filter when processed
   uint64_t filter_resets = 0;    // position resets after a run of rejected fixes
+  uint64_t map_aids = 0, map_aids_rejected = 0;  // street constraints applied / gated out
+  uint64_t map_aid_suspensions = 0;  // times the fixes stopped agreeing with the matched street
   MatchStats match;
 };
 
@@ -117,7 +136,11 @@ class Tracker {
   void process(const Event& ev);
   void processGnss(const GnssFix& f, double t);
   void processOdometry(const Odometry& o);
-  void matchStep();
+  void matchStep(const double* fix_en = nullptr, double fix_sigma = 0);
+  // The fixes' side of the matched street: suspends the map aid when they disagree.
+  void checkStreetAgreement(double e, double n, double sigma);
+  double expectedOffset(uint32_t cell) const;
+  bool ambiguous() const;
 
   TrackerDesc d_;
   geo::LocalFrame frame_;
@@ -137,6 +160,10 @@ class Tracker {
   Pose pose_;
   CellPoint cur_;            // the match, followed between HMM steps
   double confidence_ = 0;
+  double lateral_mean_ = 0;     // mean of the fixes' offset from the expected lane
+  uint32_t agreement_fixes_ = 0;
+  bool street_agrees_ = false;  // the map aid is on
+  double last_fix_sigma_ = 5;
   double last_step_t_ = -1e300, last_fix_t_ = -1e300, last_fix_event_t_ = -1e300;
   double last_gyro_t_ = -1e300, last_odo_speed_t_ = -1e300;
   TrackerStats st_;

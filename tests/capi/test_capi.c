@@ -92,6 +92,50 @@ int main(int argc, char** argv) {
   for (i = 0; i < n; i += 4) lit += (px[i] | px[i + 1] | px[i + 2]) != 0;
   EXPECT(lit == n / 4); /* sky, ground or city everywhere: nothing left black */
   free(px);
+
+  /* Tracking: fixes along a street at 10 m/s; the pose becomes valid, stays
+   * near the fixes, and the render follows it. */
+  {
+    blvd_gnss_fix fix;
+    blvd_odometry odo;
+    blvd_pose pose;
+    int k;
+    const double lat0 = 43.735370, lon0 = 7.417288, hdg = 211.0 * 3.14159265358979 / 180.0;
+    EXPECT(blvd_feed_gnss(rt, NULL) == BLVD_ERR_INVALID_ARG);
+    EXPECT(blvd_feed_gnss(NULL, NULL) == BLVD_ERR_MISUSE);
+    for (k = 0; k < 10; ++k) {
+      const double d = 10.0 * k; /* metres travelled */
+      memset(&fix, 0, sizeof fix);
+      fix.struct_size = sizeof fix;
+      fix.t = 100.0 + k;
+      fix.lat = lat0 + d * cos(hdg) / 111132.0;
+      fix.lon = lon0 + d * sin(hdg) / (111320.0 * cos(lat0 * 3.14159265358979 / 180.0));
+      fix.speed_mps = 10.0f;
+      fix.track_deg = 211.0f;
+      fix.hdop = 1.0f;
+      fix.mode = 3;
+      fix.flags = BLVD_GNSS_HAS_TIME | BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_SPEED | BLVD_GNSS_HAS_TRACK |
+                  BLVD_GNSS_HAS_HDOP;
+      EXPECT(blvd_feed_gnss(rt, &fix) == BLVD_OK);
+      memset(&odo, 0, sizeof odo);
+      odo.struct_size = sizeof odo;
+      odo.t = 100.0 + k + 0.5;
+      odo.speed_mps = 10.0;
+      odo.flags = BLVD_ODO_SPEED | BLVD_ODO_YAW_RATE;
+      EXPECT(blvd_feed_odometry(rt, &odo) == BLVD_OK);
+    }
+    memset(&pose, 0, sizeof pose);
+    pose.struct_size = sizeof pose;
+    EXPECT(blvd_get_pose(rt, 109.0, &pose) == BLVD_OK);
+    EXPECT(pose.flags & BLVD_POSE_VALID);
+    EXPECT(fabs(pose.lat - fix.lat) < 30.0 / 111132.0 && fabs(pose.lon - fix.lon) < 30.0 / 80000.0);
+    EXPECT(fabs(pose.speed_mps - 10.0) < 2.0);
+    EXPECT(blvd_get_pose(rt, NAN, &pose) == BLVD_ERR_INVALID_ARG);
+    memset(&fs, 0, sizeof fs);
+    fs.struct_size = sizeof fs;
+    EXPECT(blvd_render(rt, &fs) == BLVD_OK); /* the camera follows the tracked pose */
+    EXPECT(fs.cell != 0xffffffffu);
+  }
   blvd_runtime_destroy(rt);
   if (failures) fprintf(stderr, "%d failures\n", failures);
   else printf("C API: all checks passed\n");

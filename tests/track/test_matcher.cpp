@@ -1,0 +1,190 @@
+// The HMM map matcher on hand-built graphs: the fixed-lag decision at a
+// T-junction, direction (twin half-edges) from heading, the candidate bound, a
+// chain break, following the graph between steps, the spatial index, and no
+// allocation per step.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include "alloc_counter.h"
+#include "track/map_matcher.h"
+#include "track/spatial_index.h"
+#include "track_test_util.h"
+
+namespace blvd::track {
+namespace {
+
+using blvd_track_test::AllocCounter;
+
+constexpr double kPi = 3.14159265358979323846;
+
+MatchObservation obsAt(double t, double e, double n, double sigma = 4, double heading_deg = NAN) {
+  MatchObservation o;
+  o.t = t;
+  o.e = e;
+  o.n = n;
+  o.sigma_m = sigma;
+  if (std::isfinite(heading_deg)) {
+    o.heading_rad = heading_deg * kPi / 180;
+    o.heading_sigma_rad = 5 * kPi / 180;
+  }
+  return o;
+}
+
+// Observations of a drive up the stem that turns east; the one just past the
+// junction leans west.
+std::vector<MatchObservation> tJunctionDrive() {
+  std::vector<MatchObservation> v;
+  double time = 0;
+  for (double n = -60; n <= -5; n += 10) v.push_back(obsAt(time++, 0.5, n));
+  v.push_back(obsAt(time++, -8, 16));  // nearest the west branch
+  for (double e = 20; e <= 80; e += 15) v.push_back(obsAt(time++, e, 21));
+  return v;
+}
+
+TEST(MapMatcher, TJunctionSettlesOnTheBranchTakenAfterTheLag) {
+  const auto t = blvd_track_test::makeTJunction();
+  MatcherDesc desc;
+  desc.lag = 3;
+  MapMatcher m(t.g, desc);
+  const auto drive = tJunctionDrive();
+  const double ambiguous_t = 6;
+  bool checked = false;
+  for (const auto& o : drive) {
+    ASSERT_TRUE(m.step(o));
+    if (o.t < ambiguous_t) {
+      EXPECT_EQ(m.head().cell, t.stem) << "t = " << o.t;
+    } else if (o.t == ambiguous_t) {
+      // The online answer follows the evidence so far: the west branch ...
+      EXPECT_EQ(m.head().cell, t.west);
+      bool saw_east = false;
+      for (uint32_t i = 0; i < m.candidateCount(); ++i) saw_east |= m.candidate(i).cell == t.east;
+      EXPECT_TRUE(saw_east) << "the east branch must be a candidate of the ambiguous step";
+    } else {
+      // ... then the vehicle is clearly going east; nothing connects the
+      // branches within reach, so only a path through the east branch explains it.
+      EXPECT_EQ(m.head().cell, t.east) << "t = " << o.t;
+    }
+    if (m.settled().cell != graph::kNone && m.settledTime() == ambiguous_t) {
+      // The fixed-lag decision for the ambiguous step: the branch actually taken.
+      EXPECT_EQ(m.settled().cell, t.east);
+      EXPECT_EQ(o.t, ambiguous_t + desc.lag);
+      checked = true;
+    }
+  }
+  EXPECT_TRUE(checked) << "no settled decision for t = " << ambiguous_t;
+  EXPECT_GT(m.confidence(), 0.9);
+}
+
+TEST(MapMatcher, HeadingPicksTheDirection) {
+  const auto t = blvd_track_test::makeTJunction();
+  MapMatcher m(t.g);
+  // On the stem's centre line, heading north: the stem's north-bound half-edge.
+  ASSERT_TRUE(m.step(obsAt(0, 0, -100, 3, 0)));
+  EXPECT_EQ(m.head().cell, t.stem);
+  EXPECT_NEAR(m.head().arc_m, 100, 1e-6);
+  m.reset();
+  // Heading south: its twin, with the arc measured from the other end.
+  ASSERT_TRUE(m.step(obsAt(0, 0, -100, 3, 180)));
+  EXPECT_EQ(m.head().cell, t.g.halfedges[t.stem].twin);
+  EXPECT_NEAR(m.head().arc_m, 100, 1e-6);
+  // Lateral offset is positive to the right of the half-edge's direction.
+  m.reset();
+  ASSERT_TRUE(m.step(obsAt(0, 2, -100, 3, 0)));
+  EXPECT_NEAR(m.head().lateral_m, 2, 1e-9);
+  EXPECT_NEAR(m.head().heading_rad, 0, 1e-9);
+}
+
+TEST(MapMatcher, BoundsTheCandidates) {
+  // 30 parallel streets 4 m apart: far more half-edges in reach than K.
+  blvd_track_test::GraphBuilder b;
+  for (int i = 0; i < 30; ++i) b.street(b.vertex(i * 4.0, 0), b.vertex(i * 4.0, 300));
+  const auto g = b.finish();
+  MatcherDesc desc;
+  desc.max_candidates = 6;
+  MapMatcher m(g, desc);
+  ASSERT_TRUE(m.step(obsAt(0, 60, 150, 10)));
+  EXPECT_EQ(m.candidateCount(), 6u);
+  std::set<uint32_t> cells;
+  for (uint32_t i = 0; i < m.candidateCount(); ++i) cells.insert(m.candidate(i).cell);
+  EXPECT_EQ(cells.size(), 6u);
+  // The nearest street (x = 60) is among them.
+  EXPECT_TRUE(cells.count(2 * 15) || cells.count(2 * 15 + 1));
+}
+
+TEST(MapMatcher, NoCandidateResetsAndAJumpBreaksTheChain) {
+  // Two streets that do not connect.
+  blvd_track_test::GraphBuilder b;
+  const uint32_t a = b.street(b.vertex(0, 0), b.vertex(0, 300));
+  const uint32_t c = b.street(b.vertex(60, 0), b.vertex(60, 300));
+  const auto g = b.finish();
+  MapMatcher m(g);
+  ASSERT_TRUE(m.step(obsAt(0, 0, 100, 4, 0)));
+  EXPECT_EQ(m.head().cell, a);
+  EXPECT_FALSE(m.step(obsAt(1, 1000, 1000)));  // nowhere near a street
+  EXPECT_EQ(m.head().cell, graph::kNone);
+  EXPECT_EQ(m.stats().empty_steps, 1u);
+  ASSERT_TRUE(m.step(obsAt(2, 0, 110, 4, 0)));
+  EXPECT_EQ(m.stats().breaks, 0u);
+  // A jump onto the other street: no route, the chain restarts there.
+  ASSERT_TRUE(m.step(obsAt(3, 60, 120, 4, 0)));
+  EXPECT_EQ(m.stats().breaks, 1u);
+  EXPECT_EQ(m.head().cell, c);
+}
+
+TEST(MapMatcher, FollowMovesOntoTheSuccessor) {
+  const auto t = blvd_track_test::makeTJunction();
+  MapMatcher m(t.g);
+  const CellPoint p = m.project(t.stem, 0, -3);
+  ASSERT_EQ(p.cell, t.stem);
+  // Past the stem's end, heading north-east: onto the east branch.
+  const CellPoint q = m.follow(p, 3, 4, kPi / 4, 0.1);
+  EXPECT_EQ(q.cell, t.east);
+  EXPECT_NEAR(q.arc_m, 7 / std::sqrt(2.0), 1e-9);
+  // Still on the stem: stays.
+  EXPECT_EQ(m.follow(p, 0, -1, 0, 0.1).cell, t.stem);
+}
+
+TEST(MapMatcher, GridFindsEverySegmentInReach) {
+  const auto g = blvd_track_test::makeGrid(6, 80);
+  SegmentGrid grid;
+  grid.build(g, 50);
+  EXPECT_GT(grid.entryCount(), 0u);
+  // Brute force: every segment within r of p must be reported.
+  const double px = 123, py = 201, r = 45;
+  std::set<uint32_t> listed, brute;
+  grid.query(px, py, r, [&](const SegmentGrid::Entry& e) { listed.insert(e.halfedge); });
+  for (uint32_t h = 0; h < g.halfedges.size(); h += 2) {
+    const auto& he = g.halfedges[h];
+    const glm::dvec2 a = g.points[he.pts_begin], b = g.points[he.pts_begin + 1];
+    const glm::dvec2 d = b - a;
+    const double u = std::clamp(((px - a.x) * d.x + (py - a.y) * d.y) / (d.x * d.x + d.y * d.y), 0.0, 1.0);
+    if (std::hypot(a.x + d.x * u - px, a.y + d.y * u - py) <= r) brute.insert(h);
+  }
+  for (uint32_t h : brute) EXPECT_TRUE(listed.count(h)) << "half-edge " << h;
+}
+
+TEST(MapMatcher, StepsDoNotAllocate) {
+  const auto g = blvd_track_test::makeGrid(8, 60);
+  MapMatcher m(g);
+  m.step(obsAt(0, 30, 0, 5, 90));  // warm-up
+  long allocs = 0;
+  {
+    AllocCounter count;
+    for (int i = 1; i < 200; ++i) {
+      const double s = i * 7.0;  // east along y = 0, then north along x = 420, ...
+      const double e = std::min(s, 420.0), n = std::max(0.0, s - 420.0);
+      m.step(obsAt(i, e + 1.5, std::min(n, 420.0), 5, s < 420 ? 90 : 0));
+      (void)m.follow(m.head(), e + 2, n, 0, 0.1);
+    }
+    allocs = count.count();
+  }
+  EXPECT_EQ(allocs, 0);
+  EXPECT_EQ(m.stats().steps, 200u);
+}
+
+}  // namespace
+}  // namespace blvd::track
