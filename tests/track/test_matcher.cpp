@@ -9,7 +9,7 @@
 #include <set>
 #include <vector>
 
-#include "alloc_counter.h"
+#include "fault/alloc_counter.h"
 #include "track/map_matcher.h"
 #include "track/spatial_index.h"
 #include "track_test_util.h"
@@ -17,7 +17,7 @@
 namespace blvd::track {
 namespace {
 
-using blvd_track_test::AllocCounter;
+using blvd_test::AllocCounter;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -46,7 +46,7 @@ std::vector<MatchObservation> tJunctionDrive() {
 }
 
 TEST(MapMatcher, TJunctionSettlesOnTheBranchTakenAfterTheLag) {
-  const auto t = blvd_track_test::makeTJunction();
+  const auto t = blvd_test::makeTJunction();
   MatcherDesc desc;
   desc.lag = 3;
   MapMatcher m(t.g, desc);
@@ -80,7 +80,7 @@ TEST(MapMatcher, TJunctionSettlesOnTheBranchTakenAfterTheLag) {
 }
 
 TEST(MapMatcher, HeadingPicksTheDirection) {
-  const auto t = blvd_track_test::makeTJunction();
+  const auto t = blvd_test::makeTJunction();
   MapMatcher m(t.g);
   // On the stem's centre line, heading north: the stem's north-bound half-edge.
   ASSERT_TRUE(m.step(obsAt(0, 0, -100, 3, 0)));
@@ -100,7 +100,7 @@ TEST(MapMatcher, HeadingPicksTheDirection) {
 
 TEST(MapMatcher, BoundsTheCandidates) {
   // 30 parallel streets 4 m apart: far more half-edges in reach than K.
-  blvd_track_test::GraphBuilder b;
+  blvd_test::GraphBuilder b;
   for (int i = 0; i < 30; ++i) b.street(b.vertex(i * 4.0, 0), b.vertex(i * 4.0, 300));
   const auto g = b.finish();
   MatcherDesc desc;
@@ -117,7 +117,7 @@ TEST(MapMatcher, BoundsTheCandidates) {
 
 TEST(MapMatcher, NoCandidateResetsAndAJumpBreaksTheChain) {
   // Two streets that do not connect.
-  blvd_track_test::GraphBuilder b;
+  blvd_test::GraphBuilder b;
   const uint32_t a = b.street(b.vertex(0, 0), b.vertex(0, 300));
   const uint32_t c = b.street(b.vertex(60, 0), b.vertex(60, 300));
   const auto g = b.finish();
@@ -136,7 +136,7 @@ TEST(MapMatcher, NoCandidateResetsAndAJumpBreaksTheChain) {
 }
 
 TEST(MapMatcher, FollowMovesOntoTheSuccessor) {
-  const auto t = blvd_track_test::makeTJunction();
+  const auto t = blvd_test::makeTJunction();
   MapMatcher m(t.g);
   const CellPoint p = m.project(t.stem, 0, -3);
   ASSERT_EQ(p.cell, t.stem);
@@ -149,7 +149,7 @@ TEST(MapMatcher, FollowMovesOntoTheSuccessor) {
 }
 
 TEST(MapMatcher, GridFindsEverySegmentInReach) {
-  const auto g = blvd_track_test::makeGrid(6, 80);
+  const auto g = blvd_test::makeGrid(6, 80);
   SegmentGrid grid;
   grid.build(g, 50);
   EXPECT_GT(grid.entryCount(), 0u);
@@ -168,7 +168,7 @@ TEST(MapMatcher, GridFindsEverySegmentInReach) {
 }
 
 TEST(MapMatcher, StepsDoNotAllocate) {
-  const auto g = blvd_track_test::makeGrid(8, 60);
+  const auto g = blvd_test::makeGrid(8, 60);
   MapMatcher m(g);
   m.step(obsAt(0, 30, 0, 5, 90));  // warm-up
   long allocs = 0;

@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-#include "alloc_counter.h"
+#include "fault/alloc_counter.h"
 #include "stream/city.h"
 #include "track/sim.h"
 #include "track/tracker.h"
@@ -41,10 +41,10 @@ TEST_F(TrackMonaco, SimulatedDrivesStayOnTheirCells) {
     const SimTrace trace = simulateDrive(city_->graph(), city_->frame(), sd);
     ASSERT_FALSE(trace.epochs.empty());
     Tracker tr(city_->frame(), &city_->graph());
-    std::unique_ptr<blvd_track_test::AllocCounter> count;
+    std::unique_ptr<blvd_test::AllocCounter> count;
     size_t fi = 0, oi = 0;
     for (size_t e = 0; e < trace.epochs.size(); ++e) {
-      if (e == 5) count = std::make_unique<blvd_track_test::AllocCounter>();
+      if (e == 5) count = std::make_unique<blvd_test::AllocCounter>();
       const double t = trace.epochs[e].t;
       while (fi < trace.fixes.size() && trace.fixes[fi].t <= t) tr.feedGnss(trace.fixes[fi++]);
       while (oi < trace.odometry.size() && trace.odometry[oi].t <= t) tr.feedOdometry(trace.odometry[oi++]);

@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-#include "alloc_counter.h"
+#include "fault/alloc_counter.h"
 #include "track/sim.h"
 #include "track/tracker.h"
 #include "track_test_util.h"
@@ -19,7 +19,7 @@
 namespace blvd::track {
 namespace {
 
-using blvd_track_test::AllocCounter;
+using blvd_test::AllocCounter;
 
 const geo::LocalFrame& frame() {
   static const geo::LocalFrame f(43.7384, 7.4246, 0);
@@ -27,7 +27,7 @@ const geo::LocalFrame& frame() {
 }
 
 const graph::StreetGraph& grid() {
-  static const graph::StreetGraph g = blvd_track_test::makeGrid(9, 70);
+  static const graph::StreetGraph g = blvd_test::makeGrid(9, 70);
   return g;
 }
 

@@ -8,7 +8,7 @@
 
 #include "graph/street_graph.h"
 
-namespace blvd_track_test {
+namespace blvd_test {
 
 using blvd::graph::StreetGraph;
 
@@ -102,4 +102,4 @@ inline StreetGraph makeGrid(int n, double spacing) {
   return b.finish();
 }
 
-}  // namespace blvd_track_test
+}  // namespace blvd_test

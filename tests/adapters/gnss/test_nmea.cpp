@@ -14,7 +14,7 @@
 
 #include "gnss/nmea.h"
 
-#include "alloc_counter.h"
+#include "fault/alloc_counter.h"
 
 namespace {
 
