@@ -144,9 +144,9 @@ int run(const ViewOpts& o) {
     std::fprintf(stderr, "\r  frame %zu/%zu", i + 1, poses.size());
   }
   std::fprintf(stderr, "\n");
-  html << "<p>median frame time " << median(ms) << " ms (full model)</p>\n";
-  std::printf("wrote %zu frames and %s/index.html; median frame %.1f ms (full model)\n", poses.size(), o.out.c_str(),
-              median(ms));
+  html << "<p>median frame time " << median(ms) << " ms (mode " << o.mode << ")</p>\n";
+  std::printf("wrote %zu frames and %s/index.html; median frame %.1f ms (mode %s)\n", poses.size(), o.out.c_str(),
+              median(ms), o.mode.c_str());
   return 0;
 }
 
@@ -154,7 +154,7 @@ int run(const ViewOpts& o) {
 
 void addView(CLI::App& app, Runner& runner) {
   auto o = std::make_shared<ViewOpts>();
-  auto* cmd = app.add_subcommand("view", "render the full model headless to PNG (one pose, or a drive with --path)");
+  auto* cmd = app.add_subcommand("view", "render headless to PNG (one pose, or a drive with --path) in a render mode (--mode)");
   cmd->add_option("package", o->package, "package (.blvd)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--lat", o->lat, "eye latitude, degrees");
   cmd->add_option("--lon", o->lon, "eye longitude, degrees");
