@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "can/candump.h"
+#include "common/test_files.h"
 #include "can/dbc.h"
 #include "can/profile.h"
 #include "stream/city.h"
@@ -49,35 +50,8 @@ using namespace blvd;
 
 namespace {
 
-std::string readFile(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw std::runtime_error(path + ": cannot open");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-std::string readZstd(const std::string& path) {
-  const std::string in = readFile(path);
-  std::string out;
-  ZSTD_DStream* ds = ZSTD_createDStream();
-  ZSTD_initDStream(ds);
-  ZSTD_inBuffer ib{in.data(), in.size(), 0};
-  std::vector<char> buf(ZSTD_DStreamOutSize());
-  size_t ret = 1;
-  while (ib.pos < ib.size) {
-    ZSTD_outBuffer ob{buf.data(), buf.size(), 0};
-    ret = ZSTD_decompressStream(ds, &ob, &ib);
-    if (ZSTD_isError(ret)) {
-      ZSTD_freeDStream(ds);
-      throw std::runtime_error(path + ": " + ZSTD_getErrorName(ret));
-    }
-    out.append(buf.data(), ob.pos);
-  }
-  ZSTD_freeDStream(ds);
-  if (ret != 0) throw std::runtime_error(path + ": truncated zstd frame");
-  return out;
-}
+using blvd::test::readFile;
+using blvd::test::readZstd;
 
 std::vector<std::vector<double>> readCsv(const std::string& path) {
   std::istringstream in(readFile(path));
