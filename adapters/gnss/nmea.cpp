@@ -829,6 +829,28 @@ Fix FixAssembler::build(const Epoch& e) const {
 
 void FixAssembler::apply(const NmeaRecord& r) {
   Epoch& e = cur_;
+  // GGA and GNS carry the same fix fields; both merge them the same way.
+  auto mergeGgaGns = [](const NmeaRecord& rec, Epoch& ep) {
+    if (rec.has_pos) {
+      ep.has_pos = true;
+      ep.lat = rec.lat;
+      ep.lon = rec.lon;
+    }
+    if (rec.sats >= 0) ep.sats = rec.sats;
+    if (!std::isnan(rec.alt)) {
+      ep.has_alt = true;
+      ep.alt = rec.alt;
+      ep.alt_3d = ep.alt_3d || rec.sats >= 4;
+    }
+    if (!std::isnan(rec.geoid_sep)) {
+      ep.has_geoid = true;
+      ep.geoid_sep = rec.geoid_sep;
+    }
+    if (!std::isnan(rec.hdop) && rec.hdop < 99.0) {  // 99.99: "unknown" on BT-451 and others
+      ep.has_hdop = true;
+      ep.hdop = rec.hdop;
+    }
+  };
   if (!r.has_checksum) e.no_checksum = true;
   if (r.has_tod && !e.has_tod && r.type != SentenceType::GST) {
     e.has_tod = true;
@@ -868,25 +890,7 @@ void FixAssembler::apply(const NmeaRecord& r) {
         e.invalid = true;
         break;
       }
-      if (r.has_pos) {
-        e.has_pos = true;
-        e.lat = r.lat;
-        e.lon = r.lon;
-      }
-      if (r.sats >= 0) e.sats = r.sats;
-      if (!std::isnan(r.alt)) {
-        e.has_alt = true;
-        e.alt = r.alt;
-        e.alt_3d = e.alt_3d || r.sats >= 4;
-      }
-      if (!std::isnan(r.geoid_sep)) {
-        e.has_geoid = true;
-        e.geoid_sep = r.geoid_sep;
-      }
-      if (!std::isnan(r.hdop) && r.hdop < 99.0) {  // 99.99: "unknown" on BT-451 and others
-        e.has_hdop = true;
-        e.hdop = r.hdop;
-      }
+      mergeGgaGns(r, e);
       static constexpr int kQuality[] = {kStatusUnknown, kStatusGps,           kStatusDgps,   kStatusPps,
                                          kStatusRtkFixed, kStatusRtkFloat,      kStatusDeadReckoning,
                                          kStatusManual,  kStatusSimulated,     kStatusUnknown};
@@ -900,25 +904,7 @@ void FixAssembler::apply(const NmeaRecord& r) {
         if (r.faa == '\0' || r.faa == 'N') e.invalid = true;
         break;
       }
-      if (r.has_pos) {
-        e.has_pos = true;
-        e.lat = r.lat;
-        e.lon = r.lon;
-      }
-      if (r.sats >= 0) e.sats = r.sats;
-      if (!std::isnan(r.alt)) {
-        e.has_alt = true;
-        e.alt = r.alt;
-        e.alt_3d = e.alt_3d || r.sats >= 4;
-      }
-      if (!std::isnan(r.geoid_sep)) {
-        e.has_geoid = true;
-        e.geoid_sep = r.geoid_sep;
-      }
-      if (!std::isnan(r.hdop) && r.hdop < 99.0) {
-        e.has_hdop = true;
-        e.hdop = r.hdop;
-      }
+      mergeGgaGns(r, e);
       if (e.faa_status == kStatusUnknown) e.faa_status = statusFromFaa(r.faa, kStatusGps);
       break;
     }
