@@ -66,6 +66,7 @@ typedef enum blvd_status {
   BLVD_ERR_UNSUPPORTED = 8, /* valid request this build cannot serve */
   BLVD_ERR_INTERNAL = 9,    /* a bug in blvd; please report it */
   BLVD_ERR_NOT_FOUND = 10,  /* the requested item does not exist */
+  BLVD_ERR_TIMEOUT = 11,    /* a wait ended before its condition held */
   BLVD_STATUS_FORCE_32 = 0x7fffffff
 } blvd_status;
 
@@ -96,6 +97,14 @@ typedef enum blvd_render_mode {
   BLVD_MODE_FORCE_32 = 0x7fffffff
 } blvd_render_mode;
 
+/* Host allocator for blvd's pools (all taken in blvd_runtime_create). alloc
+ * returns memory aligned to `align` or NULL; free takes what alloc returned. */
+typedef struct blvd_allocator {
+  void* (*alloc)(size_t size, size_t align, void* user);
+  void (*free)(void* ptr, void* user);
+  void* user;
+} blvd_allocator;
+
 typedef struct blvd_runtime_desc {
   uint32_t struct_size;     /* sizeof(blvd_runtime_desc); 0 is treated as the current size */
   const char* package_path; /* required: a .blvd file made by `blvd bake`; copied */
@@ -107,15 +116,34 @@ typedef struct blvd_runtime_desc {
   float far_m;              /* far clip distance; 0 means 3000 */
   blvd_render_mode mode;    /* 0 means BLVD_MODE_BLVD (falls back to FULL if the package has no impostors) */
   float radius_m;           /* for BLVD_MODE_RADIUS; 0 means 250 */
+
+  /* ---- fixed memory. Every pool is carved at create from these
+   * and the package's largest cell; nothing grows afterwards. ---- */
+  uint64_t memory_budget_bytes; /* CPU bytes for staging, tables, tracking; 0 means 256 MiB */
+  uint64_t gpu_budget_bytes;    /* GL buffer and texture bytes; 0 means 512 MiB */
+  uint32_t max_resident_cells;  /* cell slots (current + predicted); 0 means 4, at least 2 */
+  float upload_budget_ms;       /* GL upload time per frame; 0 means 2 */
+  uint32_t ring_capacity;       /* tracking events between two frames; 0 means 512 */
+  uint32_t route_capacity;      /* cells a blvd_set_route() may hold; 0 means 4096 */
+  blvd_allocator allocator;     /* host allocator for the pools; alloc == NULL means the C heap */
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */
 BLVD_API blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* desc);
 
+/* The exact bytes blvd_runtime_create would carve for `desc` and the package
+ * at `package_path` (NULL: desc->package_path): *cpu_bytes is what counts
+ * against memory_budget_bytes, *gpu_bytes (may be NULL) against
+ * gpu_budget_bytes. Opens the package's tables, creates no GL context.
+ * Errors: BLVD_ERR_IO, BLVD_ERR_CORRUPT, BLVD_ERR_INVALID_ARG. Any thread. */
+BLVD_API blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const char* package_path,
+                                          uint64_t* cpu_bytes, uint64_t* gpu_bytes);
+
 /* Creates a runtime. Ownership: the caller owns *out and frees it with
  * blvd_runtime_destroy. Thread: the calling thread becomes the render thread.
- * Errors: BLVD_ERR_INVALID_ARG, BLVD_ERR_IO, BLVD_ERR_CORRUPT, BLVD_ERR_BACKEND;
- * on error *out is NULL and blvd_last_error(NULL) gives the reason. */
+ * Errors: BLVD_ERR_INVALID_ARG, BLVD_ERR_IO, BLVD_ERR_CORRUPT, BLVD_ERR_BACKEND,
+ * BLVD_ERR_BUDGET (the plan exceeds a budget: the message says by how much),
+ * BLVD_ERR_NOMEM (the host allocator failed); on error *out is NULL and blvd_last_error(NULL) gives the reason. */
 BLVD_API blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** out);
 
 /* Destroys a runtime and its GL objects. NULL is a no-op. Render thread only. */
@@ -158,7 +186,53 @@ typedef struct blvd_frame_stats {
   uint32_t cell;            /* the cell the pose was matched to (UINT32_MAX: none) */
   uint32_t impostor_layers; /* impostor meshes drawn */
   uint32_t blocks_drawn;    /* block meshes submitted (before frustum culling) */
+  uint32_t flags;           /* BLVD_FRAME_* */
 } blvd_frame_stats;
+
+/* Bits of blvd_frame_stats.flags. */
+#define BLVD_FRAME_DEGRADED 0x01u /* the current cell was not resident yet: drew what was */
+
+typedef struct blvd_pool_stats {
+  uint64_t capacity_bytes;   /* carved at create */
+  uint64_t used_bytes;       /* in use now */
+  uint64_t high_water_bytes; /* most ever in use */
+} blvd_pool_stats;
+
+typedef struct blvd_stats {
+  uint32_t struct_size;          /* set by the caller */
+  uint32_t resident_cells;       /* cells whose geometry is on the GPU */
+  uint32_t max_resident_cells;
+  blvd_pool_stats gpu;           /* cell slabs: vertex, index and texture bytes */
+  blvd_pool_stats staging;       /* the loader's staging arenas */
+  blvd_pool_stats decode;        /* the loader's decode scratch (high water only; capacity 0) */
+  uint64_t table_bytes;          /* package tables held in memory */
+  uint64_t tracking_bytes;       /* tracker rings, filter and matcher */
+  uint64_t loads;                /* cells decoded by the loader */
+  uint64_t evictions;            /* resident cells released for others */
+  uint64_t misses;               /* frames whose current cell was not resident */
+  uint64_t load_errors;          /* cells that failed to decode (see blvd_last_error) */
+  uint64_t frames;
+  double upload_ms;              /* GL upload time of the last frame */
+  double upload_ms_max;
+  double frame_ms;               /* the last frame */
+  uint64_t triangles;            /* the last frame */
+} blvd_stats;
+
+/* Fills *stats. Render thread. */
+BLVD_API blvd_status blvd_runtime_stats(blvd_runtime* rt, blvd_stats* stats);
+
+/* Blocks until the cell at the current pose is resident (loading and
+ * uploading without the per-frame upload budget), for start-up, tests and
+ * benchmarks; blvd_render itself never waits. Errors: BLVD_ERR_TIMEOUT after
+ * timeout_ms; BLVD_ERR_CORRUPT when the cell's data fails to decode.
+ * Render thread. */
+BLVD_API blvd_status blvd_wait_resident(blvd_runtime* rt, double timeout_ms);
+
+/* Sets the route the vehicle will follow (cells in driving order): residency
+ * then prefetches along it instead of guessing from successors. n == 0 clears
+ * it. Errors: BLVD_ERR_INVALID_ARG for a cell out of range or more than
+ * route_capacity cells. Render thread. */
+BLVD_API blvd_status blvd_set_route(blvd_runtime* rt, const uint32_t* cells, size_t n);
 
 /* Switches what frames draw (see blvd_render_mode). radius_m is used by
  * BLVD_MODE_RADIUS (0 means 250). Errors: BLVD_ERR_INVALID_ARG for an unknown

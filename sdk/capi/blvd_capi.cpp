@@ -57,7 +57,7 @@ const char* blvd_version_string(void) {
 }
 
 const char* blvd_status_string(blvd_status s) {
-  if (s < 0 || s > BLVD_ERR_NOT_FOUND) return "unknown status";
+  if (s < 0 || s > BLVD_ERR_TIMEOUT) return "unknown status";
   return blvd::core::statusString(static_cast<blvd::core::Status>(s));
 }
 
@@ -73,6 +73,12 @@ blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* in) {
   if (d.fov_y_deg == 0) d.fov_y_deg = 45.f;
   if (d.eye_height_m == 0) d.eye_height_m = 1.5f;
   if (d.far_m == 0) d.far_m = 3000.f;
+  if (!d.memory_budget_bytes) d.memory_budget_bytes = 256ull << 20;
+  if (!d.gpu_budget_bytes) d.gpu_budget_bytes = 512ull << 20;
+  if (!d.max_resident_cells) d.max_resident_cells = 4;
+  if (d.upload_budget_ms == 0) d.upload_budget_ms = 2.f;
+  if (!d.ring_capacity) d.ring_capacity = 512;
+  if (!d.route_capacity) d.route_capacity = 4096;
   return d;
 }
 
@@ -95,6 +101,19 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
     t_create_error = "blvd_runtime_create: fov_y_deg, eye_height_m or far_m out of range";
     return BLVD_ERR_INVALID_ARG;
   }
+  if (d.max_resident_cells < 2 || d.max_resident_cells > 4096) {
+    t_create_error = "blvd_runtime_create: max_resident_cells must be within 2..4096 (the current cell and one ahead)";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  if (!(d.upload_budget_ms > 0 && d.upload_budget_ms < 1000) || d.ring_capacity > (1u << 20) ||
+      d.route_capacity > (1u << 24)) {
+    t_create_error = "blvd_runtime_create: upload_budget_ms, ring_capacity or route_capacity out of range";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  if (!d.allocator.alloc != !d.allocator.free) {
+    t_create_error = "blvd_runtime_create: allocator needs both alloc and free, or neither";
+    return BLVD_ERR_INVALID_ARG;
+  }
   if (static_cast<int>(d.mode) < 0 || d.mode > BLVD_MODE_SINGLE) {
     t_create_error = "blvd_runtime_create: unknown render mode";
     return BLVD_ERR_INVALID_ARG;
@@ -113,6 +132,27 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
     return BLVD_ERR_NOMEM;
   }
   return BLVD_OK;
+}
+
+blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const char* package_path, uint64_t* cpu_bytes,
+                                 uint64_t* gpu_bytes) {
+  if (!desc || !cpu_bytes) return misuse(nullptr, "blvd_memory_required: desc or cpu_bytes is NULL");
+  t_create_error.clear();
+  blvd_runtime_desc d = blvd_runtime_desc_defaults(desc);
+  if (package_path) d.package_path = package_path;
+  if (!d.package_path || !*d.package_path) {
+    t_create_error = "blvd_memory_required: no package path";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  return guarded(nullptr, [&] {
+    blvd::stream::City city;
+    std::string err;
+    const blvd::core::Status st = city.open(d.package_path, err);
+    if (st != blvd::core::Status::Ok) throw blvd::core::Error(st, err);
+    const blvd::capi::MemoryPlan plan = blvd::capi::planMemory(d, city);
+    *cpu_bytes = plan.cpu_bytes;
+    if (gpu_bytes) *gpu_bytes = plan.gpu_bytes;
+  });
 }
 
 void blvd_runtime_destroy(blvd_runtime* rt) {
@@ -147,6 +187,22 @@ blvd_status blvd_set_pose_local(blvd_runtime* rt, double x, double y, float head
 blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mode, float radius_m) {
   if (!rt) return misuse(nullptr, "blvd_set_render_mode: rt is NULL");
   return guarded(rt, [&] { rt->impl->setMode(mode, radius_m); });
+}
+
+blvd_status blvd_runtime_stats(blvd_runtime* rt, blvd_stats* stats) {
+  if (!rt) return misuse(nullptr, "blvd_runtime_stats: rt is NULL");
+  if (!stats) return misuse(rt, "blvd_runtime_stats: stats is NULL");
+  return guarded(rt, [&] { rt->impl->stats(stats); });
+}
+
+blvd_status blvd_wait_resident(blvd_runtime* rt, double timeout_ms) {
+  if (!rt) return misuse(nullptr, "blvd_wait_resident: rt is NULL");
+  return guarded(rt, [&] { rt->impl->waitResident(timeout_ms); });
+}
+
+blvd_status blvd_set_route(blvd_runtime* rt, const uint32_t* cells, size_t n) {
+  if (!rt) return misuse(nullptr, "blvd_set_route: rt is NULL");
+  return guarded(rt, [&] { rt->impl->setRoute(cells, n); });
 }
 
 blvd_status blvd_feed_gnss(blvd_runtime* rt, const blvd_gnss_fix* fix) {

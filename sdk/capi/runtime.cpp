@@ -1,15 +1,14 @@
 #include "capi/runtime.h"
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <cstring>
 
 #include "core/log.h"
 
 namespace blvd::capi {
-namespace {
-constexpr size_t kImpostorCacheCells = 16;
-}
 using core::Error;
 using core::Status;
 
@@ -18,32 +17,39 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   Status st = city_.open(desc.package_path, err);
   if (st != Status::Ok) throw Error(st, err);
 
+  // The plan first: a budget error must come before anything is allocated.
+  plan_ = planMemory(desc, city_);
+  const std::string over = budgetError(desc, plan_);
+  if (!over.empty()) throw Error(Status::Budget, over);
+  Allocator alloc;
+  alloc.alloc = desc.allocator.alloc;
+  alloc.free = desc.allocator.free;
+  alloc.user = desc.allocator.user;
+  if (!alloc.alloc != !alloc.free) throw Error(Status::InvalidArg, "allocator needs both alloc and free, or neither");
+  loader_ = std::make_unique<CellLoader>(city_, alloc, plan_.staging_arena_bytes, plan_.staging_meshes);
+
   ctx_ = render::createContext(static_cast<render::Backend>(desc.backend), err);
   if (!ctx_) throw Error(Status::Backend, err);
   render::RendererDesc rd;
   rd.width = static_cast<int>(desc.width);
   rd.height = static_cast<int>(desc.height);
-  // Every block, plus the impostor cache: kImpostorCacheCells cells of at
-  // most the package's largest per-cell impostor count.
-  size_t per_cell = 0;
-  for (const auto& c : city_.cellTables().impostors) per_cell = std::max(per_cell, c.layered.size() + c.single.size());
-  rd.mesh_capacity = static_cast<uint32_t>(city_.blocks().size() + kImpostorCacheCells * per_cell + 1);
+  // The cell slabs' meshes, plus every block for the reference modes.
+  rd.mesh_capacity = plan_.resident_cells * plan_.slab.meshes + static_cast<uint32_t>(city_.blocks().size()) + 1;
   renderer_ = render::Renderer::create(*ctx_, rd, err);
   if (!renderer_) throw Error(Status::Backend, err);
 
-  // Every block resident. Fixed-budget streaming replaces this.
-  geo::MeshData mesh;
-  block_meshes_.resize(city_.blocks().size());
-  for (uint32_t b = 0; b < city_.blocks().size(); ++b) {
-    st = city_.decodeBlock(b, mesh, err);
-    if (st != Status::Ok) throw Error(st, err);
-    if (mesh.empty()) continue;
-    block_meshes_[b] = renderer_->upload(mesh);
-    if (block_meshes_[b].id == 0)
-      throw Error(Status::Internal, "block " + std::to_string(b) + ": " + renderer_->lastError());
+  slots_.resize(plan_.resident_cells);
+  slot_cells_.assign(plan_.resident_cells, graph::kNone);
+  for (CellSlot& slot : slots_) {
+    slot.slab = renderer_->createSlab(plan_.slab);
+    if (slot.slab.id == 0) throw Error(Status::Backend, "cell slab: " + renderer_->lastError());
+    slot.blocks.reserve(plan_.slab.meshes);
+    slot.layered.reserve(plan_.slab.textures);
+    slot.single.reserve(plan_.slab.textures);
   }
-  draw_.reserve(block_meshes_.size() + 64);
-  cache_.resize(kImpostorCacheCells);
+  failed_cells_.assign(8, graph::kNone);
+  residency_ = std::make_unique<stream::Residency>(city_.graph(), plan_.resident_cells, desc.route_capacity);
+  draw_.reserve(city_.blocks().size() + plan_.slab.meshes + 1);
   setMode(desc.mode, desc.radius_m);
   cam_.fov_y_deg = desc.fov_y_deg;
   cam_.far_m = desc.far_m;
@@ -52,18 +58,19 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   cam_.eye_enu = {0, 0, desc.eye_height_m};
   track::TrackerDesc td;
   td.eye_height_m = desc.eye_height_m;
+  td.ring_capacity = desc.ring_capacity;
   tracker_ = std::make_unique<track::Tracker>(city_.frame(), &city_.graph(), td);
-  BLVD_LOG_INFO("runtime: %s, %zu blocks on %s (%s)", desc.package_path, block_meshes_.size(), ctx_->name(),
-                renderer_->glRenderer());
+  stats_.max_resident_cells = plan_.resident_cells;
+  BLVD_LOG_INFO("runtime: %s, %u cell slots of %.1f MiB GPU, %.1f MiB CPU planned, on %s (%s)", desc.package_path,
+                plan_.resident_cells, render::slabGpuBytes(plan_.slab) / 1048576.0, plan_.cpu_bytes / 1048576.0,
+                ctx_->name(), renderer_->glRenderer());
 }
 
 Runtime::~Runtime() {
+  loader_.reset();  // joins the loader thread before the city goes
   if (renderer_ && ctx_ && ctx_->makeCurrent()) {
-    for (render::MeshHandle h : block_meshes_) renderer_->release(h);
-    for (auto& c : cache_) {
-      for (render::MeshHandle h : c.layered) renderer_->release(h);
-      for (render::MeshHandle h : c.single) renderer_->release(h);
-    }
+    for (render::MeshHandle h : reference_blocks_) renderer_->release(h);
+    for (CellSlot& slot : slots_) renderer_->resetSlab(slot.slab);
   }
   renderer_.reset();
   ctx_.reset();
@@ -177,47 +184,130 @@ void Runtime::setMode(blvd_render_mode mode, float radius_m) {
   radius_m_ = radius_m > 0 ? radius_m : 250.f;
 }
 
-Runtime::CellImpostorCache& Runtime::impostorsOf(uint32_t cell) {
-  for (auto& c : cache_)
-    if (c.cell == cell) {
-      c.last_used = frame_;
-      return c;
+void Runtime::setRoute(const uint32_t* cells, size_t n) {
+  if (n && !cells) throw Error(Status::InvalidArg, "blvd_set_route: cells is NULL");
+  if (!residency_->setRoute(cells, n))
+    throw Error(Status::InvalidArg, "route of " + std::to_string(n) + " cells: a cell is out of range or the route "
+                                        "exceeds route_capacity (" + std::to_string(desc_.route_capacity) + ")");
+}
+
+const Runtime::CellSlot* Runtime::residentSlot(uint32_t cell) const {
+  for (const CellSlot& s : slots_)
+    if (s.state == CellSlot::Resident && s.cell == cell) return &s;
+  return nullptr;
+}
+
+// Copies finished staging into its slab, mesh by mesh, until the frame's
+// upload budget is spent (at least one mesh a frame, so a load always ends).
+void Runtime::uploadStaged(double budget_ms) {
+  const auto t0 = std::chrono::steady_clock::now();
+  double spent = 0;
+  while (Staging* st = loader_->finished()) {
+    CellSlot& slot = slots_[st->target];
+    if (slot.state != CellSlot::Loading || slot.cell != st->cell) {  // evicted while loading
+      loader_->release(st);
+      continue;
     }
-  // Replace the least recently used entry.
-  CellImpostorCache* victim = &cache_[0];
-  for (auto& c : cache_)
-    if (c.last_used < victim->last_used) victim = &c;
-  for (render::MeshHandle h : victim->layered) renderer_->release(h);
-  for (render::MeshHandle h : victim->single) renderer_->release(h);
-  victim->layered.clear();
-  victim->single.clear();
-  victim->cell = cell;
-  victim->last_used = frame_;
-  const graph::CellImpostors& ci = city_.cellTables().impostors[cell];
+    if (st->state == Staging::Failed) {
+      last_error = st->error;
+      ++stats_.load_errors;
+      failed_cells_[failed_next_++ % failed_cells_.size()] = st->cell;
+      slot.state = CellSlot::Empty;
+      slot.cell = slot_cells_[st->target] = graph::kNone;
+      loader_->release(st);
+      continue;
+    }
+    while (st->uploaded < st->mesh_count) {
+      const StagedMesh& m = st->meshes[st->uploaded++];
+      const render::MeshHandle h = renderer_->uploadToSlab(slot.slab, m.mesh);
+      if (h.id == 0) {
+        // The plan sized the slab for the largest cell: this is a bug.
+        last_error = "cell " + std::to_string(st->cell) + ": " + renderer_->lastError();
+        ++stats_.load_errors;
+        break;
+      }
+      (m.kind == MeshKind::Block ? slot.blocks : m.kind == MeshKind::Layered ? slot.layered : slot.single).push_back(h);
+      spent = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      if (spent >= budget_ms) break;
+    }
+    if (st->uploaded >= st->mesh_count) {
+      const render::SlabUsage u = renderer_->slabUsage(slot.slab);
+      const uint64_t tex = uint64_t(plan_.slab.texture_width) * plan_.slab.texture_height * 4 * 4 / 3;
+      slot.bytes = u.vertex_bytes + u.index_bytes + u.textures * tex;
+      slot.state = CellSlot::Resident;
+      loader_->release(st);
+      uint64_t used = 0;
+      for (const CellSlot& other : slots_) used += other.bytes;
+      gpu_high_water_ = std::max(gpu_high_water_, used);
+    }
+    if (spent >= budget_ms) break;
+  }
+  stats_.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  stats_.upload_ms_max = std::max(stats_.upload_ms_max, stats_.upload_ms);
+}
+
+// Residency for this frame (issue 4): ask for what is wanted, most wanted
+// first, into free or releasable slots; never wait for a load.
+void Runtime::stream(uint32_t cell, double arc_m, double speed_mps) {
+  residency_->update({cell, arc_m, speed_mps});
+  // A slot whose request was dropped goes back to empty.
+  for (size_t i = 0; i < slots_.size(); ++i)
+    if (slots_[i].state == CellSlot::Loading && !loader_->pending(slots_[i].cell)) {
+      slots_[i].state = CellSlot::Empty;
+      slots_[i].cell = slot_cells_[i] = graph::kNone;
+    }
+  // The current cell jumps the queue: queued predictions make way for it.
+  if (cell != graph::kNone && !residentSlot(cell) && !loader_->pending(cell)) loader_->cancelQueued();
+  for (uint32_t r = 0; r < residency_->wantedCount(); ++r) {
+    const uint32_t c = residency_->wanted()[r];
+    bool have = false;
+    for (const CellSlot& s : slots_) have |= s.cell == c && s.state != CellSlot::Empty;
+    if (have) continue;
+    bool failed = false;
+    for (uint32_t f : failed_cells_) failed |= f == c;
+    if (failed) continue;
+    const uint32_t v = residency_->victim(slot_cells_.data(), slot_cells_.size(), r);
+    if (v == graph::kNone) break;
+    if (!loader_->request(c, v)) break;  // both staging arenas busy
+    CellSlot& slot = slots_[v];
+    if (slot.cell != graph::kNone) ++stats_.evictions;
+    renderer_->resetSlab(slot.slab);
+    slot.blocks.clear();
+    slot.layered.clear();
+    slot.single.clear();
+    slot.bytes = 0;
+    slot.state = CellSlot::Loading;
+    slot.cell = slot_cells_[v] = c;
+  }
+  uploadStaged(desc_.upload_budget_ms);
+}
+
+void Runtime::ensureReferenceBlocks() {
+  if (!reference_blocks_.empty()) return;
   geo::MeshData mesh;
   std::string err;
-  for (int single = 0; single < 2; ++single)
-    for (const graph::ImpostorLayer& layer : single ? ci.single : ci.layered) {
-      const Status st = city_.decodeImpostor(layer, mesh, err);
-      if (st != Status::Ok) throw Error(st, err);
-      const render::MeshHandle h = renderer_->upload(mesh);
-      if (h.id == 0) throw Error(Status::Internal, "impostor of cell " + std::to_string(cell) + ": " + renderer_->lastError());
-      (single ? victim->single : victim->layered).push_back(h);
-    }
-  return *victim;
+  reference_blocks_.resize(city_.blocks().size());
+  for (uint32_t b = 0; b < city_.blocks().size(); ++b) {
+    const Status st = city_.decodeBlock(b, mesh, err);
+    if (st != Status::Ok) throw Error(st, err);
+    if (mesh.empty()) continue;
+    reference_blocks_[b] = renderer_->upload(mesh);
+    if (reference_blocks_[b].id == 0)
+      throw Error(Status::Internal, "block " + std::to_string(b) + ": " + renderer_->lastError());
+  }
 }
 
 void Runtime::buildDrawList(uint32_t cell) {
   draw_.clear();
   impostors_drawn_ = 0;
+  degraded_ = false;
   const auto& blocks = city_.blocks();
   auto addBlock = [&](uint32_t b) {
-    if (b < block_meshes_.size() && block_meshes_[b].id) draw_.push_back(block_meshes_[b]);
+    if (b < reference_blocks_.size() && reference_blocks_[b].id) draw_.push_back(reference_blocks_[b]);
   };
-  const graph::StreetGraph& g = city_.graph();
   switch (mode_) {
     case BLVD_MODE_FULL:
-      for (uint32_t b = 0; b < block_meshes_.size(); ++b) addBlock(b);
+      for (uint32_t b = 0; b < reference_blocks_.size(); ++b) addBlock(b);
       break;
     case BLVD_MODE_RADIUS: {
       // Visibility radius (the VOP baseline): blocks whose box comes within R.
@@ -233,29 +323,36 @@ void Runtime::buildDrawList(uint32_t cell) {
     case BLVD_MODE_LOCAL:
     case BLVD_MODE_BLVD:
     case BLVD_MODE_SINGLE:
-    default:
+    default: {
       if (cell == graph::kNone) break;
+      const CellSlot* slot = residentSlot(cell);
+      if (!slot) {
+        // Not resident yet: never wait; draw the last cell drawn if it still
+        // is, and say so.
+        degraded_ = true;
+        ++stats_.misses;
+        slot = residentSlot(last_drawn_cell_);
+        if (!slot) break;
+      }
+      last_drawn_cell_ = slot->cell;
       // Sillion 97 §3.1: the local model as geometry ...
-      for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) addBlock(*b);
+      for (render::MeshHandle h : slot->blocks) draw_.push_back(h);
       if (mode_ == BLVD_MODE_LOCAL) break;
       // ... plus the cell's impostors for the rest; the blocks they stand
       // for are never drawn with them (K06 §3.1.2): they are not local.
-      {
-        const CellImpostorCache& c = impostorsOf(cell);
-        for (render::MeshHandle h : mode_ == BLVD_MODE_SINGLE ? c.single : c.layered) {
-          draw_.push_back(h);
-          ++impostors_drawn_;
-        }
+      for (render::MeshHandle h : mode_ == BLVD_MODE_SINGLE ? slot->single : slot->layered) {
+        draw_.push_back(h);
+        ++impostors_drawn_;
       }
       break;
+    }
   }
   blocks_drawn_ = static_cast<uint32_t>(draw_.size() - impostors_drawn_);
 }
 
-void Runtime::render(blvd_frame_stats* stats) {
-  if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
-  ++frame_;
+uint32_t Runtime::currentCell(double& arc_m, double& speed) {
   uint32_t cell = graph::kNone;
+  arc_m = speed = 0;
   if (!manual_pose_) {
     // Tracking drives the camera: the pose at the newest fed time.
     const track::Pose& p = tracker_->update(last_feed_t_.load());
@@ -263,15 +360,50 @@ void Runtime::render(blvd_frame_stats* stats) {
       cam_.eye_enu = {p.camera.eye_e, p.camera.eye_n, p.camera.eye_u};
       cam_.heading_deg = p.camera.heading_deg;
       cam_.pitch_deg = p.camera.pitch_deg;
-      if (p.flags & track::kPoseMatched) cell = p.cell;
+      speed = p.speed_mps;
+      if (p.flags & track::kPoseMatched) cell = p.cell, arc_m = p.arc_m;
     }
   }
-  if (cell == graph::kNone) cell = city_.nearestCell({cam_.eye_enu.x, cam_.eye_enu.y}, cam_.heading_deg);
+  if (cell == graph::kNone) cell = city_.nearestCell({cam_.eye_enu.x, cam_.eye_enu.y}, cam_.heading_deg, &arc_m);
+  return cell;
+}
+
+void Runtime::waitResident(double timeout_ms) {
+  if (!(timeout_ms >= 0)) throw Error(Status::InvalidArg, "blvd_wait_resident: timeout_ms must be >= 0");
+  if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
+  if (mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS) return ensureReferenceBlocks();
+  double arc_m, speed;
+  const uint32_t cell = currentCell(arc_m, speed);
+  if (cell == graph::kNone) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const uint64_t errors = stats_.load_errors;
+  for (;;) {
+    stream(cell, arc_m, speed);
+    uploadStaged(1e9);
+    if (residentSlot(cell)) return;
+    if (stats_.load_errors != errors) throw Error(Status::Corrupt, last_error);
+    if (std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() > timeout_ms)
+      throw Error(Status::Timeout, "cell " + std::to_string(cell) + " not resident after " +
+                                       std::to_string(timeout_ms) + " ms");
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
+
+void Runtime::render(blvd_frame_stats* stats) {
+  if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
+  ++frame_;
+  double arc_m, speed;
+  const uint32_t cell = currentCell(arc_m, speed);
+  if (mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS) ensureReferenceBlocks();
+  else stream(cell, arc_m, speed);
   buildDrawList(cell);
   render::FrameStats fs;
   if (!renderer_->render(cam_, draw_.data(), draw_.size(), &fs))
     throw Error(Status::Internal, "render failed: " + renderer_->lastError());
   rendered_ = true;
+  ++stats_.frames;
+  stats_.frame_ms = fs.frame_ms;
+  stats_.triangles = fs.triangles;
   if (stats) {
     const uint32_t size = stats->struct_size ? stats->struct_size : sizeof(blvd_frame_stats);
     blvd_frame_stats s{};
@@ -282,8 +414,31 @@ void Runtime::render(blvd_frame_stats* stats) {
     s.cell = cell;
     s.impostor_layers = impostors_drawn_;
     s.blocks_drawn = blocks_drawn_;
+    s.flags = degraded_ ? BLVD_FRAME_DEGRADED : 0;
     std::memcpy(stats, &s, std::min<size_t>(size, sizeof s));
   }
+}
+
+void Runtime::stats(blvd_stats* out) const {
+  blvd_stats s = stats_;
+  s.struct_size = out->struct_size ? out->struct_size : sizeof s;
+  s.resident_cells = 0;
+  uint64_t gpu_used = 0;
+  for (const CellSlot& slot : slots_) {
+    if (slot.state == CellSlot::Resident) ++s.resident_cells;
+    gpu_used += slot.bytes;
+  }
+  s.gpu.capacity_bytes = plan_.gpu_bytes;
+  s.gpu.used_bytes = gpu_used;
+  s.gpu.high_water_bytes = std::max(gpu_high_water_, gpu_used);
+  s.staging.capacity_bytes = loader_->carvedBytes();
+  s.staging.used_bytes = loader_->stagingUsed();
+  s.staging.high_water_bytes = loader_->stagingHighWater();
+  s.decode.high_water_bytes = loader_->decodeHighWater();
+  s.table_bytes = plan_.table_bytes;
+  s.tracking_bytes = tracker_->bytes();
+  s.loads = loader_->loads();
+  std::memcpy(out, &s, std::min<size_t>(s.struct_size, sizeof s));
 }
 
 void Runtime::readPixels(void* rgba, size_t bytes) {

@@ -10,6 +10,9 @@
 #include "render/camera.h"
 #include "render/context.h"
 #include "render/renderer.h"
+#include "capi/cell_loader.h"
+#include "capi/memory_plan.h"
+#include "stream/residency.h"
 #include "stream/city.h"
 #include "track/tracker.h"
 
@@ -17,7 +20,9 @@ namespace blvd::capi {
 
 class Runtime {
  public:
-  // Throws core::Error naming what failed.
+  // `desc` has its defaults applied. Throws core::Error naming what failed
+  // (Budget when the memory plan exceeds a budget, NoMem when the host
+  // allocator fails).
   explicit Runtime(const blvd_runtime_desc& desc);
   ~Runtime();
 
@@ -27,6 +32,9 @@ class Runtime {
   void readPixels(void* rgba, size_t bytes);
   void info(blvd_runtime_info* out) const;
   void setMode(blvd_render_mode mode, float radius_m);
+  void setRoute(const uint32_t* cells, size_t n);
+  void waitResident(double timeout_ms);
+  void stats(blvd_stats* out) const;
 
   // Tracking. The feeds are safe from any thread and never touch last_error
   // (another thread may be reading it); getPose runs on the render thread.
@@ -37,29 +45,49 @@ class Runtime {
   std::string last_error;
 
  private:
+  // One resident-cell slot: a GL slab and the handles of what was placed in
+  // it (local blocks, layered and single impostors), in vectors reserved once.
+  struct CellSlot {
+    enum State { Empty, Loading, Resident } state = Empty;
+    uint32_t cell = 0xffffffffu;
+    render::SlabHandle slab;
+    std::vector<render::MeshHandle> blocks, layered, single;
+    uint64_t bytes = 0;  // slab bytes in use
+  };
+  // The camera from the tracker when it drives, then the current cell.
+  uint32_t currentCell(double& arc_m, double& speed_mps);
+  void stream(uint32_t cell, double arc_m, double speed_mps);
+  void uploadStaged(double budget_ms);
+  void buildDrawList(uint32_t cell);
+  void ensureReferenceBlocks();
+  const CellSlot* residentSlot(uint32_t cell) const;
+
   blvd_runtime_desc desc_;
   stream::City city_;
+  MemoryPlan plan_;
+  std::unique_ptr<CellLoader> loader_;
   std::unique_ptr<render::Context> ctx_;
   std::unique_ptr<render::Renderer> renderer_;
-  // Impostor meshes of recently visited cells (a small LRU; fixed-budget
-  // streaming replaces it).
-  struct CellImpostorCache {
-    uint32_t cell = 0xffffffffu;
-    std::vector<render::MeshHandle> layered, single;
-    uint64_t last_used = 0;
-  };
-  void buildDrawList(uint32_t cell);
-  CellImpostorCache& impostorsOf(uint32_t cell);
+  std::unique_ptr<stream::Residency> residency_;
+  std::vector<CellSlot> slots_;
+  std::vector<uint32_t> slot_cells_;  // slots_[i].cell, for Residency::victim
+  std::vector<uint32_t> failed_cells_;  // cells whose load failed, not retried (fixed ring)
+  size_t failed_next_ = 0;
 
-  std::vector<render::MeshHandle> block_meshes_;  // per block (id 0 when empty); all resident for now
-  std::vector<render::MeshHandle> draw_;          // this frame's list
-  std::vector<CellImpostorCache> cache_;
+  // FULL and RADIUS are reference modes for benchmarks: they need every
+  // block, loaded on first use outside the budget (docs/decisions/0006).
+  std::vector<render::MeshHandle> reference_blocks_;
+  std::vector<render::MeshHandle> draw_;  // this frame's list, reserved at create
   uint64_t frame_ = 0;
   blvd_render_mode mode_ = BLVD_MODE_BLVD;
   float radius_m_ = 250.f;
   uint32_t impostors_drawn_ = 0, blocks_drawn_ = 0;
+  uint32_t last_drawn_cell_ = 0xffffffffu;
+  bool degraded_ = false;
   render::Camera cam_;
   bool rendered_ = false;
+  blvd_stats stats_{};
+  uint64_t gpu_high_water_ = 0;
   // The tracker drives the camera once it has a pose, until the host places
   // the camera itself (blvd_set_pose_*); the next feed hands it back.
   std::unique_ptr<track::Tracker> tracker_;

@@ -15,6 +15,7 @@ const char* statusString(Status s) {
     case Status::Unsupported: return "unsupported";
     case Status::Internal: return "internal error";
     case Status::NotFound: return "not found";
+    case Status::Timeout: return "timed out";
   }
   return "unknown status";
 }

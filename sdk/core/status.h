@@ -18,6 +18,7 @@ enum class Status : int {
   Unsupported = 8,  // valid input that this build cannot handle
   Internal = 9,     // a bug: an invariant did not hold
   NotFound = 10,    // a requested item does not exist
+  Timeout = 11,     // a wait ended before its condition held
 };
 
 const char* statusString(Status s);

@@ -80,8 +80,10 @@ class Context;
   X(PFNGLSHADERSOURCEPROC, ShaderSource)                       \
   X(PFNGLTEXIMAGE2DPROC, TexImage2D)                           \
   X(PFNGLTEXPARAMETERIPROC, TexParameteri)                     \
+  X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)                     \
   X(PFNGLUNIFORM1FPROC, Uniform1f)                             \
   X(PFNGLUNIFORM1IPROC, Uniform1i)                             \
+  X(PFNGLUNIFORM2FPROC, Uniform2f)                             \
   X(PFNGLUNIFORM3FPROC, Uniform3f)                             \
   X(PFNGLUNIFORM4FPROC, Uniform4f)                             \
   X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)               \

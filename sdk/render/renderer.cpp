@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
+#include <deque>
 
 #include "render/context.h"
 #include "render/frustum.h"
@@ -33,20 +34,21 @@ constexpr uint32_t kIndexBits = 20;
 constexpr uint32_t kIndexMask = (1u << kIndexBits) - 1;
 constexpr uint32_t kGenerationMask = (1u << (32 - kIndexBits)) - 1;
 
-// Interleaved: one buffer, one VAO, 36 bytes a vertex.
-struct Vertex {
-  float position[3];
-  float normal[3];
-  uint8_t color[4];
-  float uv[2];
-};
-static_assert(sizeof(Vertex) == 36, "Vertex must be tightly packed");
+void setTextureSampling(const GlApi& gl) {
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+}
 
 struct MeshSlot {
   GLuint vao = 0, vbo = 0, ibo = 0;
   GLuint texture = 0;  // impostors: the captured colour
   GLsizei index_count = 0;
   GLenum index_type = GL_UNSIGNED_SHORT;
+  uint64_t index_offset = 0;  // bytes into ibo (slab meshes share one)
+  uint32_t slab = 0;          // slab index + 1, or 0: the mesh owns its GL objects
+  float uv_scale[2] = {1, 1}; // image size over the slab texture's size
   uint32_t generation = 1;
   bool live = false;
   glm::dvec3 center{0.0};  // glTF axes, package frame
@@ -60,7 +62,7 @@ struct Uniforms {
         inv_fog2 = -1;
   GLint ray_basis = -1, zenith = -1, ground = -1, eye_height = -1;  // background
   GLint viewproj = -1, offset = -1;                                 // meshes
-  GLint item = -1, forward = -1, depth_scale = -1, texture = -1;    // capture, impostors
+  GLint item = -1, forward = -1, depth_scale = -1, texture = -1, uv_scale = -1;    // capture, impostors
 };
 
 glm::vec3 srgbToLinear(const float c[3]) {
@@ -70,6 +72,15 @@ glm::vec3 srgbToLinear(const float c[3]) {
 const void* byteOffset(size_t n) { return reinterpret_cast<const void*>(n); }
 
 }  // namespace
+
+struct Renderer::Slab {
+  SlabDesc desc;
+  GLuint vbo = 0, ibo = 0;
+  std::vector<GLuint> vaos, textures;  // made once, handed out in order
+  std::vector<uint32_t> meshes;        // slot indices placed here, reserved for desc.meshes
+  uint64_t vertex_used = 0, index_used = 0;
+  uint32_t vaos_used = 0, textures_used = 0;
+};
 
 struct Renderer::Impl {
   GLuint bg_program = 0, mesh_program = 0;
@@ -88,9 +99,8 @@ struct Renderer::Impl {
   std::vector<std::pair<float, uint32_t>> order;
 
   // upload() scratch, kept to avoid reallocating for every mesh.
-  std::vector<Vertex> vertices;
-  std::vector<uint16_t> indices16;
-  std::vector<float> normals;
+  std::vector<uint8_t> scratch;
+  std::deque<Slab> slabs;  // fixed GPU arenas, made at create
 
   // Look, derived once per setLook().
   glm::vec3 sun_dir{0.0f, 1.0f, 0.0f}, sun_color{0.0f}, sky_ambient{0.0f}, ground_ambient{0.0f};
@@ -181,6 +191,7 @@ Uniforms locate(const GlApi& gl, GLuint p) {
   u.forward = gl.GetUniformLocation(p, "u_forward");
   u.depth_scale = gl.GetUniformLocation(p, "u_depth_scale");
   u.texture = gl.GetUniformLocation(p, "u_texture");
+  u.uv_scale = gl.GetUniformLocation(p, "u_uv_scale");
   return u;
 }
 
@@ -301,8 +312,14 @@ Renderer::~Renderer() {
   if (!impl_ || !gl_->DeleteBuffers || !ctx_.makeCurrent()) return;
   const GlApi& gl = *gl_;
   ScopedGlState guard(gl, shared_);
+  for (Slab& s : impl_->slabs) {
+    gl.DeleteBuffers(1, &s.vbo);
+    gl.DeleteBuffers(1, &s.ibo);
+    if (!s.vaos.empty()) gl.DeleteVertexArrays(static_cast<GLsizei>(s.vaos.size()), s.vaos.data());
+    if (!s.textures.empty()) gl.DeleteTextures(static_cast<GLsizei>(s.textures.size()), s.textures.data());
+  }
   for (MeshSlot& s : impl_->slots) {
-    if (!s.live) continue;
+    if (!s.live || s.slab) continue;
     gl.DeleteVertexArrays(1, &s.vao);
     gl.DeleteBuffers(1, &s.vbo);
     gl.DeleteBuffers(1, &s.ibo);
@@ -345,37 +362,33 @@ bool Renderer::isValid(MeshHandle h) const {
 
 MeshHandle Renderer::upload(const geo::MeshData& mesh) {
   Impl& m = *impl_;
-  const size_t nv = mesh.vertexCount();
-  if (mesh.positions.size() % 3 != 0 || mesh.indices.size() % 3 != 0) {
-    fail("mesh positions or indices are not a multiple of 3");
+  // Prepared into a scratch arena kept between calls, then copied into GL
+  // buffers of its own.
+  int tw = 0, th = 0, tc = 0;
+  if (!mesh.image.empty() && mesh.image.size() <= 0x7fffffff)
+    stbi_info_from_memory(mesh.image.data(), static_cast<int>(mesh.image.size()), &tw, &th, &tc);
+  const size_t need = preparedBytes(mesh.vertexCount(), mesh.indices.size(), tw, th);
+  if (m.scratch.size() < need) m.scratch.resize(need);
+  StagingArena arena{m.scratch.data(), m.scratch.size(), 0};
+  PreparedMesh p;
+  if (!prepareMesh(mesh, arena, p, error_)) return {};
+  return place(p, 0);
+}
+
+MeshHandle Renderer::uploadToSlab(SlabHandle slab, const PreparedMesh& mesh) {
+  if (slab.id == 0 || slab.id > impl_->slabs.size()) {
+    fail("invalid slab handle");
     return {};
   }
-  if (mesh.empty() || nv == 0) {
+  return place(mesh, slab.id);
+}
+
+MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id) {
+  Impl& m = *impl_;
+  Slab* slab = slab_id ? &m.slabs[slab_id - 1] : nullptr;
+  if (p.vertex_count == 0 || p.index_count == 0 || !p.vertices || !p.indices) {
     fail("mesh has no triangles");
     return {};
-  }
-  if (nv > 0xFFFFFFFFull || mesh.indices.size() > 0x7FFFFFFFull) {
-    fail("mesh too large for 32-bit indices");
-    return {};
-  }
-  if (!mesh.normals.empty() && mesh.normals.size() != nv * 3) {
-    fail("mesh normals and positions disagree in count");
-    return {};
-  }
-  if (!mesh.colors.empty() && mesh.colors.size() != nv * 4) {
-    fail("mesh colors and positions disagree in count");
-    return {};
-  }
-  if (!mesh.texcoords.empty() && mesh.texcoords.size() != nv * 2) {
-    fail("mesh texcoords and positions disagree in count");
-    return {};
-  }
-  const bool textured = !mesh.image.empty() && !mesh.texcoords.empty();
-  for (uint32_t i : mesh.indices) {
-    if (i >= nv) {
-      fail("mesh index out of range");
-      return {};
-    }
   }
   if (m.free_slots.empty() && m.slots.size() >= m.capacity) {
     fail("mesh pool full (RendererDesc::mesh_capacity)");
@@ -385,90 +398,25 @@ MeshHandle Renderer::upload(const geo::MeshData& mesh) {
     fail("GL context is not current on this thread");
     return {};
   }
-
-  // Box in glTF axes; vertices are stored relative to its centre so floats
-  // keep their precision anywhere in the city.
-  glm::dvec3 lo(mesh.positions[0], mesh.positions[1], mesh.positions[2]), hi = lo;
-  for (size_t v = 1; v < nv; ++v) {
-    const glm::dvec3 p(mesh.positions[v * 3], mesh.positions[v * 3 + 1],
-                       mesh.positions[v * 3 + 2]);
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
-  const glm::dvec3 center = (lo + hi) * 0.5;
-
-  const float* normals = mesh.normals.data();
-  if (mesh.normals.empty()) {
-    // Area-weighted vertex normals: the cross product's length is twice the
-    // triangle's area, so summing unnormalised crosses weights for free.
-    m.normals.assign(nv * 3, 0.0f);
-    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-      const uint32_t ia = mesh.indices[t], ib = mesh.indices[t + 1], ic = mesh.indices[t + 2];
-      const glm::vec3 a(mesh.positions[ia * 3], mesh.positions[ia * 3 + 1],
-                        mesh.positions[ia * 3 + 2]);
-      const glm::vec3 b(mesh.positions[ib * 3], mesh.positions[ib * 3 + 1],
-                        mesh.positions[ib * 3 + 2]);
-      const glm::vec3 c(mesh.positions[ic * 3], mesh.positions[ic * 3 + 1],
-                        mesh.positions[ic * 3 + 2]);
-      const glm::vec3 n = glm::cross(b - a, c - a);
-      for (uint32_t i : {ia, ib, ic}) {
-        m.normals[i * 3] += n.x;
-        m.normals[i * 3 + 1] += n.y;
-        m.normals[i * 3 + 2] += n.z;
-      }
-    }
-    for (size_t v = 0; v < nv; ++v) {
-      glm::vec3 n(m.normals[v * 3], m.normals[v * 3 + 1], m.normals[v * 3 + 2]);
-      const float len = glm::length(n);
-      n = len > 0.0f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
-      m.normals[v * 3] = n.x;
-      m.normals[v * 3 + 1] = n.y;
-      m.normals[v * 3 + 2] = n.z;
-    }
-    normals = m.normals.data();
-  }
-
-  m.vertices.resize(nv);
-  for (size_t v = 0; v < nv; ++v) {
-    Vertex& out = m.vertices[v];
-    for (int k = 0; k < 3; ++k) {
-      out.position[k] = static_cast<float>(mesh.positions[v * 3 + k] - center[k]);
-      out.normal[k] = normals[v * 3 + k];
-    }
-    if (mesh.colors.empty()) {
-      std::memset(out.color, 200, 3);
-      out.color[3] = 255;
-    } else {
-      std::memcpy(out.color, &mesh.colors[v * 4], 4);
-    }
-    out.uv[0] = mesh.texcoords.empty() ? 0.0f : mesh.texcoords[v * 2];
-    out.uv[1] = mesh.texcoords.empty() ? 0.0f : mesh.texcoords[v * 2 + 1];
-  }
-
-  // Impostor texture: decoded here (stb), uploaded with mipmaps so a far
-  // impostor does not shimmer.
-  int tw = 0, th = 0, tc = 0;
-  stbi_uc* texels = nullptr;
-  if (textured) {
-    if (mesh.image.size() > 0x7fffffff ||
-        !(texels = stbi_load_from_memory(mesh.image.data(), static_cast<int>(mesh.image.size()), &tw, &th, &tc, 4))) {
-      fail("mesh image cannot be decoded");
+  const uint64_t vbytes = p.vertexBytes(), ibytes = p.indexBytes();
+  uint64_t voff = 0, ioff = 0;
+  if (slab) {
+    // Bump placement into the buffers made at createSlab: no GL allocation.
+    ioff = (slab->index_used + 3) & ~uint64_t(3);
+    voff = slab->vertex_used;
+    if (voff + vbytes > slab->desc.vertex_bytes || ioff + ibytes > slab->desc.index_bytes) {
+      fail("slab full: vertex or index bytes exceed its size");
       return {};
     }
-  }
-
-  // 16-bit indices halve index bandwidth for typical blocks. The bound is
-  // 65535 exclusive: 0xFFFF is the primitive-restart index a host may enable.
-  const bool small = nv < 0xFFFF;
-  const void* index_data = mesh.indices.data();
-  size_t index_bytes = mesh.indices.size() * sizeof(uint32_t);
-  if (small) {
-    m.indices16.resize(mesh.indices.size());
-    for (size_t i = 0; i < mesh.indices.size(); ++i) {
-      m.indices16[i] = static_cast<uint16_t>(mesh.indices[i]);
+    if (slab->vaos_used >= slab->vaos.size()) {
+      fail("slab full: mesh count exceeds its size");
+      return {};
     }
-    index_data = m.indices16.data();
-    index_bytes = m.indices16.size() * sizeof(uint16_t);
+    if (p.rgba && (slab->textures_used >= slab->textures.size() || p.texture_width > slab->desc.texture_width ||
+                   p.texture_height > slab->desc.texture_height)) {
+      fail("slab full: no texture slot of the image's size left");
+      return {};
+    }
   }
 
   uint32_t index;
@@ -484,62 +432,178 @@ MeshHandle Renderer::upload(const geo::MeshData& mesh) {
   const GlApi& gl = *gl_;
   {
     ScopedGlState guard(gl, shared_);
-    gl.GenVertexArrays(1, &s.vao);
-    gl.GenBuffers(1, &s.vbo);
-    gl.GenBuffers(1, &s.ibo);
+    if (slab) {
+      s.vao = slab->vaos[slab->vaos_used++];
+      s.vbo = slab->vbo;
+      s.ibo = slab->ibo;
+    } else {
+      gl.GenVertexArrays(1, &s.vao);
+      gl.GenBuffers(1, &s.vbo);
+      gl.GenBuffers(1, &s.ibo);
+    }
     // VAO first: the element buffer binding below is VAO state, and must not
     // land in whatever VAO the host had bound.
     gl.BindVertexArray(s.vao);
     gl.BindBuffer(GL_ARRAY_BUFFER, s.vbo);
-    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(nv * sizeof(Vertex)),
-                  m.vertices.data(), GL_STATIC_DRAW);
+    if (slab)
+      gl.BufferSubData(GL_ARRAY_BUFFER, static_cast<GLintptr>(voff), static_cast<GLsizeiptr>(vbytes), p.vertices);
+    else
+      gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vbytes), p.vertices, GL_STATIC_DRAW);
     gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.ibo);
-    gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(index_bytes), index_data,
-                  GL_STATIC_DRAW);
+    if (slab)
+      gl.BufferSubData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLintptr>(ioff), static_cast<GLsizeiptr>(ibytes), p.indices);
+    else
+      gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(ibytes), p.indices, GL_STATIC_DRAW);
     gl.EnableVertexAttribArray(0);
-    gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
-                           byteOffset(offsetof(Vertex, position)));
+    gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, kVertexBytes, byteOffset(voff + 0));
     gl.EnableVertexAttribArray(1);
-    gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
-                           byteOffset(offsetof(Vertex, normal)));
+    gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, kVertexBytes, byteOffset(voff + 12));
     gl.EnableVertexAttribArray(2);
-    gl.VertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(Vertex),
-                           byteOffset(offsetof(Vertex, color)));
+    gl.VertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, kVertexBytes, byteOffset(voff + 24));
     gl.EnableVertexAttribArray(3);
-    gl.VertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex), byteOffset(offsetof(Vertex, uv)));
+    gl.VertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, kVertexBytes, byteOffset(voff + 28));
     gl.BindVertexArray(0);
-    if (texels) {
+    if (p.rgba) {
+      // Impostor texture, with mipmaps so a far impostor does not shimmer.
       gl.ActiveTexture(GL_TEXTURE0);
-      gl.GenTextures(1, &s.texture);
-      gl.BindTexture(GL_TEXTURE_2D, s.texture);
       gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
-      gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, tw, th, 0, GL_RGBA, GL_UNSIGNED_BYTE, texels);
+      if (slab) {
+        s.texture = slab->textures[slab->textures_used++];
+        gl.BindTexture(GL_TEXTURE_2D, s.texture);
+        gl.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, p.texture_width, p.texture_height, GL_RGBA, GL_UNSIGNED_BYTE,
+                         p.rgba);
+        s.uv_scale[0] = float(p.texture_width) / float(slab->desc.texture_width);
+        s.uv_scale[1] = float(p.texture_height) / float(slab->desc.texture_height);
+      } else {
+        gl.GenTextures(1, &s.texture);
+        gl.BindTexture(GL_TEXTURE_2D, s.texture);
+        gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, p.texture_width, p.texture_height, 0, GL_RGBA,
+                      GL_UNSIGNED_BYTE, p.rgba);
+        setTextureSampling(gl);
+      }
       gl.GenerateMipmap(GL_TEXTURE_2D);
-      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
       gl.BindTexture(GL_TEXTURE_2D, 0);
-      stbi_image_free(texels);
     }
   }
 
-  s.index_count = static_cast<GLsizei>(mesh.indices.size());
-  s.index_type = small ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
-  s.center = center;
-  s.half = (hi - lo) * 0.5;
-  s.bytes = nv * sizeof(Vertex) + index_bytes + (s.texture ? uint64_t(tw) * th * 4 * 4 / 3 : 0);
+  s.index_count = static_cast<GLsizei>(p.index_count);
+  s.index_type = p.index16 ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
+  s.index_offset = ioff;
+  s.slab = slab_id;
+  s.center = glm::dvec3(p.center[0], p.center[1], p.center[2]);
+  s.half = glm::dvec3(p.half[0], p.half[1], p.half[2]);
+  s.bytes = vbytes + ibytes + (p.rgba ? p.textureBytes() * 4 / 3 : 0);
   s.live = true;
+  if (slab) {
+    slab->vertex_used = voff + vbytes;
+    slab->index_used = ioff + ibytes;
+    slab->meshes.push_back(index);  // reserved for desc.meshes at createSlab
+  }
   ++live_meshes_;
   mesh_bytes_ += s.bytes;
   return MeshHandle{(s.generation << kIndexBits) | (index + 1)};
+}
+
+uint64_t slabGpuBytes(const SlabDesc& d) {
+  uint64_t tex = uint64_t(d.texture_width) * uint64_t(d.texture_height) * 4;
+  tex = tex * 4 / 3;  // the mip chain adds a third
+  return d.vertex_bytes + d.index_bytes + uint64_t(d.textures) * tex;
+}
+
+SlabHandle Renderer::createSlab(const SlabDesc& d) {
+  Impl& m = *impl_;
+  if (d.meshes == 0 || d.vertex_bytes == 0 || d.index_bytes == 0) {
+    fail("slab needs meshes, vertex bytes and index bytes");
+    return {};
+  }
+  if (d.vertex_bytes > 0x7fffffffull || d.index_bytes > 0x7fffffffull) {
+    fail("slab larger than 2 GiB");
+    return {};
+  }
+  if (d.textures && (d.texture_width <= 0 || d.texture_height <= 0 || d.texture_width > 16384 ||
+                     d.texture_height > 16384)) {
+    fail("slab texture size out of range");
+    return {};
+  }
+  if (!ctx_.makeCurrent()) {
+    fail("GL context is not current on this thread");
+    return {};
+  }
+  m.slabs.emplace_back();
+  Slab& s = m.slabs.back();
+  s.desc = d;
+  s.vaos.resize(d.meshes);
+  s.textures.resize(d.textures);
+  s.meshes.reserve(d.meshes);
+  const GlApi& gl = *gl_;
+  ScopedGlState guard(gl, shared_);
+  gl.GenBuffers(1, &s.vbo);
+  gl.GenBuffers(1, &s.ibo);
+  gl.BindVertexArray(0);
+  gl.BindBuffer(GL_ARRAY_BUFFER, s.vbo);
+  gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(d.vertex_bytes), nullptr, GL_DYNAMIC_DRAW);
+  gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.ibo);
+  gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(d.index_bytes), nullptr, GL_DYNAMIC_DRAW);
+  gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
+  gl.GenVertexArrays(static_cast<GLsizei>(d.meshes), s.vaos.data());
+  if (d.textures) {
+    gl.GenTextures(static_cast<GLsizei>(d.textures), s.textures.data());
+    gl.ActiveTexture(GL_TEXTURE0);
+    for (GLuint t : s.textures) {
+      gl.BindTexture(GL_TEXTURE_2D, t);
+      // The whole mip chain is allocated here, so GenerateMipmap later fills
+      // levels that exist instead of allocating them.
+      for (int level = 0, w = d.texture_width, h = d.texture_height;; ++level, w = std::max(1, w / 2),
+               h = std::max(1, h / 2)) {
+        gl.TexImage2D(GL_TEXTURE_2D, level, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+        if (w == 1 && h == 1) break;
+      }
+      setTextureSampling(gl);
+    }
+    gl.BindTexture(GL_TEXTURE_2D, 0);
+  }
+  gpu_slab_bytes_ += slabGpuBytes(d);
+  return SlabHandle{static_cast<uint32_t>(m.slabs.size())};
+}
+
+void Renderer::resetSlab(SlabHandle h) {
+  if (h.id == 0 || h.id > impl_->slabs.size()) return;
+  Slab& s = impl_->slabs[h.id - 1];
+  // Copy-free: release() swaps each slot back to the free list.
+  while (!s.meshes.empty()) {
+    const uint32_t index = s.meshes.back();
+    const MeshSlot& ms = impl_->slots[index];
+    release(MeshHandle{(ms.generation << kIndexBits) | (index + 1)});
+  }
+  s.vertex_used = s.index_used = 0;
+  s.vaos_used = s.textures_used = 0;
+}
+
+SlabUsage Renderer::slabUsage(SlabHandle h) const {
+  SlabUsage u;
+  if (h.id == 0 || h.id > impl_->slabs.size()) return u;
+  const Slab& s = impl_->slabs[h.id - 1];
+  u.vertex_bytes = s.vertex_used;
+  u.index_bytes = s.index_used;
+  u.meshes = s.vaos_used;
+  u.textures = s.textures_used;
+  return u;
 }
 
 void Renderer::release(MeshHandle h) {
   if (!isValid(h) || !ctx_.makeCurrent()) return;
   const uint32_t index = (h.id & kIndexMask) - 1;
   MeshSlot& s = impl_->slots[index];
-  {
+  if (s.slab) {
+    // The slab keeps its buffers; only its placement list forgets the mesh.
+    auto& list = impl_->slabs[s.slab - 1].meshes;
+    for (size_t i = 0; i < list.size(); ++i)
+      if (list[i] == index) {
+        list[i] = list.back();
+        list.pop_back();
+        break;
+      }
+  } else {
     const GlApi& gl = *gl_;
     ScopedGlState guard(gl, shared_);
     gl.DeleteVertexArrays(1, &s.vao);
@@ -710,11 +774,14 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
           gl.Uniform4f(u->item, float(id & 255u) / 255.0f, float((id >> 8) & 255u) / 255.0f,
                        float((id >> 16) & 255u) / 255.0f, 1.0f);
         }
-        if (textured) gl.BindTexture(GL_TEXTURE_2D, s.texture);
+        if (textured) {
+          gl.BindTexture(GL_TEXTURE_2D, s.texture);
+          gl.Uniform2f(u->uv_scale, s.uv_scale[0], s.uv_scale[1]);
+        }
         gl.Uniform3f(u->offset, static_cast<float>(rel.x), static_cast<float>(rel.y),
                      static_cast<float>(rel.z));
         gl.BindVertexArray(s.vao);
-        gl.DrawElements(GL_TRIANGLES, s.index_count, s.index_type, nullptr);
+        gl.DrawElements(GL_TRIANGLES, s.index_count, s.index_type, byteOffset(s.index_offset));
         ++fs.draw_calls;
         ++fs.meshes_drawn;
         fs.triangles += static_cast<uint64_t>(s.index_count / 3);

@@ -15,6 +15,7 @@
 
 #include "geo/mesh.h"
 #include "render/camera.h"
+#include "render/prepared_mesh.h"
 
 namespace blvd::render {
 
@@ -47,6 +48,28 @@ struct MeshHandle {
   bool operator==(const MeshHandle& o) const { return id == o.id; }
   bool operator!=(const MeshHandle& o) const { return id != o.id; }
 };
+
+// A fixed GPU arena (issue 4): one vertex buffer, one index buffer, `meshes`
+// vertex arrays and `textures` RGBA8 textures of texture_width × texture_height
+// with their mip chains, all allocated by createSlab. Meshes are then placed
+// into it in order with uploadToSlab (glBufferSubData / glTexSubImage2D only:
+// no GL allocation) and released together by resetSlab.
+struct SlabDesc {
+  uint64_t vertex_bytes = 0;
+  uint64_t index_bytes = 0;  // 4-byte aligned placements; budget 3 bytes per mesh for it
+  uint32_t meshes = 0;
+  uint32_t textures = 0;
+  int texture_width = 0, texture_height = 0;
+};
+struct SlabHandle {
+  uint32_t id = 0;  // index + 1; 0 is invalid
+};
+struct SlabUsage {
+  uint64_t vertex_bytes = 0, index_bytes = 0;
+  uint32_t meshes = 0, textures = 0;
+};
+// GPU bytes a slab holds: buffers plus textures with a third for mips.
+uint64_t slabGpuBytes(const SlabDesc& desc);
 
 struct FrameStats {
   double frame_ms = 0.0;        // render() wall time, glFinish included
@@ -98,8 +121,20 @@ class Renderer {
   // mesh is empty or malformed (index out of range, array sizes disagree) or
   // the pool is full.
   MeshHandle upload(const geo::MeshData& mesh);
-  // Frees the GL buffers; stale and null handles are ignored.
+  // Frees the GL buffers; stale and null handles are ignored. A slab mesh
+  // gives its handle back; its bytes stay with the slab until resetSlab.
   void release(MeshHandle h);
+
+  // Creates a slab (see SlabDesc). Call at start-up: this is where GL
+  // allocates. Invalid handle with lastError() set on failure.
+  SlabHandle createSlab(const SlabDesc& desc);
+  // Places a prepared mesh after the slab's last one. Invalid handle when the
+  // slab or the mesh pool is full. The only GL calls are sub-data copies.
+  MeshHandle uploadToSlab(SlabHandle slab, const PreparedMesh& mesh);
+  // Releases every mesh placed in the slab and rewinds it.
+  void resetSlab(SlabHandle slab);
+  SlabUsage slabUsage(SlabHandle slab) const;
+  uint64_t slabBytes() const { return gpu_slab_bytes_; }
   bool isValid(MeshHandle h) const;
 
   void setLook(const Look& look);
@@ -127,7 +162,9 @@ class Renderer {
 
  private:
   struct Impl;
+  struct Slab;
   explicit Renderer(Context& ctx);
+  MeshHandle place(const PreparedMesh& mesh, uint32_t slab_id);
   bool init(const RendererDesc& desc);
   bool fail(const char* what);
 
@@ -142,6 +179,7 @@ class Renderer {
   int last_w_ = 0, last_h_ = 0;
   uint32_t live_meshes_ = 0;
   uint64_t mesh_bytes_ = 0;
+  uint64_t gpu_slab_bytes_ = 0;
 };
 
 }  // namespace blvd::render

@@ -51,6 +51,28 @@ core::Status City::open(const std::string& path, std::string& err) {
   return core::Status::Ok;
 }
 
+namespace {
+template <typename T>
+uint64_t bytesOf(const std::vector<T>& v) {
+  return uint64_t(v.capacity()) * sizeof(T);
+}
+uint64_t bytesOf(const graph::Csr& c) { return bytesOf(c.offsets) + bytesOf(c.items); }
+}  // namespace
+
+uint64_t City::tableBytes() const {
+  uint64_t n = bytesOf(graph_.vertices) + bytesOf(graph_.halfedges) + bytesOf(graph_.faces) +
+               bytesOf(graph_.points) + bytesOf(graph_.successors) + bytesOf(graph_.predecessors) +
+               bytesOf(graph_.local_blocks) + bytesOf(blocks_) + bytesOf(tables_.visibility) +
+               bytesOf(tables_.impostors);
+  for (const auto& v : tables_.visibility) n += bytesOf(v.blocks) + bytesOf(v.ach);
+  for (const auto& c : tables_.impostors) {
+    n += bytesOf(c.layered) + bytesOf(c.single);
+    for (const auto& l : c.layered) n += bytesOf(l.blocks);
+    for (const auto& l : c.single) n += bytesOf(l.blocks);
+  }
+  return n;
+}
+
 core::Status City::decodeBlock(uint32_t b, geo::MeshData& out, std::string& err) const {
   out.clear();
   if (b >= blocks_.size()) {

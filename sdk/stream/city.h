@@ -35,6 +35,9 @@ class City {
   // Decodes one impostor layer's GLB (textured depth mesh with its image).
   core::Status decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshData& out, std::string& err) const;
   const geo::LocalFrame& frame() const { return frame_; }
+  // Heap bytes of the tables above (graph, cells, blocks, visibility,
+  // impostor lists): what holding the city costs besides the mapped file.
+  uint64_t tableBytes() const;
 
   // Decodes block `b`'s GLB into `out` (cleared first). An empty block gives an
   // empty mesh and Ok. Corrupt if the blob's CRC or the GLB is bad.

@@ -36,7 +36,11 @@ std::vector<uint8_t> renderView(const View& v, blvd_backend backend, blvd_render
   if (!rt) return {};
   std::vector<uint8_t> px(kW * kH * 4);
   EXPECT_EQ(blvd_set_pose_geo(rt, v.lat, v.lon, v.heading, v.pitch), BLVD_OK) << blvd_last_error(rt);
+  EXPECT_EQ(blvd_wait_resident(rt, 30000), BLVD_OK) << blvd_last_error(rt);
   EXPECT_EQ(blvd_render(rt, stats), BLVD_OK) << blvd_last_error(rt);
+  if (stats) {
+    EXPECT_EQ(stats->flags & BLVD_FRAME_DEGRADED, 0u);
+  }
   EXPECT_EQ(blvd_read_pixels(rt, px.data(), px.size()), BLVD_OK) << blvd_last_error(rt);
   blvd_runtime_destroy(rt);
   return px;

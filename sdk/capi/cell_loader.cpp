@@ -1,0 +1,190 @@
+#include "capi/cell_loader.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <new>
+
+#include "core/status.h"
+
+namespace blvd::capi {
+
+void* Allocator::allocate(size_t size) const {
+  if (alloc) return alloc(size, 16, user);
+  return std::aligned_alloc(16, (size + 15) & ~size_t(15));
+}
+
+void Allocator::release(void* p) const {
+  if (!p) return;
+  if (free) free(p, user);
+  else std::free(p);
+}
+
+CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes)
+    : city_(city), alloc_(alloc) {
+  for (Staging& s : slots_) {
+    void* arena = alloc_.allocate(arena_bytes);
+    void* table = arena ? alloc_.allocate(sizeof(StagedMesh) * meshes) : nullptr;
+    if (!arena || !table) {
+      alloc_.release(arena);
+      for (Staging& t : slots_) {
+        alloc_.release(t.arena.base);
+        alloc_.release(t.meshes);
+      }
+      throw core::Error(core::Status::NoMem, "cannot allocate the loader's staging memory (" +
+                                                 std::to_string(arena_bytes) + " bytes per slot)");
+    }
+    s.arena = {static_cast<uint8_t*>(arena), static_cast<size_t>(arena_bytes), 0};
+    s.meshes = new (table) StagedMesh[meshes];
+    s.mesh_capacity = meshes;
+    carved_ += arena_bytes + sizeof(StagedMesh) * meshes;
+  }
+  thread_ = std::thread([this] { run(); });
+}
+
+CellLoader::~CellLoader() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    stop_ = true;
+  }
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  for (Staging& s : slots_) {
+    alloc_.release(s.arena.base);
+    alloc_.release(s.meshes);  // StagedMesh is trivially destructible
+  }
+}
+
+bool CellLoader::request(uint32_t cell, uint32_t target) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    Staging* free_slot = nullptr;
+    for (uint32_t i = 0; i < kStagingSlots; ++i)
+      if (slots_[i].state == Staging::Free) {
+        free_slot = &slots_[i];
+        order_[i] = ++seq_;
+        break;
+      }
+    if (!free_slot) return false;
+    free_slot->state = Staging::Queued;
+    free_slot->cell = cell;
+    free_slot->target = target;
+  }
+  cv_.notify_one();
+  return true;
+}
+
+Staging* CellLoader::finished() {
+  std::lock_guard<std::mutex> lock(mu_);
+  Staging* best = nullptr;
+  uint64_t best_seq = ~uint64_t(0);
+  for (uint32_t i = 0; i < kStagingSlots; ++i)
+    if ((slots_[i].state == Staging::Ready || slots_[i].state == Staging::Failed) && order_[i] < best_seq)
+      best = &slots_[i], best_seq = order_[i];
+  return best;
+}
+
+void CellLoader::release(Staging* s) {
+  std::lock_guard<std::mutex> lock(mu_);
+  s->state = Staging::Free;
+  s->cell = 0xffffffffu;
+  s->uploaded = 0;
+}
+
+bool CellLoader::pending(uint32_t cell) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  for (const Staging& s : slots_)
+    if (s.state != Staging::Free && s.cell == cell) return true;
+  return false;
+}
+
+uint64_t CellLoader::stagingUsed() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  uint64_t n = 0;
+  for (const Staging& s : slots_)
+    if (s.state == Staging::Ready || s.state == Staging::Decoding) n += s.arena.used;
+  return n;
+}
+
+void CellLoader::cancelQueued() {
+  std::lock_guard<std::mutex> lock(mu_);
+  for (Staging& s : slots_)
+    if (s.state == Staging::Queued) s.state = Staging::Free, s.cell = 0xffffffffu;
+}
+
+void CellLoader::run() {
+  for (;;) {
+    Staging* job = nullptr;
+    {
+      std::unique_lock<std::mutex> lock(mu_);
+      cv_.wait(lock, [&] {
+        if (stop_) return true;
+        for (Staging& s : slots_)
+          if (s.state == Staging::Queued) return true;
+        return false;
+      });
+      if (stop_) return;
+      uint64_t best_seq = ~uint64_t(0);
+      for (uint32_t i = 0; i < kStagingSlots; ++i)
+        if (slots_[i].state == Staging::Queued && order_[i] < best_seq) job = &slots_[i], best_seq = order_[i];
+      job->state = Staging::Decoding;
+    }
+    decode(*job);
+    ++loads_;
+  }
+}
+
+void CellLoader::decode(Staging& s) {
+  s.arena.reset();
+  s.mesh_count = 0;
+  s.uploaded = 0;
+  s.error[0] = 0;
+  std::string err;
+  auto fail = [&](const std::string& what) {
+    std::snprintf(s.error, sizeof s.error, "cell %u: %s", s.cell, what.c_str());
+    std::lock_guard<std::mutex> lock(mu_);
+    s.state = Staging::Failed;
+  };
+  auto stage = [&](MeshKind kind, uint32_t item) {
+    if (scratch_.empty()) return true;  // an empty block draws nothing
+    if (s.mesh_count >= s.mesh_capacity) {
+      fail("more meshes than the plan's largest cell");
+      return false;
+    }
+    StagedMesh& m = s.meshes[s.mesh_count];
+    if (!render::prepareMesh(scratch_, s.arena, m.mesh, err)) {
+      fail(err);
+      return false;
+    }
+    m.kind = kind;
+    m.item = item;
+    ++s.mesh_count;
+    const uint64_t scratch_bytes = scratch_.positions.capacity() * 4 + scratch_.normals.capacity() * 4 +
+                                   scratch_.colors.capacity() + scratch_.texcoords.capacity() * 4 +
+                                   scratch_.indices.capacity() * 4 + scratch_.image.capacity();
+    if (scratch_bytes > decode_high_water_) decode_high_water_ = scratch_bytes;
+    return true;
+  };
+  const graph::StreetGraph& g = city_.graph();
+  for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b) {
+    const core::Status st = city_.decodeBlock(*b, scratch_, err);
+    if (st != core::Status::Ok) return fail(err);
+    if (!stage(MeshKind::Block, *b)) return;
+  }
+  if (s.cell < city_.cellTables().impostors.size()) {
+    const graph::CellImpostors& ci = city_.cellTables().impostors[s.cell];
+    for (int single = 0; single < 2; ++single) {
+      const auto& list = single ? ci.single : ci.layered;
+      for (uint32_t i = 0; i < list.size(); ++i) {
+        const core::Status st = city_.decodeImpostor(list[i], scratch_, err);
+        if (st != core::Status::Ok) return fail(err);
+        if (!stage(single ? MeshKind::Single : MeshKind::Layered, i)) return;
+      }
+    }
+  }
+  if (s.arena.used > staging_high_water_) staging_high_water_ = s.arena.used;
+  std::lock_guard<std::mutex> lock(mu_);
+  s.state = Staging::Ready;
+}
+
+}  // namespace blvd::capi

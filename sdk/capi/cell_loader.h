@@ -1,0 +1,101 @@
+// The loader thread (issue 4, "Streaming"): reads a cell's blobs from the
+// mapped package, decodes GLB/Draco and images, and writes the renderer's GPU
+// layout into one of kStagingSlots fixed arenas. The render thread then copies
+// a ready slot into a GL slab within its upload budget and hands it back.
+//
+// Memory: the arenas and their mesh tables are carved at construction through
+// the host allocator. The decoder's scratch (a MeshData reused for every mesh)
+// grows on this thread only, is capped by the largest mesh the package
+// declares, and its high-water mark is reported.
+// Threads: request()/ready()/release() on the render thread; they take a
+// mutex for a few instructions and never allocate.
+#pragma once
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <thread>
+
+#include "render/prepared_mesh.h"
+#include "stream/city.h"
+
+namespace blvd::capi {
+
+inline constexpr uint32_t kStagingSlots = 2;
+
+enum class MeshKind : uint32_t { Block = 0, Layered = 1, Single = 2 };
+
+struct StagedMesh {
+  render::PreparedMesh mesh;
+  MeshKind kind = MeshKind::Block;
+  uint32_t item = 0;  // block id, or layer index within its list
+};
+
+struct Allocator {
+  void* (*alloc)(size_t size, size_t align, void* user) = nullptr;
+  void (*free)(void* ptr, void* user) = nullptr;
+  void* user = nullptr;
+  void* allocate(size_t size) const;
+  void release(void* p) const;
+};
+
+struct Staging {
+  enum State : uint32_t { Free, Queued, Decoding, Ready, Failed };
+  State state = Free;
+  uint32_t cell = 0xffffffffu;
+  uint32_t target = 0;  // the caller's tag (its GPU slot)
+  render::StagingArena arena;
+  StagedMesh* meshes = nullptr;
+  uint32_t mesh_count = 0, mesh_capacity = 0;
+  uint32_t uploaded = 0;  // render thread: meshes already copied to the slab
+  char error[256] = {0};
+};
+
+class CellLoader {
+ public:
+  // Carves kStagingSlots arenas of `arena_bytes` with tables of `meshes`
+  // entries and starts the thread. Throws core::Error(NoMem) when the
+  // allocator fails (nothing is leaked).
+  CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes);
+  ~CellLoader();
+  CellLoader(const CellLoader&) = delete;
+  CellLoader& operator=(const CellLoader&) = delete;
+
+  // Queues `cell` into a free staging slot, tagged `target`. False when every
+  // slot is busy.
+  bool request(uint32_t cell, uint32_t target);
+  // A slot in state Ready or Failed, oldest request first, or nullptr.
+  Staging* finished();
+  // Gives a Ready/Failed slot back.
+  void release(Staging* s);
+  // True when `cell` is queued, decoding or waiting for upload.
+  bool pending(uint32_t cell) const;
+  // Drops queued (not yet started) requests.
+  void cancelQueued();
+
+  uint64_t loads() const { return loads_; }
+  uint64_t stagingUsed() const;  // arena bytes held by busy slots
+  uint64_t decodeHighWater() const { return decode_high_water_; }
+  uint64_t stagingHighWater() const { return staging_high_water_; }
+  uint64_t carvedBytes() const { return carved_; }
+
+ private:
+  void run();
+  void decode(Staging& s);
+
+  const stream::City& city_;
+  Allocator alloc_;
+  Staging slots_[kStagingSlots];
+  uint64_t order_[kStagingSlots] = {};  // request sequence, to finish oldest first
+  uint64_t seq_ = 0;
+  uint64_t carved_ = 0;
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  bool stop_ = false;
+  std::thread thread_;
+  geo::MeshData scratch_;  // loader thread only
+  std::atomic<uint64_t> loads_{0};
+  std::atomic<uint64_t> decode_high_water_{0}, staging_high_water_{0};
+};
+
+}  // namespace blvd::capi

@@ -1,0 +1,103 @@
+#include "capi/memory_plan.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "capi/cell_loader.h"
+#include "track/tracker.h"
+
+namespace blvd::capi {
+namespace {
+
+// Index bytes of a mesh of v vertices and t triangles, plus the 4-byte
+// alignment a slab placement may add.
+uint64_t indexBytes(uint64_t v, uint64_t t) { return t * 3 * (v < 0xFFFF ? 2 : 4) + 3; }
+
+void addMesh(CellNeed& n, uint64_t v, uint64_t t, int tw, int th) {
+  n.vertex_bytes += v * render::kVertexBytes;
+  n.index_bytes += indexBytes(v, t);
+  n.staging_bytes += render::preparedBytes(v, t * 3, tw, th);
+  ++n.meshes;
+  if (tw > 0) ++n.textures;
+}
+
+}  // namespace
+
+CellNeed cellNeed(const stream::City& city, uint32_t cell) {
+  CellNeed n;
+  const graph::StreetGraph& g = city.graph();
+  for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) {
+    const graph::BlockRecord& r = city.blocks()[*b];
+    if (r.blob == 0xffffffffu || r.triangle_count == 0) continue;
+    addMesh(n, uint64_t(r.triangle_count) * 3, r.triangle_count, 0, 0);
+  }
+  if (cell < city.cellTables().impostors.size()) {
+    const graph::CellImpostors& ci = city.cellTables().impostors[cell];
+    for (const auto* list : {&ci.layered, &ci.single})
+      for (const graph::ImpostorLayer& l : *list)
+        addMesh(n, uint64_t(l.triangles) * 3, l.triangles, l.texture_width, l.texture_height);
+  }
+  return n;
+}
+
+uint64_t stagingTableBytes(uint32_t meshes) { return uint64_t(meshes) * sizeof(StagedMesh); }
+
+MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
+  MemoryPlan p;
+  p.resident_cells = desc.max_resident_cells;
+  int tw = 0, th = 0;
+  for (const auto& ci : city.cellTables().impostors)
+    for (const auto* list : {&ci.layered, &ci.single})
+      for (const graph::ImpostorLayer& l : *list) {
+        tw = std::max<int>(tw, l.texture_width);
+        th = std::max<int>(th, l.texture_height);
+      }
+  uint64_t most = 0;
+  for (uint32_t c = 0; c < city.graph().cellCount(); ++c) {
+    const CellNeed n = cellNeed(city, c);
+    p.slab.vertex_bytes = std::max(p.slab.vertex_bytes, n.vertex_bytes);
+    p.slab.index_bytes = std::max(p.slab.index_bytes, n.index_bytes);
+    p.slab.meshes = std::max(p.slab.meshes, n.meshes);
+    p.slab.textures = std::max(p.slab.textures, n.textures);
+    p.staging_arena_bytes = std::max(p.staging_arena_bytes, n.staging_bytes);
+    const uint64_t total = n.vertex_bytes + n.index_bytes + n.staging_bytes;
+    if (total > most) most = total, p.largest_cell = c;
+  }
+  // A slab needs at least one of each so that an empty city still creates.
+  p.slab.vertex_bytes = std::max<uint64_t>(p.slab.vertex_bytes, render::kVertexBytes);
+  p.slab.index_bytes = std::max<uint64_t>(p.slab.index_bytes, 8);
+  p.slab.meshes = std::max(p.slab.meshes, 1u);
+  p.slab.texture_width = p.slab.textures ? tw : 0;
+  p.slab.texture_height = p.slab.textures ? th : 0;
+  p.staging_meshes = p.slab.meshes;
+  p.staging_bytes = kStagingSlots * (p.staging_arena_bytes + stagingTableBytes(p.staging_meshes));
+  p.table_bytes = city.tableBytes();
+  track::TrackerDesc td;
+  td.ring_capacity = desc.ring_capacity;
+  const track::Tracker probe(city.frame(), &city.graph(), td);
+  p.tracking_bytes = probe.bytes();
+  p.cpu_bytes = p.staging_bytes + p.table_bytes + p.tracking_bytes;
+  p.gpu_bytes = uint64_t(p.resident_cells) * render::slabGpuBytes(p.slab);
+  return p;
+}
+
+std::string budgetError(const blvd_runtime_desc& desc, const MemoryPlan& p) {
+  char buf[256];
+  const double mib = 1024.0 * 1024.0;
+  if (p.cpu_bytes > desc.memory_budget_bytes) {
+    std::snprintf(buf, sizeof buf,
+                  "package needs %.1f MiB for %u resident cells (staging %.1f, tables %.1f, tracking %.1f), "
+                  "memory budget is %.1f MiB",
+                  p.cpu_bytes / mib, p.resident_cells, p.staging_bytes / mib, p.table_bytes / mib,
+                  p.tracking_bytes / mib, desc.memory_budget_bytes / mib);
+    return buf;
+  }
+  if (p.gpu_bytes > desc.gpu_budget_bytes) {
+    std::snprintf(buf, sizeof buf, "package needs %.1f MiB of GPU memory for %u resident cells, GPU budget is %.1f MiB",
+                  p.gpu_bytes / mib, p.resident_cells, desc.gpu_budget_bytes / mib);
+    return buf;
+  }
+  return {};
+}
+
+}  // namespace blvd::capi

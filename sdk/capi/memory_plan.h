@@ -1,0 +1,56 @@
+// The runtime's memory plan (issue 4): every pool's size, worked out from the
+// package's tables and the descriptor before anything is allocated, so that
+// blvd_memory_required() and blvd_runtime_create() agree to the byte.
+//
+// Pools:
+//   GPU   one slab per resident-cell slot, sized for the package's largest
+//         cell in each dimension (vertex bytes, index bytes, meshes, impostor
+//         textures): the current cell's local blocks and its impostors.
+//   CPU   staging: kStagingSlots arenas the loader thread decodes a cell into
+//         (the render thread copies them to a slab), each for the largest cell;
+//         tables: the package's graph, cell and block tables the runtime holds;
+//         tracking: the tracker's ring, filter and matcher.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "blvd/blvd.h"
+#include "capi/cell_loader.h"
+#include "render/renderer.h"
+#include "stream/city.h"
+
+namespace blvd::capi {
+
+// What one cell needs resident. Block vertex counts come from the BLCK record
+// when the package has them, else the bound 3 × triangles.
+struct CellNeed {
+  uint64_t vertex_bytes = 0, index_bytes = 0;
+  uint64_t staging_bytes = 0;  // render::preparedBytes summed over the meshes
+  uint32_t meshes = 0, textures = 0;
+};
+CellNeed cellNeed(const stream::City& city, uint32_t cell);
+
+struct MemoryPlan {
+  uint32_t resident_cells = 0;
+  render::SlabDesc slab;           // one per resident cell
+  uint64_t staging_arena_bytes = 0;  // per staging slot
+  uint32_t staging_meshes = 0;       // per staging slot
+  uint64_t staging_bytes = 0;        // all staging slots with their mesh tables
+  uint64_t table_bytes = 0;          // the package tables held in memory
+  uint64_t tracking_bytes = 0;       // tracker rings, filter, matcher
+  uint64_t cpu_bytes = 0;            // staging + tables + tracking
+  uint64_t gpu_bytes = 0;            // slabs
+  uint32_t largest_cell = 0;         // the cell that needs the most bytes
+};
+
+// Bytes of one staging slot's table of prepared meshes.
+uint64_t stagingTableBytes(uint32_t meshes);
+
+// Plans for `desc` (defaults already applied) and `city`.
+MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city);
+
+// "package needs 38.2 MiB for 3 resident cells, budget is 16 MiB" when the
+// plan exceeds a budget of `desc`; empty when it fits.
+std::string budgetError(const blvd_runtime_desc& desc, const MemoryPlan& plan);
+
+}  // namespace blvd::capi

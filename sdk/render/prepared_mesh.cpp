@@ -1,0 +1,146 @@
+#include "render/prepared_mesh.h"
+
+#include <cmath>
+#include <cstring>
+
+#include <glm/glm.hpp>
+#include <stb_image.h>
+
+namespace blvd::render {
+namespace {
+
+struct Vertex {
+  float position[3];
+  float normal[3];
+  uint8_t color[4];
+  float uv[2];
+};
+static_assert(sizeof(Vertex) == kVertexBytes, "Vertex must be tightly packed");
+
+constexpr size_t kAlign = 16;
+size_t alignUp(size_t n) { return (n + kAlign - 1) & ~(kAlign - 1); }
+
+bool failWith(std::string& err, const char* what) {
+  err = what;
+  return false;
+}
+
+}  // namespace
+
+void* StagingArena::take(size_t bytes) {
+  const size_t at = alignUp(used);
+  if (at > capacity || capacity - at < bytes) return nullptr;
+  used = at + bytes;
+  return base + at;
+}
+
+size_t preparedBytes(uint64_t vertices, uint64_t indices, int w, int h) {
+  const uint64_t index_size = vertices < 0xFFFF ? 2 : 4;
+  return alignUp(vertices * kVertexBytes) + alignUp(indices * index_size) +
+         alignUp(uint64_t(w > 0 ? w : 0) * uint64_t(h > 0 ? h : 0) * 4) + kAlign;
+}
+
+bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err) {
+  out = PreparedMesh{};
+  const size_t nv = mesh.vertexCount();
+  if (mesh.positions.size() % 3 != 0 || mesh.indices.size() % 3 != 0)
+    return failWith(err, "mesh positions or indices are not a multiple of 3");
+  if (mesh.empty() || nv == 0) return failWith(err, "mesh has no triangles");
+  if (nv > 0xFFFFFFFFull || mesh.indices.size() > 0x7FFFFFFFull)
+    return failWith(err, "mesh too large for 32-bit indices");
+  if (!mesh.normals.empty() && mesh.normals.size() != nv * 3)
+    return failWith(err, "mesh normals and positions disagree in count");
+  if (!mesh.colors.empty() && mesh.colors.size() != nv * 4)
+    return failWith(err, "mesh colors and positions disagree in count");
+  if (!mesh.texcoords.empty() && mesh.texcoords.size() != nv * 2)
+    return failWith(err, "mesh texcoords and positions disagree in count");
+  for (uint32_t i : mesh.indices)
+    if (i >= nv) return failWith(err, "mesh index out of range");
+
+  // Box in glTF axes; vertices are stored relative to its centre so floats
+  // keep their precision anywhere in the city.
+  glm::dvec3 lo(mesh.positions[0], mesh.positions[1], mesh.positions[2]), hi = lo;
+  for (size_t v = 1; v < nv; ++v) {
+    const glm::dvec3 p(mesh.positions[v * 3], mesh.positions[v * 3 + 1], mesh.positions[v * 3 + 2]);
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const glm::dvec3 center = (lo + hi) * 0.5, half = (hi - lo) * 0.5;
+
+  auto* vertices = static_cast<Vertex*>(arena.take(nv * sizeof(Vertex)));
+  if (!vertices) return failWith(err, "staging arena too small for the mesh's vertices");
+  for (size_t v = 0; v < nv; ++v) {
+    Vertex& o = vertices[v];
+    for (int k = 0; k < 3; ++k) {
+      o.position[k] = static_cast<float>(mesh.positions[v * 3 + k] - center[k]);
+      o.normal[k] = mesh.normals.empty() ? 0.0f : mesh.normals[v * 3 + k];
+    }
+    if (mesh.colors.empty()) {
+      std::memset(o.color, 200, 3);  // light grey
+      o.color[3] = 255;
+    } else {
+      std::memcpy(o.color, &mesh.colors[v * 4], 4);
+    }
+    o.uv[0] = mesh.texcoords.empty() ? 0.0f : mesh.texcoords[v * 2];
+    o.uv[1] = mesh.texcoords.empty() ? 0.0f : mesh.texcoords[v * 2 + 1];
+  }
+  if (mesh.normals.empty()) {
+    // Area-weighted vertex normals, accumulated in place: the cross product's
+    // length is twice the triangle's area, so summing raw crosses weights.
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+      const uint32_t ia = mesh.indices[t], ib = mesh.indices[t + 1], ic = mesh.indices[t + 2];
+      const glm::vec3 a(mesh.positions[ia * 3], mesh.positions[ia * 3 + 1], mesh.positions[ia * 3 + 2]);
+      const glm::vec3 b(mesh.positions[ib * 3], mesh.positions[ib * 3 + 1], mesh.positions[ib * 3 + 2]);
+      const glm::vec3 c(mesh.positions[ic * 3], mesh.positions[ic * 3 + 1], mesh.positions[ic * 3 + 2]);
+      const glm::vec3 n = glm::cross(b - a, c - a);
+      for (uint32_t i : {ia, ib, ic})
+        for (int k = 0; k < 3; ++k) vertices[i].normal[k] += n[k];
+    }
+    for (size_t v = 0; v < nv; ++v) {
+      glm::vec3 n(vertices[v].normal[0], vertices[v].normal[1], vertices[v].normal[2]);
+      const float len = glm::length(n);
+      n = len > 0.0f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
+      for (int k = 0; k < 3; ++k) vertices[v].normal[k] = n[k];
+    }
+  }
+
+  // 16-bit indices halve index bandwidth for typical blocks. The bound is
+  // 65535 exclusive: 0xFFFF is the primitive-restart index a host may enable.
+  const bool small = nv < 0xFFFF;
+  void* indices = arena.take(mesh.indices.size() * (small ? 2 : 4));
+  if (!indices) return failWith(err, "staging arena too small for the mesh's indices");
+  if (small) {
+    auto* i16 = static_cast<uint16_t*>(indices);
+    for (size_t i = 0; i < mesh.indices.size(); ++i) i16[i] = static_cast<uint16_t>(mesh.indices[i]);
+  } else {
+    std::memcpy(indices, mesh.indices.data(), mesh.indices.size() * 4);
+  }
+
+  if (!mesh.image.empty() && !mesh.texcoords.empty()) {
+    int tw = 0, th = 0, tc = 0;
+    stbi_uc* texels = nullptr;
+    if (mesh.image.size() > 0x7fffffff ||
+        !(texels = stbi_load_from_memory(mesh.image.data(), static_cast<int>(mesh.image.size()), &tw, &th, &tc, 4)))
+      return failWith(err, "mesh image cannot be decoded");
+    void* rgba = arena.take(size_t(tw) * size_t(th) * 4);
+    if (rgba) std::memcpy(rgba, texels, size_t(tw) * size_t(th) * 4);
+    stbi_image_free(texels);
+    if (!rgba) return failWith(err, "staging arena too small for the mesh's texture");
+    out.rgba = static_cast<const uint8_t*>(rgba);
+    out.texture_width = tw;
+    out.texture_height = th;
+  }
+
+  out.vertices = reinterpret_cast<const uint8_t*>(vertices);
+  out.vertex_count = static_cast<uint32_t>(nv);
+  out.indices = indices;
+  out.index_count = static_cast<uint32_t>(mesh.indices.size());
+  out.index16 = small;
+  for (int k = 0; k < 3; ++k) {
+    out.center[k] = center[k];
+    out.half[k] = half[k];
+  }
+  return true;
+}
+
+}  // namespace blvd::render

@@ -1,0 +1,55 @@
+// A mesh converted to the renderer's GPU vertex layout on any thread, without
+// GL, into memory the caller owns (issue 4: the loader thread decodes and
+// prepares; the render thread only copies bytes into buffers made at create).
+//
+// Memory: prepareMesh() writes only into the StagingArena it is given, a bump
+// allocator over a fixed block; decoding an embedded JPEG/PNG goes through
+// stb, which allocates and frees its own scratch on the calling thread.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "geo/mesh.h"
+
+namespace blvd::render {
+
+// Interleaved vertex: position (3 × f32, relative to the mesh's box centre),
+// normal (3 × f32), colour (4 × u8, sRGB), uv (2 × f32).
+inline constexpr size_t kVertexBytes = 36;
+
+struct StagingArena {
+  uint8_t* base = nullptr;
+  size_t capacity = 0;
+  size_t used = 0;
+  // `bytes` aligned to 16, or nullptr when the arena cannot hold them.
+  void* take(size_t bytes);
+  void reset() { used = 0; }
+};
+
+struct PreparedMesh {
+  const uint8_t* vertices = nullptr;  // vertex_count × kVertexBytes
+  uint32_t vertex_count = 0;
+  const void* indices = nullptr;      // uint16 when index16, else uint32
+  uint32_t index_count = 0;
+  bool index16 = true;
+  const uint8_t* rgba = nullptr;      // texture_width × texture_height × 4, top row first; or null
+  int texture_width = 0, texture_height = 0;
+  double center[3] = {0, 0, 0};       // box centre and half extents, glTF axes
+  double half[3] = {0, 0, 0};
+
+  uint64_t vertexBytes() const { return uint64_t(vertex_count) * kVertexBytes; }
+  uint64_t indexBytes() const { return uint64_t(index_count) * (index16 ? 2 : 4); }
+  uint64_t textureBytes() const { return uint64_t(texture_width) * uint64_t(texture_height) * 4; }
+};
+
+// Arena bytes prepareMesh() needs at most for a mesh of `vertices` vertices,
+// `indices` indices and a texture of w × h (0 × 0 without one).
+size_t preparedBytes(uint64_t vertices, uint64_t indices, int texture_width, int texture_height);
+
+// Validates `mesh` (counts agree, indices in range, image decodes), computes
+// missing normals (area-weighted) and writes the GPU layout into `arena`.
+// False with `err` set when the mesh is malformed or the arena is too small.
+bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err);
+
+}  // namespace blvd::render
