@@ -244,6 +244,30 @@ BLVD_API blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mod
  * framebuffer (or the host's, with BLVD_CONTEXT_SHARED). Render thread only. */
 BLVD_API blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats /* may be NULL */);
 
+/* One view of a multi-view frame: a rectangle of the frame seen from the pose
+ * turned, tilted and shifted (a rear-view mirror, a stereo eye). */
+#define BLVD_VIEW_MIRROR 0x01u /* left-right flipped, as a mirror shows it */
+
+typedef struct blvd_view {
+  uint32_t struct_size;     /* sizeof(blvd_view) */
+  uint32_t x, y;            /* top-left corner in the frame, pixels (y down) */
+  uint32_t width, height;   /* 0 means the frame's */
+  float yaw_offset_deg;     /* added to the pose's heading (180: looking back) */
+  float pitch_offset_deg;   /* added to the pose's pitch */
+  float eye_offset_right_m; /* eye moved to the right of the pose (stereo: -+ half the separation) */
+  float fov_y_deg;          /* 0 means the runtime's */
+  uint32_t flags;           /* BLVD_VIEW_* */
+} blvd_view;
+
+/* Renders `n` views (1..16) of the current pose in one frame, in order (later
+ * views draw over earlier ones where they overlap). The views share one draw
+ * list, the residency step and the LOD choice (Yilmaz et al. §3.4: one draw
+ * list for both eyes); each view clips to its own frustum. `stats` sums the
+ * views. Errors: BLVD_ERR_INVALID_ARG for a view outside the frame. Render
+ * thread only. */
+BLVD_API blvd_status blvd_render_views(blvd_runtime* rt, const blvd_view* views, uint32_t n,
+                                       blvd_frame_stats* stats /* may be NULL */);
+
 /* Copies the last frame as tightly packed RGBA8, top row first, into `rgba`
  * (at least width*height*4 bytes). Errors: BLVD_ERR_INVALID_ARG if too small. */
 BLVD_API blvd_status blvd_read_pixels(blvd_runtime* rt, void* rgba, size_t rgba_bytes);

@@ -195,6 +195,12 @@ blvd_status blvd_runtime_stats(blvd_runtime* rt, blvd_stats* stats) {
   return guarded(rt, [&] { rt->impl->stats(stats); });
 }
 
+blvd_status blvd_render_views(blvd_runtime* rt, const blvd_view* views, uint32_t n, blvd_frame_stats* stats) {
+  if (!rt) return misuse(nullptr, "blvd_render_views: rt is NULL");
+  if (!views || n == 0 || n > 16) return misuse(rt, "blvd_render_views: need 1..16 views");
+  return guarded(rt, [&] { rt->impl->render(stats, views, n); });
+}
+
 blvd_status blvd_wait_resident(blvd_runtime* rt, double timeout_ms) {
   if (!rt) return misuse(nullptr, "blvd_wait_resident: rt is NULL");
   return guarded(rt, [&] { rt->impl->waitResident(timeout_ms); });

@@ -389,7 +389,7 @@ void Runtime::waitResident(double timeout_ms) {
   }
 }
 
-void Runtime::render(blvd_frame_stats* stats) {
+void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n) {
   if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
   ++frame_;
   double arc_m, speed;
@@ -398,8 +398,43 @@ void Runtime::render(blvd_frame_stats* stats) {
   else stream(cell, arc_m, speed);
   buildDrawList(cell);
   render::FrameStats fs;
-  if (!renderer_->render(cam_, draw_.data(), draw_.size(), &fs))
-    throw Error(Status::Internal, "render failed: " + renderer_->lastError());
+  if (!views) {
+    if (!renderer_->render(cam_, draw_.data(), draw_.size(), &fs))
+      throw Error(Status::Internal, "render failed: " + renderer_->lastError());
+  } else {
+    // One draw list for every view (Yilmaz et al. §3.4); each view only
+    // changes the camera.
+    const uint32_t W = desc_.width, H = desc_.height;
+    for (uint32_t i = 0; i < n; ++i) {
+      const blvd_view v = sized(views[i]);
+      const uint32_t w = v.width ? v.width : W, h = v.height ? v.height : H;
+      if (v.x >= W || v.y >= H || w > W - v.x || h > H - v.y)
+        throw Error(Status::InvalidArg, "view " + std::to_string(i) + " lies outside the " + std::to_string(W) + "x" +
+                                            std::to_string(H) + " frame");
+      if (!std::isfinite(v.yaw_offset_deg) || !std::isfinite(v.pitch_offset_deg) ||
+          !std::isfinite(v.eye_offset_right_m) || !(v.fov_y_deg == 0 || (v.fov_y_deg > 1 && v.fov_y_deg < 179)))
+        throw Error(Status::InvalidArg, "view " + std::to_string(i) + " has an angle or offset out of range");
+      render::Camera c = cam_;
+      c.width = int(w);
+      c.height = int(h);
+      c.viewport_x = int(v.x);
+      c.viewport_y = int(H - v.y - h);  // GL counts rows from the bottom
+      c.heading_deg = std::fmod(cam_.heading_deg + v.yaw_offset_deg + 720.0, 360.0);
+      c.pitch_deg = std::clamp(cam_.pitch_deg + v.pitch_offset_deg, -89.0, 89.0);
+      if (v.fov_y_deg > 0) c.fov_y_deg = v.fov_y_deg;
+      const double hr = cam_.heading_deg * 3.14159265358979323846 / 180.0;
+      c.eye_enu.x += std::cos(hr) * v.eye_offset_right_m;  // right of the heading
+      c.eye_enu.y -= std::sin(hr) * v.eye_offset_right_m;
+      c.mirror = (v.flags & BLVD_VIEW_MIRROR) != 0;
+      render::FrameStats one;
+      if (!renderer_->render(c, draw_.data(), draw_.size(), &one))
+        throw Error(Status::Internal, "render failed: " + renderer_->lastError());
+      fs.frame_ms += one.frame_ms;
+      fs.triangles += one.triangles;
+      fs.draw_calls += one.draw_calls;
+    }
+    renderer_->setReadSize(int(W), int(H));
+  }
   rendered_ = true;
   ++stats_.frames;
   stats_.frame_ms = fs.frame_ms;

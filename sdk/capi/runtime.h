@@ -28,7 +28,8 @@ class Runtime {
 
   void setPoseLocal(double x, double y, double heading_deg, double pitch_deg);
   void setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg);
-  void render(blvd_frame_stats* stats);
+  // One frame of the current pose: the whole frame, or `n` views of it.
+  void render(blvd_frame_stats* stats, const blvd_view* views = nullptr, uint32_t n = 0);
   void readPixels(void* rgba, size_t bytes);
   void info(blvd_runtime_info* out) const;
   void setMode(blvd_render_mode mode, float radius_m);

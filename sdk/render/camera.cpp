@@ -36,6 +36,11 @@ glm::dmat4 viewRotation(const Camera& cam) {
 }
 
 glm::dmat4 projection(const Camera& cam) {
+  if (cam.mirror) {
+    Camera plain = cam;
+    plain.mirror = false;
+    return glm::scale(glm::dmat4(1.0), glm::dvec3(-1.0, 1.0, 1.0)) * projection(plain);
+  }
   const double aspect = static_cast<double>(cam.width) / static_cast<double>(cam.height);
   return glm::perspective(glm::radians(cam.fov_y_deg), aspect, cam.near_m, cam.far_m);
 }

@@ -17,6 +17,9 @@ struct Camera {
   double far_m = 3000.0;
   int width = 800;  // viewport in pixels; also sets the aspect ratio
   int height = 480;
+  int viewport_x = 0;  // viewport's lower-left corner in the framebuffer (GL convention)
+  int viewport_y = 0;
+  bool mirror = false;  // left-right flipped, as a rear-view mirror shows the road
 };
 
 // nullptr when usable, else static text naming the bad field.

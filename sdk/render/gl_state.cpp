@@ -27,6 +27,10 @@ void GlStateSnapshot::capture(const GlApi& gl) {
   gl.GetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &read_framebuffer);
   gl.GetIntegerv(GL_RENDERBUFFER_BINDING, &renderbuffer);
   gl.GetIntegerv(GL_VIEWPORT, viewport);
+  gl.GetIntegerv(GL_SCISSOR_BOX, scissor_box);
+  gl.GetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &pixel_unpack_buffer);
+  gl.GetIntegerv(GL_UNPACK_ALIGNMENT, &unpack_alignment);
+  gl.GetIntegerv(GL_UNPACK_ROW_LENGTH, &unpack_row_length);
   gl.GetIntegerv(GL_ACTIVE_TEXTURE, &active_texture);
   // Impostors sample unit 0: remember what the host had bound there.
   gl.ActiveTexture(GL_TEXTURE0);
@@ -62,6 +66,10 @@ void GlStateSnapshot::restore(const GlApi& gl) const {
   gl.BindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(read_framebuffer));
   gl.BindRenderbuffer(GL_RENDERBUFFER, static_cast<GLuint>(renderbuffer));
   gl.Viewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+  gl.Scissor(scissor_box[0], scissor_box[1], scissor_box[2], scissor_box[3]);
+  gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, static_cast<GLuint>(pixel_unpack_buffer));
+  gl.PixelStorei(GL_UNPACK_ALIGNMENT, unpack_alignment);
+  gl.PixelStorei(GL_UNPACK_ROW_LENGTH, unpack_row_length);
   gl.ActiveTexture(GL_TEXTURE0);
   gl.BindTexture(GL_TEXTURE_2D, static_cast<GLuint>(texture0_2d));
   gl.ActiveTexture(static_cast<GLenum>(active_texture));

@@ -3,11 +3,12 @@
 // bindings, viewport and fixed-function switches as it left them.
 //
 // Covered: program, VAO, array/element/pixel-pack buffers, draw/read
-// framebuffers, renderbuffer, viewport, active texture, depth test/func/mask,
+// framebuffers, renderbuffer, viewport, scissor box, pixel-unpack buffer and
+// unpack alignment/row length, active texture, depth test/func/mask,
 // cull face/mode, front face, blend, polygon offset fill, scissor test,
 // stencil test, rasterizer discard, colour mask, pack alignment/row
 // length/skips. Not covered (never touched): depth range, clear values,
-// scissor box, blend equation, textures and samplers, uniform buffers.
+// blend equation, textures and samplers, uniform buffers.
 #pragma once
 #include "render/gl_api.h"
 
@@ -16,7 +17,8 @@ namespace blvd::render {
 struct GlStateSnapshot {
   GLint program, vertex_array, array_buffer, element_buffer, pixel_pack_buffer;
   GLint draw_framebuffer, read_framebuffer, renderbuffer;
-  GLint viewport[4];
+  GLint viewport[4], scissor_box[4];
+  GLint pixel_unpack_buffer, unpack_alignment, unpack_row_length;
   GLint active_texture, texture0_2d, depth_func, cull_face_mode, front_face;
   GLfloat clear_color[4];
   GLfloat clear_depth;

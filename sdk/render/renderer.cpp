@@ -465,7 +465,12 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id) {
     gl.BindVertexArray(0);
     if (p.rgba) {
       // Impostor texture, with mipmaps so a far impostor does not shimmer.
+      // A host's bound unpack buffer or row length would redirect the copy.
       gl.ActiveTexture(GL_TEXTURE0);
+      if (shared_) {
+        gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+        gl.PixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+      }
       gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
       if (slab) {
         s.texture = slab->textures[slab->textures_used++];
@@ -623,7 +628,8 @@ void Renderer::release(MeshHandle h) {
 bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, FrameStats* stats,
                       const RenderOptions& opt) {
   if (const char* bad = validateCamera(cam)) return fail(bad);
-  if (!shared_ && (cam.width > fb_w_ || cam.height > fb_h_)) {
+  if (cam.viewport_x < 0 || cam.viewport_y < 0) return fail("camera viewport starts outside the framebuffer");
+  if (!shared_ && (cam.viewport_x + cam.width > fb_w_ || cam.viewport_y + cam.height > fb_h_)) {
     return fail("camera viewport is larger than the renderer's framebuffer");
   }
   if (n > 0 && !list) return fail("draw list is null");
@@ -650,8 +656,10 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
     } else {
       gl.BindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     }
-    gl.Viewport(0, 0, cam.width, cam.height);
-    gl.Disable(GL_SCISSOR_TEST);
+    gl.Viewport(cam.viewport_x, cam.viewport_y, cam.width, cam.height);
+    // The clear below must stay inside this view (a frame may hold several).
+    gl.Enable(GL_SCISSOR_TEST);
+    gl.Scissor(cam.viewport_x, cam.viewport_y, cam.width, cam.height);
     gl.Disable(GL_STENCIL_TEST);
     gl.Disable(GL_BLEND);
     gl.Disable(GL_POLYGON_OFFSET_FILL);
@@ -721,7 +729,7 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
     } else {
       gl.Enable(GL_CULL_FACE);
       gl.CullFace(GL_BACK);
-      gl.FrontFace(GL_CCW);
+      gl.FrontFace(cam.mirror ? GL_CW : GL_CCW);  // a mirrored projection flips the winding
     }
     gl.DepthFunc(GL_LESS);
     for (int textured = 0; textured < 2; ++textured) {
@@ -795,8 +803,8 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
   gl.Finish();
   fs.frame_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  last_w_ = cam.width;
-  last_h_ = cam.height;
+  last_w_ = cam.viewport_x + cam.width;
+  last_h_ = cam.viewport_y + cam.height;
   if (stats) *stats = fs;
   // Only on a context blvd owns: on a host context this would swallow the
   // host's own pending errors.

@@ -149,6 +149,8 @@ class Renderer {
 
   // Copies the last frame (lastWidth() x lastHeight()) as RGBA8, top row first.
   bool readPixels(uint8_t* rgba_top_row_first);
+  // A frame of several views reads back as one: the area they share.
+  void setReadSize(int w, int h) { last_w_ = w, last_h_ = h; }
   int lastWidth() const { return last_w_; }
   int lastHeight() const { return last_h_; }
 

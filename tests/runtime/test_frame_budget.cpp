@@ -1,0 +1,118 @@
+// The budget controller against a simulated cost model, and the ACH share
+// with leftovers passed on (issue 4, Marvie seed 004).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "stream/frame_budget.h"
+
+namespace blvd::stream {
+namespace {
+
+// A machine whose frame costs fixed + per_tri × triangles, with ±5 % noise.
+struct Machine {
+  double fixed_ms, per_tri_ms;
+  std::mt19937 rng{7};
+  double frame(uint64_t tris) {
+    std::uniform_real_distribution<double> noise(0.95, 1.05);
+    return (fixed_ms + per_tri_ms * double(tris)) * noise(rng);
+  }
+};
+
+double percentile(std::vector<double> v, double p) {
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, size_t(p / 100.0 * double(v.size())))];
+}
+
+TEST(PolygonBudget, ConvergesOnTheTargetOfASimulatedMachine) {
+  Machine m{3.0, 2e-5};  // 4 ms target leaves 1 ms: 50k triangles
+  PolygonBudget b(4.0, 1000, 400000);
+  uint64_t p = b.budget();
+  std::vector<double> settled;
+  for (int f = 0; f < 200; ++f) {
+    // The scene offers 400k triangles; the frame draws what the budget allows.
+    const double ms = m.frame(p);
+    if (f >= 50) settled.push_back(ms);
+    p = b.next(ms, p);
+  }
+  EXPECT_NEAR(percentile(settled, 50), 4.0, 0.4);   // ±10 %
+  EXPECT_LE(percentile(settled, 95), 1.25 * 4.0);
+  EXPECT_NEAR(double(p), 50000.0, 10000.0);
+  // Settled, the history has little spread in triangles, so the fit pins the
+  // cost at the operating point rather than the intercept.
+  EXPECT_NEAR(b.fixedMs() + b.msPerTriangle() * double(p), 4.0, 0.4);
+  EXPECT_FALSE(b.unreachable());
+}
+
+TEST(PolygonBudget, FollowsAMachineThatSlowsDown) {
+  Machine m{1.0, 1e-5};
+  PolygonBudget b(4.0, 1000, 1000000);
+  uint64_t p = b.budget();
+  for (int f = 0; f < 100; ++f) p = b.next(m.frame(p), p);
+  EXPECT_NEAR(double(p), 300000.0, 45000.0);
+  m.per_tri_ms = 3e-5;  // e.g. a thermal throttle
+  std::vector<double> after;
+  for (int f = 0; f < 100; ++f) {
+    const double ms = m.frame(p);
+    if (f >= 40) after.push_back(ms);
+    p = b.next(ms, p);
+  }
+  EXPECT_NEAR(percentile(after, 50), 4.0, 0.4);
+  EXPECT_NEAR(double(p), 100000.0, 20000.0);
+}
+
+TEST(PolygonBudget, SaysWhenTheFixedCostAloneMissesTheTarget) {
+  Machine m{5.0, 1e-5};
+  PolygonBudget b(4.0, 1000, 400000);
+  uint64_t p = b.budget();
+  for (int f = 0; f < 100; ++f) p = b.next(m.frame(p), p);
+  EXPECT_TRUE(b.unreachable());
+  EXPECT_EQ(p, 1000u);  // it gives all it can
+}
+
+TEST(PolygonBudget, IgnoresBadMeasurements) {
+  PolygonBudget b(4.0, 10, 100);
+  EXPECT_EQ(b.next(std::nan(""), 100), 100u);
+  EXPECT_EQ(b.next(-1, 100), 100u);
+}
+
+TEST(ShareBudget, CoverageSharesAndLeftoversPassOn) {
+  // Three objects; levels 1000/500/250/100 each.
+  const uint32_t tris[4] = {1000, 500, 250, 100};
+  const LodChain chains[3] = {{tris, 4}, {tris, 4}, {tris, 4}};
+  const float ach[3] = {0.1f, 0.6f, 0.3f};  // renormalised: same
+  uint32_t order[3];
+  uint8_t level[3];
+  // P = 1000: object 1 gets 600 -> nearest 500 (100 left); object 2 gets
+  // 300 + 100 = 400 -> nearest 500 (nothing left); object 0 gets 100 -> 100.
+  const uint64_t total = shareBudget(1000, ach, chains, 3, order, level);
+  EXPECT_EQ(level[1], 1);
+  EXPECT_EQ(level[2], 1);
+  EXPECT_EQ(level[0], 3);
+  EXPECT_EQ(total, 1100u);
+  EXPECT_EQ(order[0], 1u);
+  // A large budget takes every full level; a tiny one the coarsest.
+  shareBudget(10000, ach, chains, 3, order, level);
+  EXPECT_EQ(level[0] + level[1] + level[2], 0);
+  shareBudget(10, ach, chains, 3, order, level);
+  EXPECT_EQ(level[0] + level[1] + level[2], 9);
+}
+
+TEST(ShareBudget, ZeroCoverageSharesEqually) {
+  const uint32_t tris[2] = {200, 50};
+  const LodChain chains[2] = {{tris, 2}, {tris, 2}};
+  const float ach[2] = {0, 0};
+  uint32_t order[2];
+  uint8_t level[2];
+  shareBudget(400, ach, chains, 2, order, level);
+  EXPECT_EQ(level[0], 0);
+  EXPECT_EQ(level[1], 0);
+  shareBudget(200, ach, chains, 2, order, level);  // 100 each: nearest is 50
+  EXPECT_EQ(level[0], 1);
+}
+
+}  // namespace
+}  // namespace blvd::stream
