@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "blvd/blvd.h"
+#include "cli/bench_util.h"
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "cli/route.h"
@@ -41,20 +42,6 @@ const Mode kModes[] = {{"full", BLVD_MODE_FULL, 0},       {"local", BLVD_MODE_LO
                        {"radius100", BLVD_MODE_RADIUS, 100}, {"radius250", BLVD_MODE_RADIUS, 250},
                        {"single", BLVD_MODE_SINGLE, 0},   {"blvd", BLVD_MODE_BLVD, 0}};
 constexpr size_t kNumModes = sizeof kModes / sizeof kModes[0];
-
-double pct(std::vector<double> v, double p) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const double idx = p / 100.0 * double(v.size() - 1);
-  const size_t i = static_cast<size_t>(idx);
-  const double f = idx - double(i);
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
-
-void check(blvd_status st, blvd_runtime* rt, const char* what) {
-  if (st != BLVD_OK) throw core::Error(static_cast<core::Status>(st), std::string(what) + ": " + blvd_last_error(rt));
-}
 
 int runRoute(const BenchOpts& o) {
   int w = 0, h = 0;
@@ -247,6 +234,7 @@ void addBench(CLI::App& app, Runner& run) {
   r->add_option("--html", o->html_dir, "write an HTML page with frames and SVG plots into this folder");
   r->add_option("--pictures", o->pictures, "poses shown in the HTML page")->capture_default_str();
   r->callback([o, &run] { run = [o] { return runRoute(*o); }; });
+  addBenchMemory(*bench, run);
 }
 
 }  // namespace blvd::cli

@@ -16,7 +16,7 @@
 
 #include "blvd/blvd.h"
 #include "drive.h"
-#include "fault/malloc_hook.h"
+#include "cli/malloc_probe.h"
 #include "stream/city.h"
 
 namespace {
@@ -205,7 +205,7 @@ long rssKiB() {
 }
 
 TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
-  if (!blvd_test::ThreadMallocCounter::available()) GTEST_SKIP() << "malloc belongs to AddressSanitizer here";
+  if (!blvd::probe::ThreadMallocCounter::available()) GTEST_SKIP() << "malloc belongs to AddressSanitizer here";
   const blvd_test::Drive dr = drive(60, 6.0);
   ASSERT_GE(dr.cells.size(), 20u);
   blvd_runtime_desc d = baseDesc();
@@ -222,7 +222,7 @@ TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
   const uint64_t loads_before = statsOf(r.rt).loads;
   long allocations = 0, driver = 0;
   {
-    blvd_test::ThreadMallocCounter counter;
+    blvd::probe::ThreadMallocCounter counter;
     for (size_t i = warm; i < dr.poses.size(); ++i) frame(dr.poses[i]);
     allocations = counter.count();
     driver = counter.driverCount();
@@ -238,7 +238,7 @@ TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
   EXPECT_EQ(allocations, 0) << "heap allocations on the render thread over " << dr.poses.size() - warm << " frames";
   // The counter itself counts.
   {
-    blvd_test::ThreadMallocCounter counter;
+    blvd::probe::ThreadMallocCounter counter;
     void* volatile p = std::malloc(64);
     std::free(p);
     EXPECT_EQ(counter.count(), 1);

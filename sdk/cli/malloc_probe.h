@@ -1,8 +1,10 @@
+// Used by the runtime tests and `blvd bench memory`.
+//
 // Counts every malloc-family call made on the calling thread while a
 // ThreadMallocCounter is alive on it: blvd's own and the GL driver's (issue 4:
 // "zero heap allocations per frame on the render thread"). The counting
 // malloc/calloc/realloc/memalign/posix_memalign/aligned_alloc replace glibc's
-// in the test executable (malloc_hook.cpp) and forward to glibc's __libc_*
+// in the executable that links it (malloc_probe.cpp) and forward to glibc's __libc_*
 // functions, so every shared library's calls go through them. Not usable
 // under AddressSanitizer, which owns malloc: available() is false there.
 //
@@ -13,7 +15,7 @@
 // mallocs and frees itself; blvd cannot change that and does not claim to.
 #pragma once
 
-namespace blvd_test {
+namespace blvd::probe {
 
 class ThreadMallocCounter {
  public:
@@ -26,4 +28,4 @@ class ThreadMallocCounter {
   static bool available();
 };
 
-}  // namespace blvd_test
+}  // namespace blvd::probe

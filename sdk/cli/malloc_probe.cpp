@@ -1,4 +1,4 @@
-#include "malloc_hook.h"
+#include "cli/malloc_probe.h"
 
 #include <cerrno>
 #include <cstddef>
@@ -83,7 +83,7 @@ int posix_memalign(void** out, size_t a, size_t n) {
 }
 #endif
 
-namespace blvd_test {
+namespace blvd::probe {
 
 ThreadMallocCounter::ThreadMallocCounter() {
   // The first backtrace() loads libgcc_s, which allocates: do it uncounted.
@@ -97,4 +97,4 @@ long ThreadMallocCounter::count() const { return t_count; }
 long ThreadMallocCounter::driverCount() const { return t_driver; }
 bool ThreadMallocCounter::available() { return BLVD_HOOK_MALLOC != 0; }
 
-}  // namespace blvd_test
+}  // namespace blvd::probe

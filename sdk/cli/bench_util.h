@@ -1,0 +1,30 @@
+// Helpers shared by the `blvd bench` subcommands: percentiles, C API status
+// checks and a drive of a runtime along a route.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "blvd/blvd.h"
+#include "core/status.h"
+
+namespace blvd::cli {
+
+// Linear-interpolated percentile p (0..100) of the finite values; NaN if none.
+inline double pct(std::vector<double> v, double p) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const double idx = p / 100.0 * double(v.size() - 1);
+  const size_t i = static_cast<size_t>(idx);
+  const double f = idx - double(i);
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+// Throws core::Error with blvd_last_error's text when st is not BLVD_OK.
+inline void check(blvd_status st, blvd_runtime* rt, const char* what) {
+  if (st != BLVD_OK) throw core::Error(static_cast<core::Status>(st), std::string(what) + ": " + blvd_last_error(rt));
+}
+
+}  // namespace blvd::cli
