@@ -8,7 +8,9 @@
 
 #include "bake/block_mesh.h"
 #include "bake/progress.h"
+#include "bake/pool_sizing.h"
 #include "bake/street_map.h"
+#include "bake/tile.h"
 #include "bake/triangulate.h"
 #include "core/log.h"
 #include "graph/block_table.h"
@@ -20,6 +22,7 @@ namespace blvd::bake {
 
 BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, const BakeOptions& opt) {
   const auto t0 = std::chrono::steady_clock::now();
+  checkLodOptions(opt.lod);
   BakeSummary sum;
   Progress progress(opt.quiet);
 
@@ -46,13 +49,11 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
     progress.update(double(i), double(city.buildings.size()));
   }
 
-  progress.stage("block geometry + GLB");
+  progress.stage("block geometry + LOD chain + GLB");
   std::vector<std::vector<uint32_t>> face_halfedges(g.faces.size());
   for (uint32_t h = 0; h < g.halfedges.size(); ++h) face_halfedges[g.halfedges[h].face].push_back(h);
   package::PackageWriter writer;
   std::vector<graph::BlockRecord> blocks(g.faces.size());
-  uint32_t max_blob = 0;
-  float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
   std::vector<geo::MeshData> block_meshes(g.faces.size());  // kept for the impostor captures
   package::GlbOptions glb_opt;
   glb_opt.draco = opt.draco;
@@ -73,21 +74,9 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
       }
     }
     sum.buildings += rec.building_count;
-    rec.triangle_count = static_cast<uint32_t>(mesh.triangleCount());
-    sum.triangles += rec.triangle_count;
     if (!mesh.empty()) {
-      for (int k = 0; k < 3; ++k) {
-        rec.bbox_min[k] = std::numeric_limits<float>::max();
-        rec.bbox_max[k] = -std::numeric_limits<float>::max();
-      }
-      for (size_t v = 0; v < mesh.positions.size(); v += 3)
-        for (int k = 0; k < 3; ++k) {
-          rec.bbox_min[k] = std::min(rec.bbox_min[k], mesh.positions[v + k]);
-          rec.bbox_max[k] = std::max(rec.bbox_max[k], mesh.positions[v + k]);
-        }
-      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], rec.bbox_min[k]), hi[k] = std::max(hi[k], rec.bbox_max[k]);
-      std::vector<uint8_t> glb = package::encodeGlb(mesh, glb_opt);
-      max_blob = std::max<uint32_t>(max_blob, static_cast<uint32_t>(glb.size()));
+      std::vector<uint8_t> glb = encodeBlock(mesh, opt.lod, glb_opt, rec, sum.lod);
+      sum.triangles += rec.triangle_count;
       rec.blob = writer.addBlob(std::move(glb));
     }
     progress.update(double(f), double(g.faces.size()));
@@ -96,10 +85,12 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
     BLVD_LOG_WARN("%zu buildings skipped (footprint unusable; see --verbose)", sum.skipped_buildings);
 
   graph::CellTables tables;
+  // Chosen on the city before any tiling, so the same cells in a 1x and a tiled package.
+  const std::vector<uint32_t> route = opt.select_cells ? opt.select_cells(g) : std::vector<uint32_t>{};
   if (opt.impostor.mode != ImpostorMode::None) {
     std::string current;
     ImpostorOptions iopt = opt.impostor;
-    if (opt.select_cells) iopt.only_cells = opt.select_cells(g);
+    iopt.only_cells = route;
     const ImpostorBakeResult ir =
         bakeImpostors(g, block_meshes, iopt, writer, [&](const char* stage, double d, double t) {
           if (current != stage) progress.stage(current = stage);
@@ -118,7 +109,28 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
     if (opt.on_impostors) opt.on_impostors(g, ir);
   }
 
+  const bool tiled = opt.tile.nx * opt.tile.ny > 1;
+  if (tiled) progress.stage("tiling " + std::to_string(opt.tile.nx) + "x" + std::to_string(opt.tile.ny));
+  const TileLayout tiles = tileCity(g, blocks, tables, writer, opt.tile);  // 1x1: no change
+  if (tiled) {
+    const uint64_t n = tiles.copies;
+    sum.buildings *= n;
+    sum.triangles *= n;
+    for (uint32_t k = 0; k < graph::kMaxBlockLods; ++k)
+      sum.lod.blocks[k] *= n, sum.lod.triangles[k] *= n, sum.lod.vertices[k] *= n;
+  }
+
   progress.stage("writing package");
+  float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  bool any = false;
+  for (const graph::BlockRecord& rec : blocks) {
+    if (rec.lod_count == 0) continue;
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = any ? std::min(lo[k], rec.bbox_min[k]) : rec.bbox_min[k];
+      hi[k] = any ? std::max(hi[k], rec.bbox_max[k]) : rec.bbox_max[k];
+    }
+    any = true;
+  }
   const std::vector<std::string> bad = graph::checkInvariants(g);
   if (!bad.empty()) throw core::Error(core::Status::Internal, "street graph invariant broken: " + bad.front());
   package::PackageHeader hdr;
@@ -133,8 +145,8 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   hdr.block_count = static_cast<uint32_t>(g.faces.size());
   hdr.building_count = static_cast<uint32_t>(sum.buildings);
   hdr.triangle_count = sum.triangles;
-  hdr.max_block_blob_bytes = max_blob;
   hdr.source_bytes = city.source_bytes;
+  fillPoolSizing(g, blocks, tables, [&](uint32_t i) { return uint64_t{writer.blob(i).size()}; }, hdr);
   writer.setHeader(hdr);
   writer.addSection(package::kSectionGraph, graph::serializeGraph(g));
   writer.addSection(package::kSectionCells, graph::serializeCells(g));
@@ -150,6 +162,20 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
       {"default_height_m", opt.osm.default_height_m},
       {"level_height_m", opt.osm.level_height_m},
       {"draco", opt.draco},
+      {"tile",
+       {{"nx", opt.tile.nx}, {"ny", opt.tile.ny}, {"gap_m", opt.tile.gap_m},
+        {"step_m", {tiles.step.x, tiles.step.y}}, {"cells_per_tile", tiles.cells},
+        {"blocks_per_tile", tiles.blocks}, {"vertices_per_tile", tiles.vertices}, {"blobs_per_tile", tiles.blobs}}},
+      {"impostor_route", route},
+      {"lod",
+       {{"mode", opt.lod.enabled ? "chain" : "none"},
+        {"ratios", opt.lod.ratios},
+        {"blocks_per_level", sum.lod.blocks},
+        {"triangles_per_level", sum.lod.triangles},
+        {"vertices_per_level", sum.lod.vertices},
+        {"sloppy_levels", sum.lod.sloppy_levels},
+        {"unlocked_levels", sum.lod.unlocked_levels},
+        {"max_error_m", sum.lod.max_error_m}}},
       {"impostors",
        {{"mode", opt.impostor.mode == ImpostorMode::None     ? "none"
                  : opt.impostor.mode == ImpostorMode::Single ? "single"

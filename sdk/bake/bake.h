@@ -5,8 +5,11 @@
 #include <functional>
 #include <string>
 
+#include "bake/block_blob.h"
 #include "bake/impostor_bake.h"
+#include "bake/lod_chain.h"
 #include "bake/osm_reader.h"
+#include "bake/tile.h"
 
 namespace blvd::bake {
 
@@ -14,18 +17,22 @@ struct BakeOptions {
   OsmReadOptions osm;
   bool quiet = false;
   bool draco = true;
+  LodOptions lod;
+  TileOptions tile;  // --tile NxM: N x M disconnected copies of the city (benchmarks)
   ImpostorOptions impostor;
   // Called with the graph and the impostor results before the package is
   // written (the CLI writes its HTML bake report from them).
   std::function<void(const graph::StreetGraph&, const ImpostorBakeResult&)> on_impostors;
-  // Chooses the cells that get impostors (all when unset), e.g. a benchmark route.
+  // Chooses the cells that get impostors (all when unset), e.g. a benchmark
+  // route; called on the city before tiling (so on copy 0's ids).
   std::function<std::vector<uint32_t>(const graph::StreetGraph&)> select_cells;
 };
 
 struct BakeSummary {
   size_t streets = 0, junctions = 0, vertices = 0, cells = 0, blocks = 0, buildings = 0;
   size_t skipped_buildings = 0, bad_polygons = 0, defaulted_heights = 0;
-  uint64_t triangles = 0;
+  uint64_t triangles = 0;  // level 0 (the full model)
+  LodStats lod;
   size_t impostors = 0, impostor_cells = 0, item_samples = 0;
   uint64_t impostor_triangles = 0, impostor_bytes = 0;
   double pvs_seconds = 0, impostor_seconds = 0;

@@ -263,9 +263,15 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
       }
       mesh.image = encodeTextureJpeg(img, opt.jpeg_quality);
       mesh.image_mime = "image/jpeg";
-      std::vector<uint8_t> glb = package::encodeGlb(mesh, glb_opt);
+      package::GlbMeshCounts counts;
+      std::vector<uint8_t> glb = package::encodeGlb(mesh, glb_opt, &counts);
+      if (counts.triangles == 0) {
+        BLVD_LOG_DEBUG("cell %u layer %u: no impostor (Draco kept no triangle)", h, layer_index);
+        continue;
+      }
       graph::ImpostorLayer il;
-      il.triangles = static_cast<uint32_t>(mesh.triangleCount());
+      il.triangles = counts.triangles;
+      il.vertices = counts.vertices;
       il.texture_width = static_cast<uint16_t>(img.width);
       il.texture_height = static_cast<uint16_t>(img.height);
       il.blocks = blocks;

@@ -1,4 +1,6 @@
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 
 #include "bake/bake.h"
 #include "cli/bake_report.h"
@@ -7,6 +9,24 @@
 #include "core/status.h"
 
 namespace blvd::cli {
+namespace {
+// "0.5,0.25,0.1" -> {0.5, 0.25, 0.1}; the bake checks the values.
+std::vector<double> parseRatios(const std::string& text) {
+  std::vector<double> r;
+  size_t pos = 0;
+  while (pos <= text.size()) {
+    const size_t comma = std::min(text.find(',', pos), text.size());
+    const std::string item = text.substr(pos, comma - pos);
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (item.empty() || end != item.c_str() + item.size())
+      throw core::Error(core::Status::InvalidArg, "--lod-ratios: '" + item + "' is not a number (expected e.g. 0.5,0.25,0.1)");
+    r.push_back(v);
+    pos = comma + 1;
+  }
+  return r;
+}
+}  // namespace
 
 void addBake(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand("bake", "bake an OpenStreetMap .osm.pbf into a .blvd package");
@@ -14,7 +34,7 @@ void addBake(CLI::App& app, Runner& run) {
     std::string in, out, report_dir;
     bake::BakeOptions bake;
     bool no_draco = false;
-    std::string impostor = "layered", only_route;
+    std::string impostor = "layered", only_route, lod = "chain", lod_ratios = "0.5,0.25,0.1", tile = "1x1";
     uint64_t seed = 1;
   };
   auto o = std::make_shared<Opts>();
@@ -27,6 +47,16 @@ void addBake(CLI::App& app, Runner& run) {
       ->capture_default_str()->check(CLI::Range(1.0, 10.0));
   cmd->add_flag("--quiet", o->bake.quiet, "plain log lines, no progress bar");
   cmd->add_flag("--no-draco", o->no_draco, "store plain GLB buffers instead of Draco-compressed meshes");
+  cmd->add_option("--lod", o->lod, "per-block levels of detail: chain (meshoptimizer, see --lod-ratios) or none")
+      ->capture_default_str()->check(CLI::IsMember({"chain", "none"}));
+  cmd->add_option("--lod-ratios", o->lod_ratios,
+                  "triangle shares of the full mesh the simplified levels aim at, decreasing, at most 3")
+      ->capture_default_str();
+  cmd->add_option("--tile", o->tile,
+                  "NxM disconnected copies of the city, N east by M north (benchmark packages: 2x2 is 4x the city)")
+      ->capture_default_str();
+  cmd->add_option("--tile-gap", o->bake.tile.gap_m, "metres between the copies of --tile")
+      ->capture_default_str()->check(CLI::Range(0.0, 100000.0));
   cmd->add_option("--impostor", o->impostor,
                   "impostors per cell: layered (Decoret 99 MMI), single (Sillion 97), both, or none")
       ->capture_default_str()->check(CLI::IsMember({"layered", "single", "both", "none"}));
@@ -54,6 +84,14 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->callback([o, &run] {
     run = [o] {
       o->bake.draco = !o->no_draco;
+      o->bake.lod.enabled = o->lod == "chain";
+      o->bake.lod.ratios = parseRatios(o->lod_ratios);
+      unsigned nx = 0, ny = 0;
+      char tail = 0;
+      if (std::sscanf(o->tile.c_str(), "%ux%u%c", &nx, &ny, &tail) != 2 || nx == 0 || ny == 0 || nx * ny > 64)
+        throw core::Error(core::Status::InvalidArg, "--tile must be NxM with 1 <= N*M <= 64, e.g. 2x2");
+      o->bake.tile.nx = nx;
+      o->bake.tile.ny = ny;
       const std::string& m = o->impostor;
       o->bake.impostor.mode = m == "none"     ? bake::ImpostorMode::None
                               : m == "single" ? bake::ImpostorMode::Single
@@ -74,13 +112,19 @@ void addBake(CLI::App& app, Runner& run) {
           "baked %s -> %s in %.2f s\n"
           "  streets %zu, junctions %zu, graph vertices %zu, cells %zu, blocks %zu\n"
           "  buildings %zu (%zu at the default height %.1f m, %zu skipped, %zu unassembled polygons)\n"
-          "  triangles %llu\n"
+          "  triangles %llu; LOD levels 0-3: %llu/%llu/%llu/%llu blocks, %llu/%llu/%llu/%llu triangles, "
+          "%llu sloppy, max error %.2f m, simplification %.1f s\n"
           "  impostors %zu meshes on %zu cells, %llu triangles, %llu bytes; %zu item-buffer samples in %.1f s, "
           "impostors in %.1f s\n"
           "  package %llu bytes, source %llu bytes, package/source = %.2f\n",
           o->in.c_str(), o->out.c_str(), s.seconds, s.streets, s.junctions, s.vertices, s.cells, s.blocks,
           s.buildings, s.defaulted_heights, o->bake.osm.default_height_m, s.skipped_buildings, s.bad_polygons,
-          static_cast<unsigned long long>(s.triangles), s.impostors, s.impostor_cells,
+          static_cast<unsigned long long>(s.triangles), static_cast<unsigned long long>(s.lod.blocks[0]),
+          static_cast<unsigned long long>(s.lod.blocks[1]), static_cast<unsigned long long>(s.lod.blocks[2]),
+          static_cast<unsigned long long>(s.lod.blocks[3]), static_cast<unsigned long long>(s.lod.triangles[0]),
+          static_cast<unsigned long long>(s.lod.triangles[1]), static_cast<unsigned long long>(s.lod.triangles[2]),
+          static_cast<unsigned long long>(s.lod.triangles[3]), static_cast<unsigned long long>(s.lod.sloppy_levels),
+          s.lod.max_error_m, s.lod.seconds, s.impostors, s.impostor_cells,
           static_cast<unsigned long long>(s.impostor_triangles), static_cast<unsigned long long>(s.impostor_bytes),
           s.item_samples, s.pvs_seconds, s.impostor_seconds, static_cast<unsigned long long>(s.package_bytes),
           static_cast<unsigned long long>(s.source_bytes),

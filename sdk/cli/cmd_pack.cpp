@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 
@@ -35,6 +36,32 @@ int info(const std::string& path, bool json) {
       {"max_block_blob_bytes", h.max_block_blob_bytes},
       {"source_bytes", h.source_bytes},
   };
+  // Levels of detail, from the BLCK records (no decoding).
+  nlohmann::json levels = nlohmann::json::array();
+  for (uint32_t k = 0; k < graph::kMaxBlockLods; ++k) {
+    uint64_t blocks = 0, tris = 0, verts = 0;
+    double max_err = 0, sum_err = 0;
+    for (const graph::BlockRecord& b : city.blocks()) {
+      if (k >= b.lod_count) continue;
+      ++blocks;
+      tris += b.triangles[k];
+      verts += b.vertices[k];
+      max_err = std::max(max_err, double(b.error_m[k]));
+      sum_err += b.error_m[k];
+    }
+    levels.push_back({{"level", k}, {"blocks", blocks}, {"triangles", tris}, {"vertices", verts},
+                      {"max_error_m", max_err}, {"mean_error_m", blocks ? sum_err / double(blocks) : 0.0}});
+  }
+  j["lod_levels"] = levels;
+  nlohmann::json pools = nlohmann::json::object();
+  for (const package::PoolSizingField& f : package::poolSizing(h)) pools[f.name] = f.value;
+  j["pool_sizing"] = pools;
+  // The bake's metadata (options, LOD totals, tiling, the impostor route).
+  package::Span meta;
+  std::string meta_err;
+  if (city.package().hasSection(package::kSectionMeta) &&
+      city.package().checkedSection(package::kSectionMeta, meta, meta_err) == core::Status::Ok)
+    j["meta"] = nlohmann::json::parse(meta.data, meta.data + meta.size, nullptr, false);
   nlohmann::json sections = nlohmann::json::object();
   for (const auto& s : city.package().sections())
     sections[package::tagToString(s.tag)] = {{"offset", s.offset}, {"bytes", s.size}};
@@ -49,6 +76,15 @@ int info(const std::string& path, bool json) {
               double(h.bounds_max[0] - h.bounds_min[0]), double(h.bounds_max[1] - h.bounds_min[1]));
   std::printf("  junctions %u, cells %u, blocks %u, buildings %u, triangles %llu\n", h.junction_count, h.cell_count,
               h.block_count, h.building_count, static_cast<unsigned long long>(h.triangle_count));
+  std::printf("  pool sizing (header):\n");
+  for (const auto& [key, value] : j["pool_sizing"].items())
+    std::printf("    %-32s %llu\n", key.c_str(), value.get<unsigned long long>());
+  std::printf("  levels of detail:\n");
+  for (const auto& l : levels)
+    std::printf("    level %u: %6llu blocks, %9llu triangles, %9llu vertices, error mean %.2f m, max %.2f m\n",
+                l["level"].get<unsigned>(), l["blocks"].get<unsigned long long>(),
+                l["triangles"].get<unsigned long long>(), l["vertices"].get<unsigned long long>(),
+                l["mean_error_m"].get<double>(), l["max_error_m"].get<double>());
   std::printf("  sections:\n");
   for (const auto& s : city.package().sections())
     std::printf("    %-4s  offset %10llu  %10llu bytes\n", package::tagToString(s.tag).c_str(),

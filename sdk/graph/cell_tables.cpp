@@ -6,11 +6,15 @@
 
 namespace blvd::graph {
 namespace {
+// 2 since package format 2.0: layers carry their vertex count.
+constexpr uint32_t kImpostorTableVersion = 2;
+
 void putLayers(core::ByteWriter& w, const std::vector<ImpostorLayer>& layers) {
   w.put<uint32_t>(static_cast<uint32_t>(layers.size()));
   for (const ImpostorLayer& l : layers) {
     w.put(l.blob);
     w.put(l.triangles);
+    w.put(l.vertices);
     w.put(l.texture_width);
     w.put(l.texture_height);
     w.put<uint32_t>(static_cast<uint32_t>(l.blocks.size()));
@@ -19,14 +23,17 @@ void putLayers(core::ByteWriter& w, const std::vector<ImpostorLayer>& layers) {
 }
 
 void getLayers(core::ByteReader& r, std::vector<ImpostorLayer>& layers, uint32_t blocks, uint32_t blobs) {
-  layers.resize(r.getCount(16));
+  layers.resize(r.getCount(20));
   for (ImpostorLayer& l : layers) {
     const size_t at = r.pos();
     l.blob = r.get<uint32_t>();
     l.triangles = r.get<uint32_t>();
+    l.vertices = r.get<uint32_t>();
     l.texture_width = r.get<uint16_t>();
     l.texture_height = r.get<uint16_t>();
     if (l.blob >= blobs) r.fail("impostor blob index out of range", at);
+    if (l.triangles == 0 || l.vertices == 0 || l.triangles > (1u << 24) || l.vertices > (1u << 24))
+      r.fail("impostor layer counts outside 1..2^24", at);
     l.blocks.resize(r.getCount(4));
     for (uint32_t& b : l.blocks) {
       b = r.get<uint32_t>();
@@ -52,7 +59,7 @@ std::vector<uint8_t> serializeVisibility(const CellTables& t) {
 
 std::vector<uint8_t> serializeImpostors(const CellTables& t) {
   core::ByteWriter w;
-  w.put<uint32_t>(1);
+  w.put<uint32_t>(kImpostorTableVersion);
   w.put(t.threshold_px);
   w.put(t.display_fov_y_deg);
   w.put(t.display_width);
@@ -88,7 +95,9 @@ void parseVisibility(const uint8_t* data, size_t size, uint64_t file_offset, uin
 void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
                     uint32_t blobs, CellTables& t) {
   core::ByteReader r(data, size, "impostor section IMPO", file_offset);
-  if (r.get<uint32_t>() != 1) r.fail("unknown impostor version");
+  if (const uint32_t v = r.get<uint32_t>(); v != kImpostorTableVersion)
+    r.fail("impostor table version " + std::to_string(v) + ", this build reads " + std::to_string(kImpostorTableVersion),
+           0);
   t.threshold_px = r.get<float>();
   t.display_fov_y_deg = r.get<float>();
   t.display_width = r.get<uint16_t>();

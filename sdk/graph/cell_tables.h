@@ -16,8 +16,9 @@ struct CellVisibility {
 
 struct ImpostorLayer {
   uint32_t blob = 0;             // GLB with the textured depth mesh and its texture
-  uint32_t triangles = 0;
-  uint16_t texture_width = 0, texture_height = 0;
+  uint32_t triangles = 0;        // exactly what decoding the blob gives
+  uint32_t vertices = 0;         // exactly what decoding gives (the mesh has no normals: 3 per triangle)
+  uint16_t texture_width = 0, texture_height = 0;  // of the image in the GLB; RGBA8 takes w × h × 4 bytes
   std::vector<uint32_t> blocks;  // the far blocks it stands for (never drawn with it, K06 §3.1.2)
 };
 

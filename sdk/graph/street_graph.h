@@ -93,8 +93,9 @@ struct StreetGraph {
 // Checks the half-edge invariants; returns one line per violation (empty = ok):
 // every half-edge has a twin, a next and a face; twin(twin(h)) == h; next(h)
 // starts where h ends; walking next returns to h with the same face; polylines
-// join their vertices; V - E + F == 1 + C (Euler for a planar map with C
-// components and one unbounded face); cell lists are in range.
+// join their vertices; V - E + F == U + C (Euler for a planar map with C
+// components and U = 1 unbounded face; a tiled benchmark package is U planar
+// maps side by side, each with its own); cell lists are in range.
 std::vector<std::string> checkInvariants(const StreetGraph& g);
 
 // Binary (de)serialisation for the package's GRPH and CELL sections. `parse`

@@ -151,6 +151,24 @@ core::Status parseHeader(const uint8_t* data, size_t size, uint64_t file_size,
   ph.max_block_blob_bytes = get<uint32_t>(data + h::kMaxBlockBlob);
   ph.max_cell_blob_bytes = get<uint32_t>(data + h::kMaxCellBlob);
   ph.source_bytes = get<uint64_t>(data + h::kSourceBytes);
+  ph.max_block_lod0_vertices = get<uint32_t>(data + h::kMaxBlockLod0Vertices);
+  ph.max_block_lod0_triangles = get<uint32_t>(data + h::kMaxBlockLod0Triangles);
+  ph.max_block_vertices = get<uint32_t>(data + h::kMaxBlockVertices);
+  ph.max_block_triangles = get<uint32_t>(data + h::kMaxBlockTriangles);
+  ph.max_cell_local_blocks = get<uint32_t>(data + h::kMaxCellLocalBlocks);
+  ph.max_cell_local_lod0_vertices = get<uint32_t>(data + h::kMaxCellLocalLod0Vertices);
+  ph.max_cell_local_lod0_triangles = get<uint32_t>(data + h::kMaxCellLocalLod0Triangles);
+  ph.max_cell_local_vertices = get<uint32_t>(data + h::kMaxCellLocalVertices);
+  ph.max_cell_local_triangles = get<uint32_t>(data + h::kMaxCellLocalTriangles);
+  ph.max_cell_impostor_layers = get<uint32_t>(data + h::kMaxCellImpostorLayers);
+  ph.max_cell_local_blob_bytes = get<uint64_t>(data + h::kMaxCellLocalBlobBytes);
+  ph.max_cell_impostor_blob_bytes = get<uint64_t>(data + h::kMaxCellImpostorBlobBytes);
+  ph.max_cell_impostor_texture_bytes = get<uint64_t>(data + h::kMaxCellImpostorTextureBytes);
+  ph.max_cell_impostor_vertices = get<uint32_t>(data + h::kMaxCellImpostorVertices);
+  ph.max_cell_impostor_triangles = get<uint32_t>(data + h::kMaxCellImpostorTriangles);
+  ph.max_impostor_texture_bytes = get<uint32_t>(data + h::kMaxImpostorTextureBytes);
+  ph.max_impostor_texture_width = get<uint16_t>(data + h::kMaxImpostorTextureWidth);
+  ph.max_impostor_texture_height = get<uint16_t>(data + h::kMaxImpostorTextureHeight);
 
   if (out.file_size != file_size)
     return corrupt(err, at(name, "header", h::kFileSize) + "header records " +
@@ -176,6 +194,31 @@ core::Status parseHeader(const uint8_t* data, size_t size, uint64_t file_size,
                             std::to_string(dir_bytes) + " bytes) does not fit in the file (" +
                             std::to_string(file_size) + " bytes) or is misplaced");
   return core::Status::Ok;
+}
+
+std::vector<PoolSizingField> poolSizing(const PackageHeader& h) {
+  return {
+      {"max_block_blob_bytes", h.max_block_blob_bytes},
+      {"max_cell_blob_bytes", h.max_cell_blob_bytes},
+      {"max_block_lod0_vertices", h.max_block_lod0_vertices},
+      {"max_block_lod0_triangles", h.max_block_lod0_triangles},
+      {"max_block_vertices", h.max_block_vertices},
+      {"max_block_triangles", h.max_block_triangles},
+      {"max_cell_local_blocks", h.max_cell_local_blocks},
+      {"max_cell_local_lod0_vertices", h.max_cell_local_lod0_vertices},
+      {"max_cell_local_lod0_triangles", h.max_cell_local_lod0_triangles},
+      {"max_cell_local_vertices", h.max_cell_local_vertices},
+      {"max_cell_local_triangles", h.max_cell_local_triangles},
+      {"max_cell_impostor_layers", h.max_cell_impostor_layers},
+      {"max_cell_local_blob_bytes", h.max_cell_local_blob_bytes},
+      {"max_cell_impostor_blob_bytes", h.max_cell_impostor_blob_bytes},
+      {"max_cell_impostor_texture_bytes", h.max_cell_impostor_texture_bytes},
+      {"max_cell_impostor_vertices", h.max_cell_impostor_vertices},
+      {"max_cell_impostor_triangles", h.max_cell_impostor_triangles},
+      {"max_impostor_texture_bytes", h.max_impostor_texture_bytes},
+      {"max_impostor_texture_width", h.max_impostor_texture_width},
+      {"max_impostor_texture_height", h.max_impostor_texture_height},
+  };
 }
 
 core::Status parseDirectory(const uint8_t* data, size_t size, const HeaderLayout& layout,

@@ -29,7 +29,9 @@ constexpr uint32_t fourcc(char a, char b, char c, char d) {
 }
 
 inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
-inline constexpr uint16_t kVersionMajor = 1;  // a reader opens only its own major
+// 2.0: BLCK records carry the levels of detail, IMPO layers their vertex
+// counts, the header the pool sizing fields (docs/package-format.md).
+inline constexpr uint16_t kVersionMajor = 2;  // a reader opens only its own major
 inline constexpr uint16_t kVersionMinor = 0;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
@@ -59,9 +61,35 @@ struct PackageHeader {
   float bounds_min[2] = {0, 0}, bounds_max[2] = {0, 0};  // local east/north metres
   uint32_t junction_count = 0, cell_count = 0, block_count = 0, building_count = 0;
   uint64_t triangle_count = 0;
-  uint32_t max_block_blob_bytes = 0, max_cell_blob_bytes = 0;  // sizes the runtime plans pools from
+  // Largest block blob (all its levels) and largest cell blob (one impostor
+  // layer's GLB), bytes.
+  uint32_t max_block_blob_bytes = 0, max_cell_blob_bytes = 0;
   uint64_t source_bytes = 0;  // bytes of the source .osm.pbf
+  // Pool sizing (2.0): exact maxima over the package, so the runtime carves
+  // its pools at create from the header alone. "Vertices"/"triangles" are
+  // what decoding gives (the BLCK/IMPO counts); a cell's "local blocks" are
+  // its CELL local-block list. docs/package-format.md defines each one.
+  uint32_t max_block_lod0_vertices = 0, max_block_lod0_triangles = 0;  // one block, level 0
+  uint32_t max_block_vertices = 0, max_block_triangles = 0;            // one block, its levels summed
+  uint32_t max_cell_local_blocks = 0;                                  // most local blocks of one cell
+  uint32_t max_cell_local_lod0_vertices = 0, max_cell_local_lod0_triangles = 0;  // summed over a cell's local blocks
+  uint32_t max_cell_local_vertices = 0, max_cell_local_triangles = 0;  // same, every level of each
+  uint64_t max_cell_local_blob_bytes = 0;                              // a cell's local blocks' blobs
+  uint32_t max_cell_impostor_layers = 0;                               // layered + single of one cell
+  uint32_t max_cell_impostor_vertices = 0, max_cell_impostor_triangles = 0;  // summed over a cell's layers
+  uint64_t max_cell_impostor_blob_bytes = 0;                           // a cell's impostor blobs
+  uint64_t max_cell_impostor_texture_bytes = 0;                        // a cell's layers' w × h × 4
+  uint32_t max_impostor_texture_bytes = 0;                             // one layer's w × h × 4
+  uint16_t max_impostor_texture_width = 0, max_impostor_texture_height = 0;  // over all layers
 };
+
+// The pool sizing fields by name (max_block_blob_bytes, max_cell_blob_bytes
+// and the 2.0 ones, in header order), for `blvd pack info` and tests.
+struct PoolSizingField {
+  const char* name;
+  uint64_t value;
+};
+std::vector<PoolSizingField> poolSizing(const PackageHeader& h);
 
 // One directory entry (for `blvd pack info` and range clients).
 struct SectionInfo {

@@ -26,7 +26,7 @@ void put(uint8_t* p, T v) {
 // CRC32C over header[0, header_size) with the CRC field read as zero.
 uint32_t headerCrc(const uint8_t* header, size_t header_size);
 
-namespace hdr {  // header, 256 bytes in v1.0
+namespace hdr {  // header, 256 bytes in 2.0
 constexpr size_t kMagic = 0;          // char[8] "BLVDPKG\0"
 constexpr size_t kVersionMajor = 8;   // u16
 constexpr size_t kVersionMinor = 10;  // u16
@@ -50,7 +50,26 @@ constexpr size_t kTriangleCount = 104;// u64
 constexpr size_t kMaxBlockBlob = 112; // u32
 constexpr size_t kMaxCellBlob = 116;  // u32
 constexpr size_t kSourceBytes = 120;  // u64
-constexpr size_t kReservedTail = 128; // zero up to header_size
+// Pool sizing, 2.0.
+constexpr size_t kMaxBlockLod0Vertices = 128;      // u32
+constexpr size_t kMaxBlockLod0Triangles = 132;     // u32
+constexpr size_t kMaxBlockVertices = 136;          // u32
+constexpr size_t kMaxBlockTriangles = 140;         // u32
+constexpr size_t kMaxCellLocalBlocks = 144;        // u32
+constexpr size_t kMaxCellLocalLod0Vertices = 148;  // u32
+constexpr size_t kMaxCellLocalLod0Triangles = 152; // u32
+constexpr size_t kMaxCellLocalVertices = 156;      // u32
+constexpr size_t kMaxCellLocalTriangles = 160;     // u32
+constexpr size_t kMaxCellImpostorLayers = 164;     // u32
+constexpr size_t kMaxCellLocalBlobBytes = 168;     // u64
+constexpr size_t kMaxCellImpostorBlobBytes = 176;  // u64
+constexpr size_t kMaxCellImpostorTextureBytes = 184;  // u64
+constexpr size_t kMaxCellImpostorVertices = 192;   // u32
+constexpr size_t kMaxCellImpostorTriangles = 196;  // u32
+constexpr size_t kMaxImpostorTextureBytes = 200;   // u32
+constexpr size_t kMaxImpostorTextureWidth = 204;   // u16
+constexpr size_t kMaxImpostorTextureHeight = 206;  // u16
+constexpr size_t kReservedTail = 208; // zero up to header_size
 }  // namespace hdr
 
 namespace dir {  // one 32-byte directory entry

@@ -79,9 +79,9 @@ int componentForIndices(size_t vertex_count) {
   return vertex_count <= 0xFFFF ? kUnsignedShort : kUnsignedInt;
 }
 
-void validateMesh(const geo::MeshData& m, const GlbOptions& opt) {
-  auto bad = [](const std::string& why) {
-    throw core::Error(Status::InvalidArg, "encodeGlb: " + why);
+void validateMesh(const geo::MeshData& m, const GlbOptions& opt, const std::string& where) {
+  auto bad = [&](const std::string& why) {
+    throw core::Error(Status::InvalidArg, "encodeGlb: " + where + why);
   };
   if (m.positions.size() % 3) bad("positions.size() is not a multiple of 3");
   const size_t n = m.vertexCount();
@@ -180,86 +180,93 @@ std::vector<uint8_t> linearColors(const geo::MeshData& mesh) {
   return c;
 }
 
-// Puts the mesh's image (if any) at the end of `bin` as its own bufferView and
-// makes it material 0's unlit base colour texture.
-void addImage(const geo::MeshData& mesh, json& doc, json& views, std::vector<uint8_t>& bin) {
+// The buffers, views and accessors of a GLB under construction; each level
+// of detail adds one primitive to them.
+struct Parts {
+  std::vector<uint8_t> bin;
+  json views = json::array(), accessors = json::array();
+
+  size_t addView(const void* p, size_t bytes, std::optional<int> target) {
+    while (bin.size() % 4) bin.push_back(0);
+    const size_t off = bin.size();
+    bin.insert(bin.end(), static_cast<const uint8_t*>(p), static_cast<const uint8_t*>(p) + bytes);
+    json v = {{"buffer", 0}, {"byteOffset", off}, {"byteLength", bytes}};
+    if (target) v["target"] = *target;
+    views.push_back(v);
+    return views.size() - 1;
+  }
+};
+
+// Puts the mesh's image (if any) at the end of the BIN data as its own
+// bufferView and makes it material 0's unlit base colour texture.
+void addImage(const geo::MeshData& mesh, json& doc, Parts& parts) {
   if (mesh.image.empty()) return;
-  while (bin.size() % 4) bin.push_back(0);
-  const size_t off = bin.size();
-  bin.insert(bin.end(), mesh.image.begin(), mesh.image.end());
-  views.push_back({{"buffer", 0}, {"byteOffset", off}, {"byteLength", mesh.image.size()}});
-  doc["images"] = json::array({{{"bufferView", views.size() - 1}, {"mimeType", mesh.image_mime}}});
+  const size_t view = parts.addView(mesh.image.data(), mesh.image.size(), std::nullopt);
+  doc["images"] = json::array({{{"bufferView", view}, {"mimeType", mesh.image_mime}}});
   // 9729 LINEAR, 9987 LINEAR_MIPMAP_LINEAR, 33071 CLAMP_TO_EDGE.
   doc["samplers"] = json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 33071}, {"wrapT", 33071}}});
   doc["textures"] = json::array({{{"source", 0}, {"sampler", 0}}});
   json& mat = doc["materials"][0];
   mat["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
   mat["extensions"] = {{"KHR_materials_unlit", json::object()}};
-  json used = doc.value("extensionsUsed", json::array());
-  used.push_back("KHR_materials_unlit");
-  doc["extensionsUsed"] = used;
+}
+
+// What the decoder makes of `points` vertices and `faces` triangles: a mesh
+// without normals is unwelded into flat-shaded triangles.
+GlbMeshCounts decodedCounts(const geo::MeshData& mesh, size_t points, size_t faces) {
+  GlbMeshCounts c;
+  c.triangles = static_cast<uint32_t>(faces);
+  c.vertices = static_cast<uint32_t>(mesh.normals.empty() ? faces * 3 : points);
+  return c;
 }
 
 // Plain buffers: POSITION/NORMAL float32, COLOR_0 unorm8 RGBA, indices u16/u32.
-std::vector<uint8_t> encodePlain(const geo::MeshData& mesh, json doc) {
+json addPlainPrimitive(const geo::MeshData& mesh, Parts& parts, GlbMeshCounts& counts) {
   const size_t n = mesh.vertexCount();
-  std::vector<uint8_t> bin;
-  json views = json::array(), accessors = json::array(), attributes = json::object();
-  auto addView = [&](const void* p, size_t bytes, int target) {
-    while (bin.size() % 4) bin.push_back(0);
-    const size_t off = bin.size();
-    bin.insert(bin.end(), static_cast<const uint8_t*>(p), static_cast<const uint8_t*>(p) + bytes);
-    views.push_back({{"buffer", 0}, {"byteOffset", off}, {"byteLength", bytes}, {"target", target}});
-    return views.size() - 1;
-  };
+  json& accessors = parts.accessors;
+  json attributes = json::object();
   std::array<float, 3> lo, hi;
   minMax(mesh.positions.data(), n, lo, hi);
   attributes["POSITION"] = accessors.size();
-  accessors.push_back({{"bufferView", addView(mesh.positions.data(), n * 12, kArrayBuffer)},
+  accessors.push_back({{"bufferView", parts.addView(mesh.positions.data(), n * 12, kArrayBuffer)},
                        {"componentType", kFloat}, {"count", n}, {"type", "VEC3"},
                        {"min", lo}, {"max", hi}});
   if (!mesh.normals.empty()) {
     attributes["NORMAL"] = accessors.size();
-    accessors.push_back({{"bufferView", addView(mesh.normals.data(), n * 12, kArrayBuffer)},
+    accessors.push_back({{"bufferView", parts.addView(mesh.normals.data(), n * 12, kArrayBuffer)},
                          {"componentType", kFloat}, {"count", n}, {"type", "VEC3"}});
   }
   if (!mesh.colors.empty()) {
     const std::vector<uint8_t> lin = linearColors(mesh);
     attributes["COLOR_0"] = accessors.size();
-    accessors.push_back({{"bufferView", addView(lin.data(), lin.size(), kArrayBuffer)},
+    accessors.push_back({{"bufferView", parts.addView(lin.data(), lin.size(), kArrayBuffer)},
                          {"componentType", kUnsignedByte}, {"normalized", true},
                          {"count", n}, {"type", "VEC4"}});
   }
   if (!mesh.texcoords.empty()) {
     attributes["TEXCOORD_0"] = accessors.size();
-    accessors.push_back({{"bufferView", addView(mesh.texcoords.data(), n * 8, kArrayBuffer)},
+    accessors.push_back({{"bufferView", parts.addView(mesh.texcoords.data(), n * 8, kArrayBuffer)},
                          {"componentType", kFloat}, {"count", n}, {"type", "VEC2"}});
   }
   const int ictype = componentForIndices(n);
   size_t iview;
   if (ictype == kUnsignedShort) {
     std::vector<uint16_t> idx(mesh.indices.begin(), mesh.indices.end());
-    iview = addView(idx.data(), idx.size() * 2, kElementArrayBuffer);
+    iview = parts.addView(idx.data(), idx.size() * 2, kElementArrayBuffer);
   } else {
-    iview = addView(mesh.indices.data(), mesh.indices.size() * 4, kElementArrayBuffer);
+    iview = parts.addView(mesh.indices.data(), mesh.indices.size() * 4, kElementArrayBuffer);
   }
   const size_t iacc = accessors.size();
   accessors.push_back({{"bufferView", iview}, {"componentType", ictype},
                        {"count", mesh.indices.size()}, {"type", "SCALAR"}});
-  addImage(mesh, doc, views, bin);
-  doc["buffers"] = json::array({{{"byteLength", bin.size()}}});
-  doc["bufferViews"] = views;
-  doc["accessors"] = accessors;
-  doc["meshes"] = json::array(
-      {{{"primitives",
-         json::array({{{"attributes", attributes}, {"indices", iacc}, {"material", 0}, {"mode", kModeTriangles}}})}}});
-  return assembleGlb(doc, bin);
+  counts = decodedCounts(mesh, n, mesh.triangleCount());
+  return {{"attributes", attributes}, {"indices", iacc}, {"material", 0}, {"mode", kModeTriangles}};
 }
 
 Status decodeDracoBuffer(const uint8_t* data, size_t size, std::unique_ptr<draco::Mesh>& mesh,
                          std::string& err);
 
-std::vector<uint8_t> encodeDraco(const geo::MeshData& mesh, const GlbOptions& opt, json doc) {
+json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& parts, GlbMeshCounts& counts) {
   const size_t n = mesh.vertexCount();
   draco::Mesh dm;
   dm.set_num_points(static_cast<uint32_t>(n));
@@ -328,9 +335,11 @@ std::vector<uint8_t> encodeDraco(const geo::MeshData& mesh, const GlbOptions& op
     }
   }
 
-  std::vector<uint8_t> bin(bytes, bytes + eb.size());
-  json accessors = json::array(), attributes = json::object(), draco_attrs = json::object();
+  const size_t view = parts.addView(bytes, eb.size(), std::nullopt);
+  json& accessors = parts.accessors;
+  json attributes = json::object(), draco_attrs = json::object();
   const int ictype = componentForIndices(points);
+  const size_t iacc = accessors.size();
   accessors.push_back({{"componentType", ictype}, {"count", back->num_faces() * 3}, {"type", "SCALAR"}});
   attributes["POSITION"] = accessors.size();
   draco_attrs["POSITION"] = pos_id;
@@ -350,17 +359,9 @@ std::vector<uint8_t> encodeDraco(const geo::MeshData& mesh, const GlbOptions& op
     draco_attrs["TEXCOORD_0"] = *tex_id;
     accessors.push_back({{"componentType", kFloat}, {"count", points}, {"type", "VEC2"}});
   }
-  doc["extensionsUsed"] = json::array({"KHR_draco_mesh_compression"});
-  doc["extensionsRequired"] = json::array({"KHR_draco_mesh_compression"});
-  json views = json::array({{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", bin.size()}}});
-  addImage(mesh, doc, views, bin);
-  doc["buffers"] = json::array({{{"byteLength", bin.size()}}});
-  doc["bufferViews"] = views;
-  doc["accessors"] = accessors;
-  json prim = {{"attributes", attributes}, {"indices", 0}, {"material", 0}, {"mode", kModeTriangles},
-               {"extensions", {{"KHR_draco_mesh_compression", {{"bufferView", 0}, {"attributes", draco_attrs}}}}}};
-  doc["meshes"] = json::array({{{"primitives", json::array({prim})}}});
-  return assembleGlb(doc, bin);
+  counts = decodedCounts(mesh, points, back->num_faces());
+  return {{"attributes", attributes}, {"indices", iacc}, {"material", 0}, {"mode", kModeTriangles},
+          {"extensions", {{"KHR_draco_mesh_compression", {{"bufferView", view}, {"attributes", draco_attrs}}}}}};
 }
 
 // ---------------------------------------------------------------- decoder ---
@@ -416,7 +417,8 @@ struct Mat4 {
 
 class Decoder {
  public:
-  Decoder(const json& doc, const uint8_t* bin, size_t bin_size) : doc_(doc), bin_(bin), bin_size_(bin_size) {}
+  Decoder(const json& doc, const uint8_t* bin, size_t bin_size, uint32_t level)
+      : doc_(doc), bin_(bin), bin_size_(bin_size), level_(level) {}
 
   void run(geo::MeshData& out) {
     runGeometry(out);
@@ -438,16 +440,21 @@ class Decoder {
           roots.push_back(indexValue((*list)[i], "scenes[" + std::to_string(scene) + "].nodes[" + std::to_string(i) + "]",
                                      nodes ? nodes->size() : 0, "nodes"));
     } else if (nodes && !nodes->empty()) {
+      // Roots are the nodes nobody refers to, as a child or as a level of detail.
       std::vector<bool> is_child(nodes->size(), false);
       for (size_t i = 0; i < nodes->size(); ++i) {
         const std::string where = "nodes[" + std::to_string(i) + "]";
         if (const json* ch = arrayMember(object((*nodes)[i], where), "children", where))
           for (size_t k = 0; k < ch->size(); ++k)
             is_child[indexValue((*ch)[k], where + ".children", nodes->size(), "nodes")] = true;
+        if (const json* ids = lodIds((*nodes)[i], where))
+          for (size_t k = 0; k < ids->size(); ++k)
+            is_child[indexValue((*ids)[k], where + ".extensions.MSFT_lod.ids", nodes->size(), "nodes")] = true;
       }
       for (size_t i = 0; i < nodes->size(); ++i)
         if (!is_child[i]) roots.push_back(i);
     } else {
+      if (level_ > 0) fail("level " + std::to_string(level_) + " requested but the GLB has no nodes", Status::NotFound);
       const json* meshes = arrayMember(doc_, "meshes", "");
       for (size_t i = 0; meshes && i < meshes->size(); ++i) emitMesh(i, Mat4{}, out);
       return;
@@ -463,12 +470,27 @@ class Decoder {
     while (!stack.empty()) {
       Item item = stack.back();
       stack.pop_back();
-      const std::string where = "nodes[" + std::to_string(item.node) + "]";
+      std::string where = "nodes[" + std::to_string(item.node) + "]";
       // glTF nodes form a forest; a cycle or a DAG that fans out
       // exponentially is invalid, and these limits turn it into an error.
       if (item.depth > 64) fail(where + ": node hierarchy deeper than 64 (a cycle?)");
       if (++visits > 100000) fail(where + ": more than 100000 node visits (shared children?)");
-      const json& node = object((*nodes)[item.node], where);
+      const json* node_ptr = &object((*nodes)[item.node], where);
+      // MSFT_lod: the node stands for its whole level; its level node (with
+      // that node's own transform, mesh and children) takes its place.
+      if (level_ > 0) {
+        if (const json* ids = lodIds(*node_ptr, where)) {
+          if (level_ > ids->size())
+            fail(where + ".extensions.MSFT_lod: " + std::to_string(ids->size()) + " lower levels, level " +
+                     std::to_string(level_) + " requested",
+                 Status::NotFound);
+          const size_t sub = indexValue((*ids)[level_ - 1], where + ".extensions.MSFT_lod.ids", nodes->size(), "nodes");
+          where = "nodes[" + std::to_string(sub) + "]";
+          node_ptr = &object((*nodes)[sub], where);
+          ++substituted_;
+        }
+      }
+      const json& node = *node_ptr;
       const Mat4 world = item.parent * localMatrix(node, where);
       if (node.contains("mesh")) {
         const json* meshes = arrayMember(doc_, "meshes", "");
@@ -480,6 +502,20 @@ class Decoder {
                                       nodes->size(), "nodes"),
                            world, item.depth + 1});
     }
+    if (level_ > 0 && substituted_ == 0)
+      fail("level " + std::to_string(level_) + " requested but the scene has no MSFT_lod node", Status::NotFound);
+  }
+
+  // The node's MSFT_lod level list, or null; a malformed one is an error.
+  static const json* lodIds(const json& node, const std::string& where) {
+    if (!node.is_object()) return nullptr;
+    auto ext = node.find("extensions");
+    if (ext == node.end() || !ext->is_object()) return nullptr;
+    auto lod = ext->find("MSFT_lod");
+    if (lod == ext->end()) return nullptr;
+    const json* ids = arrayMember(object(*lod, where + ".extensions.MSFT_lod"), "ids", where + ".extensions.MSFT_lod");
+    if (!ids) fail(where + ".extensions.MSFT_lod.ids: required but missing");
+    return ids;
   }
 
  private:
@@ -1141,6 +1177,8 @@ class Decoder {
   size_t bin_size_;
   std::map<size_t, Stored> buffers_;
   std::map<std::pair<size_t, size_t>, Primitive> cache_;
+  uint32_t level_ = 0;
+  size_t substituted_ = 0;  // nodes replaced by their MSFT_lod level
 };
 
 uint32_t readU32(const uint8_t* p) {
@@ -1149,23 +1187,16 @@ uint32_t readU32(const uint8_t* p) {
   return v;
 }
 
-}  // namespace
+// The GLB container: header and chunks (JSON first, required; then an
+// optional BIN; other chunks are ignored).
+struct Chunks {
+  const uint8_t* json_data = nullptr;
+  size_t json_size = 0;
+  const uint8_t* bin = nullptr;
+  size_t bin_size = 0;
+};
 
-std::vector<uint8_t> encodeGlb(const geo::MeshData& mesh, const GlbOptions& opt) {
-  validateMesh(mesh, opt);
-  json doc = baseDocument();
-  if (mesh.indices.empty()) {
-    doc["scenes"] = json::array({json::object()});
-    return assembleGlb(doc, {});
-  }
-  doc["scenes"] = json::array({{{"nodes", {0}}}});
-  doc["nodes"] = json::array({{{"mesh", 0}}});
-  doc["materials"] = json::array({material()});
-  return opt.draco ? encodeDraco(mesh, opt, std::move(doc)) : encodePlain(mesh, std::move(doc));
-}
-
-Status decodeGlb(const uint8_t* data, size_t size, geo::MeshData& out, std::string& err) {
-  out.clear();
+Status splitChunks(const uint8_t* data, size_t size, Chunks& c, std::string& err) {
   if (data == nullptr || size < 12) {
     err = "GLB: " + std::to_string(size) + " bytes, shorter than the 12-byte header";
     return Status::Corrupt;
@@ -1183,11 +1214,6 @@ Status decodeGlb(const uint8_t* data, size_t size, geo::MeshData& out, std::stri
     err = "GLB: header says " + std::to_string(length) + " bytes, " + std::to_string(size) + " available";
     return Status::Corrupt;
   }
-  // Chunks: JSON first (required), then optional BIN, then others to ignore.
-  const uint8_t* json_data = nullptr;
-  size_t json_size = 0;
-  const uint8_t* bin = nullptr;
-  size_t bin_size = 0;
   size_t pos = 12;
   for (int chunk = 0; pos < length; ++chunk) {
     if (length - pos < 8) {
@@ -1206,26 +1232,98 @@ Status decodeGlb(const uint8_t* data, size_t size, geo::MeshData& out, std::stri
         err = "GLB: first chunk is not JSON";
         return Status::Corrupt;
       }
-      json_data = body;
-      json_size = clen;
+      c.json_data = body;
+      c.json_size = clen;
     } else if (chunk == 1 && ctype == kChunkBin) {
-      bin = body;
-      bin_size = clen;
+      c.bin = body;
+      c.bin_size = clen;
     }
     pos += 8 + size_t{clen};
     pos = (pos + 3) & ~size_t{3};  // chunks are 4-aligned; tolerate writers that forget the padding
   }
-  if (!json_data) {
+  if (!c.json_data) {
     err = "GLB: no JSON chunk";
     return Status::Corrupt;
   }
+  return Status::Ok;
+}
+
+}  // namespace
+
+std::vector<uint8_t> encodeGlb(const geo::MeshData& mesh, const GlbOptions& opt, GlbMeshCounts* counts) {
+  std::vector<GlbMeshCounts> c;
+  std::vector<uint8_t> glb = encodeGlbLevels({mesh}, opt, counts ? &c : nullptr);
+  if (counts) *counts = c.at(0);
+  return glb;
+}
+
+std::vector<uint8_t> encodeGlbLevels(const std::vector<geo::MeshData>& levels, const GlbOptions& opt,
+                                     std::vector<GlbMeshCounts>* counts) {
+  if (levels.empty()) throw core::Error(Status::InvalidArg, "encodeGlb: no levels");
+  for (size_t k = 0; k < levels.size(); ++k) {
+    const std::string where = levels.size() > 1 ? "level " + std::to_string(k) + ": " : "";
+    validateMesh(levels[k], opt, where);
+    if (k == 0) continue;
+    const geo::MeshData &m = levels[k], &m0 = levels[0];
+    if (m.indices.empty()) throw core::Error(Status::InvalidArg, "encodeGlb: " + where + "empty (only level 0 may be)");
+    if (m.normals.empty() != m0.normals.empty() || m.colors.empty() != m0.colors.empty() ||
+        m.texcoords.empty() != m0.texcoords.empty())
+      throw core::Error(Status::InvalidArg, "encodeGlb: " + where + "attributes differ from level 0's");
+    if (!m.image.empty()) throw core::Error(Status::InvalidArg, "encodeGlb: " + where + "only level 0 may carry an image");
+  }
+  if (counts) counts->assign(levels.size(), GlbMeshCounts{});
+  json doc = baseDocument();
+  if (levels[0].indices.empty()) {
+    doc["scenes"] = json::array({json::object()});
+    return assembleGlb(doc, {});
+  }
+  doc["scenes"] = json::array({{{"nodes", {0}}}});
+  doc["materials"] = json::array({material()});
+  Parts parts;
+  json meshes = json::array(), nodes = json::array(), used = json::array();
+  for (size_t k = 0; k < levels.size(); ++k) {
+    GlbMeshCounts c;
+    json prim = opt.draco ? addDracoPrimitive(levels[k], opt, parts, c) : addPlainPrimitive(levels[k], parts, c);
+    if (counts) (*counts)[k] = c;
+    meshes.push_back({{"primitives", json::array({prim})}});
+    nodes.push_back({{"mesh", k}});
+  }
+  if (levels.size() > 1) {
+    json ids = json::array();
+    for (size_t k = 1; k < levels.size(); ++k) ids.push_back(k);
+    nodes[0]["extensions"] = {{"MSFT_lod", {{"ids", ids}}}};
+  }
+  addImage(levels[0], doc, parts);
+  if (opt.draco) used.push_back("KHR_draco_mesh_compression");
+  if (levels.size() > 1) used.push_back("MSFT_lod");
+  if (!levels[0].image.empty()) used.push_back("KHR_materials_unlit");
+  if (!used.empty()) doc["extensionsUsed"] = used;
+  if (opt.draco) doc["extensionsRequired"] = json::array({"KHR_draco_mesh_compression"});
+  doc["buffers"] = json::array({{{"byteLength", parts.bin.size()}}});
+  doc["bufferViews"] = parts.views;
+  doc["accessors"] = parts.accessors;
+  doc["meshes"] = meshes;
+  doc["nodes"] = nodes;
+  return assembleGlb(doc, parts.bin);
+}
+
+Status decodeGlb(const uint8_t* data, size_t size, geo::MeshData& out, std::string& err) {
+  return decodeGlbLevel(data, size, 0, out, err);
+}
+
+Status decodeGlbLevel(const uint8_t* data, size_t size, uint32_t level, geo::MeshData& out, std::string& err) {
+  out.clear();
+  Chunks c;
+  if (const Status st = splitChunks(data, size, c, err); st != Status::Ok) return st;
+  const uint8_t *json_data = c.json_data, *bin = c.bin;
+  const size_t json_size = c.json_size, bin_size = c.bin_size;
   try {
     const json doc = json::parse(json_data, json_data + json_size);
     if (!doc.is_object()) {
       err = "GLB: JSON chunk is not an object";
       return Status::Corrupt;
     }
-    Decoder(doc, bin, bin_size).run(out);
+    Decoder(doc, bin, bin_size, level).run(out);
     return Status::Ok;
   } catch (const DecodeError& e) {
     err = "GLB: " + e.message;
@@ -1243,6 +1341,55 @@ Status decodeGlb(const uint8_t* data, size_t size, geo::MeshData& out, std::stri
     err = std::string("GLB: ") + e.what();
     out.clear();
     return Status::Corrupt;
+  }
+}
+
+namespace {
+[[noreturn]] void bad(const std::string& why) { throw core::Error(Status::InvalidArg, "translateGlb: " + why); }
+}  // namespace
+
+std::vector<uint8_t> translateGlb(const uint8_t* data, size_t size, const float offset[3]) {
+  Chunks c;
+  std::string err;
+  if (splitChunks(data, size, c, err) != Status::Ok) bad(err);
+  try {
+    json doc = json::parse(c.json_data, c.json_data + c.json_size, nullptr, false);
+    if (doc.is_discarded() || !doc.is_object()) bad("the JSON chunk does not parse");
+    // The nodes that place the geometry: the scene's roots and their MSFT_lod
+    // level nodes (which sit outside the scene).
+    std::vector<size_t> movers;
+    json empty = json::array();
+    json& nodes = doc.contains("nodes") ? doc["nodes"] : empty;
+    {
+      if (!nodes.is_array()) bad("nodes is not an array");
+      auto add = [&](const json& v) {
+        if (!v.is_number_unsigned() || v.get<size_t>() >= nodes.size()) bad("a node index is out of range");
+        if (std::find(movers.begin(), movers.end(), v.get<size_t>()) == movers.end()) movers.push_back(v.get<size_t>());
+      };
+      for (const json& sc : doc.value("scenes", json::array()))
+        for (const json& n : sc.value("nodes", json::array())) add(n);
+      for (size_t i = 0; i < movers.size(); ++i) {
+        const json& node = nodes[movers[i]];
+        if (!node.is_object()) bad("a node is not an object");
+        const json ids = node.value("/extensions/MSFT_lod/ids"_json_pointer, json::array());
+        if (!ids.is_array()) bad("MSFT_lod.ids is not an array");
+        for (const json& n : ids) add(n);
+      }
+    }
+    for (size_t n : movers) {
+      json& node = nodes[n];
+      if (node.contains("matrix")) bad("nodes[" + std::to_string(n) + "] has a matrix");
+      json t = node.value("translation", json::array({0.0, 0.0, 0.0}));
+      if (!t.is_array() || t.size() != 3) bad("nodes[" + std::to_string(n) + "].translation is not 3 numbers");
+      for (int k = 0; k < 3; ++k) {
+        if (!t[k].is_number()) bad("nodes[" + std::to_string(n) + "].translation is not 3 numbers");
+        t[k] = t[k].get<double>() + double(offset[k]);
+      }
+      node["translation"] = t;
+    }
+    return assembleGlb(doc, std::vector<uint8_t>(c.bin, c.bin + c.bin_size));
+  } catch (const json::exception& e) {
+    bad(std::string("JSON: ") + e.what());
   }
 }
 

@@ -29,6 +29,15 @@ struct GlbOptions {
   int compression_level = 7;  // 0 (fastest) .. 10 (smallest), as draco_encoder -cl
 };
 
+// What decodeGlb()/decodeGlbLevel() will return for one encoded mesh, known
+// at encode time so a package can record it (runtime pools are sized from
+// these counts without decoding). Draco may drop degenerate faces, so these
+// come from decoding the encoder's own output, not from the input mesh; a mesh
+// without normals decodes unwelded (3 vertices per triangle) and counts so.
+struct GlbMeshCounts {
+  uint32_t vertices = 0, triangles = 0;
+};
+
 // Encodes `mesh` as a GLB with one mesh, one primitive (POSITION, NORMAL if
 // the mesh has normals, COLOR_0 if it has colours, TEXCOORD_0 if it has uvs,
 // indices), and, when the mesh carries an image, that image in the BIN chunk
@@ -40,7 +49,21 @@ struct GlbOptions {
 // Throws core::Error(InvalidArg) when the mesh is inconsistent (array sizes,
 // an index >= vertex count, a non-finite position) or an option is out of
 // range; core::Error(Internal) when Draco fails to encode.
-std::vector<uint8_t> encodeGlb(const geo::MeshData& mesh, const GlbOptions& opt = {});
+std::vector<uint8_t> encodeGlb(const geo::MeshData& mesh, const GlbOptions& opt = {}, GlbMeshCounts* counts = nullptr);
+
+// Levels of detail in one GLB (MSFT_lod, node-based): levels[0] is encoded as
+// encodeGlb() does (node 0, mesh 0, the only node in the scene, so any viewer
+// and decodeGlb() show it), levels[1..] as meshes 1.. on nodes 1.. outside the
+// scene, listed in decreasing detail by node 0's
+// `extensions.MSFT_lod.ids`. Each level is its own primitive (its own Draco
+// buffer when opt.draco), so a level decodes without touching the others.
+// MSFT_lod goes in extensionsUsed only: a reader without it still sees level 0.
+// Every level must have the same attribute set (normals, colours, uvs); only
+// level 0 may carry an image. An empty levels[0] (then the only level) gives
+// the empty-scene GLB. `counts` (if given) gets one entry per level.
+// Throws as encodeGlb() does, naming the level.
+std::vector<uint8_t> encodeGlbLevels(const std::vector<geo::MeshData>& levels, const GlbOptions& opt = {},
+                                     std::vector<GlbMeshCounts>* counts = nullptr);
 
 // The most vertices (and a third of the most indices) decodeGlb() produces;
 // beyond it returns Unsupported rather than allocate without bound (node
@@ -67,5 +90,18 @@ inline constexpr size_t kMaxDecodedVertices = size_t{1} << 24;
 // bytes at offset 8 run past bufferView 1 (288 bytes)"). `out` is replaced;
 // it is empty after a failure.
 core::Status decodeGlb(const uint8_t* data, size_t size, geo::MeshData& out, std::string& err);
+
+// As decodeGlb(), but every node of the scene that has an MSFT_lod extension
+// is replaced by its level `level` node (ids[level - 1]); level 0 is
+// decodeGlb(). NotFound when the scene has no MSFT_lod node, or one has fewer
+// than `level` lower levels; Corrupt for a malformed MSFT_lod.
+core::Status decodeGlbLevel(const uint8_t* data, size_t size, uint32_t level, geo::MeshData& out, std::string& err);
+
+// A copy of a GLB whose whole scene (LOD nodes included) is moved by `offset`
+// (glTF axes, metres): its scene roots and MSFT_lod level nodes gain the
+// translation, everything else (the Draco buffers, images) is the same bytes.
+// For the bake's tiled benchmark packages. Throws core::Error(InvalidArg) when
+// the GLB is not one this module wrote (no JSON chunk, a node with a matrix).
+std::vector<uint8_t> translateGlb(const uint8_t* data, size_t size, const float offset[3]);
 
 }  // namespace blvd::package

@@ -139,6 +139,24 @@ PackageWriter::Layout PackageWriter::layout() const {
   put<uint32_t>(hp + h::kMaxBlockBlob, header_.max_block_blob_bytes);
   put<uint32_t>(hp + h::kMaxCellBlob, header_.max_cell_blob_bytes);
   put<uint64_t>(hp + h::kSourceBytes, header_.source_bytes);
+  put<uint32_t>(hp + h::kMaxBlockLod0Vertices, header_.max_block_lod0_vertices);
+  put<uint32_t>(hp + h::kMaxBlockLod0Triangles, header_.max_block_lod0_triangles);
+  put<uint32_t>(hp + h::kMaxBlockVertices, header_.max_block_vertices);
+  put<uint32_t>(hp + h::kMaxBlockTriangles, header_.max_block_triangles);
+  put<uint32_t>(hp + h::kMaxCellLocalBlocks, header_.max_cell_local_blocks);
+  put<uint32_t>(hp + h::kMaxCellLocalLod0Vertices, header_.max_cell_local_lod0_vertices);
+  put<uint32_t>(hp + h::kMaxCellLocalLod0Triangles, header_.max_cell_local_lod0_triangles);
+  put<uint32_t>(hp + h::kMaxCellLocalVertices, header_.max_cell_local_vertices);
+  put<uint32_t>(hp + h::kMaxCellLocalTriangles, header_.max_cell_local_triangles);
+  put<uint32_t>(hp + h::kMaxCellImpostorLayers, header_.max_cell_impostor_layers);
+  put<uint64_t>(hp + h::kMaxCellLocalBlobBytes, header_.max_cell_local_blob_bytes);
+  put<uint64_t>(hp + h::kMaxCellImpostorBlobBytes, header_.max_cell_impostor_blob_bytes);
+  put<uint64_t>(hp + h::kMaxCellImpostorTextureBytes, header_.max_cell_impostor_texture_bytes);
+  put<uint32_t>(hp + h::kMaxCellImpostorVertices, header_.max_cell_impostor_vertices);
+  put<uint32_t>(hp + h::kMaxCellImpostorTriangles, header_.max_cell_impostor_triangles);
+  put<uint32_t>(hp + h::kMaxImpostorTextureBytes, header_.max_impostor_texture_bytes);
+  put<uint16_t>(hp + h::kMaxImpostorTextureWidth, header_.max_impostor_texture_width);
+  put<uint16_t>(hp + h::kMaxImpostorTextureHeight, header_.max_impostor_texture_height);
   put<uint32_t>(hp + h::kCrc, detail::headerCrc(hp, kHeaderSize));
   return L;
 }

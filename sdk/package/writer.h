@@ -29,6 +29,9 @@ class PackageWriter {
   // call order. The index is what the BLCK/CELL sections store.
   uint32_t addBlob(std::vector<uint8_t> bytes);
   uint32_t blobCount() const { return static_cast<uint32_t>(blobs_.size()); }
+  // The bytes of blob `i` (< blobCount()). The reference is valid until the
+  // next addBlob().
+  const std::vector<uint8_t>& blob(uint32_t i) const { return blobs_.at(i).bytes; }
 
   // Bytes the section will occupy without padding; for BIDX and BDAT the size
   // the writer will give them; 0 for a tag that was not added.

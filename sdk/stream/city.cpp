@@ -75,18 +75,42 @@ uint64_t City::tableBytes() const {
 
 core::Status City::decodeBlock(uint32_t b, geo::MeshData& out, std::string& err) const {
   out.clear();
+  if (b < blocks_.size() && blocks_[b].blob == 0xffffffffu) return core::Status::Ok;  // empty block, no levels
+  return decodeBlock(b, 0, out, err);
+}
+
+core::Status City::decodeBlock(uint32_t b, uint32_t lod, geo::MeshData& out, std::string& err) const {
+  out.clear();
   if (b >= blocks_.size()) {
     err = "block " + std::to_string(b) + " does not exist";
     return core::Status::NotFound;
   }
-  if (blocks_[b].blob == 0xffffffffu) return core::Status::Ok;
+  const graph::BlockRecord& rec = blocks_[b];
+  if (lod >= rec.lod_count) {
+    err = "block " + std::to_string(b) + " has " + std::to_string(rec.lod_count) + " levels, level " +
+          std::to_string(lod) + " requested";
+    return core::Status::NotFound;
+  }
   package::Span s;
-  core::Status st = reader_.blob(blocks_[b].blob, s, err);
+  core::Status st = reader_.blob(rec.blob, s, err);
   if (st != core::Status::Ok) return st;
-  st = package::decodeGlb(s.data, s.size, out, err);
-  if (st != core::Status::Ok) err = reader_.name() + ": block " + std::to_string(b) + " at offset " +
-                                    std::to_string(s.offset) + ": " + err;
-  return st;
+  const std::string where =
+      reader_.name() + ": block " + std::to_string(b) + " level " + std::to_string(lod) + " at offset " + std::to_string(s.offset) + ": ";
+  st = package::decodeGlbLevel(s.data, s.size, lod, out, err);
+  if (st == core::Status::NotFound) st = core::Status::Corrupt;  // BLCK promised the level
+  if (st != core::Status::Ok) {
+    err = where + err;
+    return st;
+  }
+  // Pools are sized from the record; a GLB that decodes to more would overrun them.
+  if (out.vertexCount() != rec.vertices[lod] || out.triangleCount() != rec.triangles[lod]) {
+    err = where + "decodes to " + std::to_string(out.vertexCount()) + " vertices and " +
+          std::to_string(out.triangleCount()) + " triangles, BLCK records " + std::to_string(rec.vertices[lod]) +
+          " and " + std::to_string(rec.triangles[lod]);
+    out.clear();
+    return core::Status::Corrupt;
+  }
+  return core::Status::Ok;
 }
 
 core::Status City::decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshData& out, std::string& err) const {

@@ -42,6 +42,11 @@ class City {
   // Decodes block `b`'s GLB into `out` (cleared first). An empty block gives an
   // empty mesh and Ok. Corrupt if the blob's CRC or the GLB is bad.
   core::Status decodeBlock(uint32_t b, geo::MeshData& out, std::string& err) const;
+  // Decodes level `lod` (0 = full) of block `b`: exactly blocks()[b].vertices[lod]
+  // vertices and .triangles[lod] triangles. NotFound when lod >= lod_count (an
+  // empty block has none); Corrupt, naming the file, block and offset, when the
+  // blob or GLB is bad or its level disagrees with the BLCK record.
+  core::Status decodeBlock(uint32_t b, uint32_t lod, geo::MeshData& out, std::string& err) const;
 
   // The cell nearest to local point p whose direction best matches heading_deg
   // (clockwise from north); kNone for an empty graph. Also returns the arc

@@ -17,6 +17,14 @@ assert c["junctions"] > 100 and c["cells"] > 200 and c["blocks"] > 50, c
 assert c["buildings"] > 1000 and c["triangles"] > 10000, c
 for s in ("GRPH", "CELL", "BLCK", "META", "BIDX", "BDAT"):
     assert s in j["sections"] and j["sections"][s]["bytes"] > 0, s
+# Levels of detail: fewer triangles per level, errors growing; pool sizing filled in.
+lv = j["lod_levels"]
+assert 0 < lv[0]["blocks"] <= c["blocks"], lv
+assert lv[1]["blocks"] > 0 and lv[1]["triangles"] < lv[0]["triangles"], lv
+assert all(lv[k]["max_error_m"] >= 0 for k in range(4)), lv
+p = j["pool_sizing"]
+assert p["max_block_triangles"] >= p["max_block_lod0_triangles"] > 0, p
+assert p["max_cell_local_blocks"] > 0 and p["max_cell_impostor_layers"] > 0, p
 PY
 "$blvd" pack verify "$pkg" | grep -q "ok" || fail "verify of a good package"
 
@@ -60,6 +68,10 @@ assert j["asset"]["version"] == "2.0" and j["meshes"], j.keys()
 assert "KHR_draco_mesh_compression" in j.get("extensionsRequired", []), "blocks must be Draco-compressed"
 prim = j["meshes"][0]["primitives"][0]
 assert "KHR_draco_mesh_compression" in prim["extensions"], prim
+if "block" in sys.argv[1]:  # a block holds its levels of detail (MSFT_lod, not required)
+    assert "MSFT_lod" in j["extensionsUsed"] and "MSFT_lod" not in j["extensionsRequired"], j["extensionsUsed"]
+    ids = j["nodes"][0]["extensions"]["MSFT_lod"]["ids"]
+    assert len(ids) >= 1 and j["scenes"][0]["nodes"] == [0], ids
 PY
 done
 # view: one pose to PNG.

@@ -72,6 +72,25 @@ inline PackageHeader sampleHeader() {
   h.max_block_blob_bytes = 65536;
   h.max_cell_blob_bytes = 262144;
   h.source_bytes = 673936;
+  // Pool sizing: distinct values, some past 32 bits where the field is 64.
+  h.max_block_lod0_vertices = 1000;
+  h.max_block_lod0_triangles = 1037;
+  h.max_block_vertices = 1074;
+  h.max_block_triangles = 1111;
+  h.max_cell_local_blocks = 1148;
+  h.max_cell_local_lod0_vertices = 1185;
+  h.max_cell_local_lod0_triangles = 1222;
+  h.max_cell_local_vertices = 1259;
+  h.max_cell_local_triangles = 1296;
+  h.max_cell_impostor_layers = 1333;
+  h.max_cell_local_blob_bytes = 8589934602ull;
+  h.max_cell_impostor_blob_bytes = 8589934603ull;
+  h.max_cell_impostor_texture_bytes = 8589934604ull;
+  h.max_cell_impostor_vertices = 1481;
+  h.max_cell_impostor_triangles = 1518;
+  h.max_impostor_texture_bytes = 1555;
+  h.max_impostor_texture_width = 516;
+  h.max_impostor_texture_height = 517;
   return h;
 }
 

@@ -82,6 +82,9 @@ TEST(Package, RoundTrip) {
   EXPECT_EQ(h.max_block_blob_bytes, e.max_block_blob_bytes);
   EXPECT_EQ(h.max_cell_blob_bytes, e.max_cell_blob_bytes);
   EXPECT_EQ(h.source_bytes, e.source_bytes);
+  const auto got = poolSizing(h), want = poolSizing(e);
+  ASSERT_EQ(got.size(), 20u);
+  for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].value, want[i].value) << got[i].name;
 
   // Sections: contents, alignment, directory order (user sections, BIDX, BDAT).
   const uint32_t tags[] = {kSectionGraph, kSectionCells, kSectionBlocks};
@@ -443,10 +446,20 @@ TEST_F(Resealed, HeaderSizeField) {
 }
 
 TEST_F(Resealed, NewerMajorVersionIsUnsupported) {
-  set<uint16_t>(detail::hdr::kVersionMajor, 2);
+  set<uint16_t>(detail::hdr::kVersionMajor, kVersionMajor + 1);
   std::string err;
   EXPECT_EQ(open(err), Status::Unsupported);
-  EXPECT_TRUE(contains(err, "version 2.0") && contains(err, "1.x")) << err;
+  const std::string v = std::to_string(kVersionMajor);
+  EXPECT_TRUE(contains(err, "version " + std::to_string(kVersionMajor + 1) + ".0") && contains(err, v + ".x")) << err;
+}
+
+// A 1.x package (before the BLCK level-of-detail fields) is refused as a
+// whole, not misread.
+TEST_F(Resealed, OlderMajorVersionIsUnsupported) {
+  set<uint16_t>(detail::hdr::kVersionMajor, 1);
+  std::string err;
+  EXPECT_EQ(open(err), Status::Unsupported);
+  EXPECT_TRUE(contains(err, "version 1.0") && contains(err, "this build reads 2.x")) << err;
 }
 
 TEST_F(Resealed, NewerMinorVersionOpens) {

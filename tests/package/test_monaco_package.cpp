@@ -1,0 +1,139 @@
+// The baked Monaco package (fixture bake.monaco_geofabrik), checked by brute
+// force against what decoding it gives: every block level decodes to exactly
+// the counts its BLCK record promises, levels lose triangles, errors grow;
+// the header's pool sizing fields equal a scan that decodes everything.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "common/monaco_city.h"
+
+namespace blvd {
+namespace {
+
+const stream::City& city() { return test::monacoCity(); }
+
+TEST(MonacoPackage, EveryBlockLevelDecodesToItsRecordedCounts) {
+  const auto& blocks = city().blocks();
+  size_t multi = 0;
+  for (uint32_t b = 0; b < blocks.size(); ++b) {
+    const graph::BlockRecord& r = blocks[b];
+    ASSERT_LE(r.lod_count, graph::kMaxBlockLods);
+    multi += r.lod_count > 1;
+    for (uint32_t k = 0; k < r.lod_count; ++k) {
+      geo::MeshData m;
+      std::string err;
+      ASSERT_EQ(city().decodeBlock(b, k, m, err), core::Status::Ok) << err;
+      ASSERT_EQ(m.vertexCount(), r.vertices[k]) << "block " << b << " level " << k;
+      ASSERT_EQ(m.triangleCount(), r.triangles[k]) << "block " << b << " level " << k;
+      ASSERT_TRUE(std::isfinite(r.error_m[k]));
+      if (k > 0) {
+        ASSERT_LT(r.triangles[k], r.triangles[k - 1]) << "block " << b;
+        ASSERT_GE(r.error_m[k], r.error_m[k - 1]) << "block " << b;
+      }
+    }
+    geo::MeshData m;
+    std::string err;
+    EXPECT_EQ(city().decodeBlock(b, r.lod_count, m, err), core::Status::NotFound);
+  }
+  // The default bake makes a chain for nearly every block.
+  EXPECT_GT(multi, blocks.size() * 9 / 10);
+}
+
+// Width and height from a JPEG's SOF marker or a PNG's IHDR.
+bool imageSize(const std::vector<uint8_t>& img, uint32_t& w, uint32_t& h) {
+  if (img.size() > 24 && img[0] == 0x89 && img[1] == 'P') {
+    w = uint32_t(img[16]) << 24 | uint32_t(img[17]) << 16 | uint32_t(img[18]) << 8 | img[19];
+    h = uint32_t(img[20]) << 24 | uint32_t(img[21]) << 16 | uint32_t(img[22]) << 8 | img[23];
+    return true;
+  }
+  for (size_t i = 2; i + 9 < img.size();) {
+    if (img[i] != 0xFF) return false;
+    const uint8_t marker = img[i + 1];
+    const size_t len = size_t(img[i + 2]) << 8 | img[i + 3];
+    if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+      h = uint32_t(img[i + 5]) << 8 | img[i + 6];
+      w = uint32_t(img[i + 7]) << 8 | img[i + 8];
+      return true;
+    }
+    i += 2 + len;
+  }
+  return false;
+}
+
+TEST(MonacoPackage, HeaderPoolSizingEqualsABruteForceScan) {
+  const auto& blocks = city().blocks();
+  const auto& g = city().graph();
+  const package::PackageReader& pkg = city().package();
+  // Per block, from decoding every level.
+  std::vector<uint64_t> v_all(blocks.size()), t_all(blocks.size()), v0(blocks.size()), t0(blocks.size()),
+      bytes(blocks.size());
+  package::PackageHeader e;  // expected
+  for (uint32_t b = 0; b < blocks.size(); ++b) {
+    for (uint32_t k = 0; k < blocks[b].lod_count; ++k) {
+      geo::MeshData m;
+      std::string err;
+      ASSERT_EQ(city().decodeBlock(b, k, m, err), core::Status::Ok) << err;
+      v_all[b] += m.vertexCount();
+      t_all[b] += m.triangleCount();
+      if (k == 0) v0[b] = m.vertexCount(), t0[b] = m.triangleCount();
+    }
+    bytes[b] = blocks[b].lod_count ? pkg.blobInfo(blocks[b].blob).size : 0;
+    e.max_block_blob_bytes = std::max<uint32_t>(e.max_block_blob_bytes, uint32_t(bytes[b]));
+    e.max_block_lod0_vertices = std::max<uint32_t>(e.max_block_lod0_vertices, uint32_t(v0[b]));
+    e.max_block_lod0_triangles = std::max<uint32_t>(e.max_block_lod0_triangles, uint32_t(t0[b]));
+    e.max_block_vertices = std::max<uint32_t>(e.max_block_vertices, uint32_t(v_all[b]));
+    e.max_block_triangles = std::max<uint32_t>(e.max_block_triangles, uint32_t(t_all[b]));
+  }
+  for (uint32_t c = 0; c < g.cellCount(); ++c) {
+    uint64_t n = 0, sv0 = 0, st0 = 0, sv = 0, st = 0, sb = 0;
+    for (const uint32_t* b = g.local_blocks.begin(c); b != g.local_blocks.end(c); ++b)
+      ++n, sv0 += v0[*b], st0 += t0[*b], sv += v_all[*b], st += t_all[*b], sb += bytes[*b];
+    e.max_cell_local_blocks = std::max<uint32_t>(e.max_cell_local_blocks, uint32_t(n));
+    e.max_cell_local_lod0_vertices = std::max<uint32_t>(e.max_cell_local_lod0_vertices, uint32_t(sv0));
+    e.max_cell_local_lod0_triangles = std::max<uint32_t>(e.max_cell_local_lod0_triangles, uint32_t(st0));
+    e.max_cell_local_vertices = std::max<uint32_t>(e.max_cell_local_vertices, uint32_t(sv));
+    e.max_cell_local_triangles = std::max<uint32_t>(e.max_cell_local_triangles, uint32_t(st));
+    e.max_cell_local_blob_bytes = std::max(e.max_cell_local_blob_bytes, sb);
+  }
+  ASSERT_TRUE(city().hasImpostors()) << "the fixture bakes impostors on a route";
+  size_t layers_seen = 0;
+  for (const graph::CellImpostors& ci : city().cellTables().impostors) {
+    uint64_t n = 0, sv = 0, st = 0, sb = 0, stex = 0;
+    for (const auto* list : {&ci.layered, &ci.single})
+      for (const graph::ImpostorLayer& l : *list) {
+        geo::MeshData m;
+        std::string err;
+        ASSERT_EQ(city().decodeImpostor(l, m, err), core::Status::Ok) << err;
+        uint32_t w = 0, h = 0;
+        ASSERT_TRUE(imageSize(m.image, w, h)) << "impostor blob " << l.blob << " has no readable image";
+        EXPECT_EQ(w, l.texture_width);
+        EXPECT_EQ(h, l.texture_height);
+        EXPECT_EQ(m.vertexCount(), l.vertices);
+        EXPECT_EQ(m.triangleCount(), l.triangles);
+        const uint64_t blob = pkg.blobInfo(l.blob).size, tex = uint64_t{w} * h * 4;
+        ++n, ++layers_seen, sv += m.vertexCount(), st += m.triangleCount(), sb += blob, stex += tex;
+        e.max_cell_blob_bytes = std::max<uint32_t>(e.max_cell_blob_bytes, uint32_t(blob));
+        e.max_impostor_texture_bytes = std::max<uint32_t>(e.max_impostor_texture_bytes, uint32_t(tex));
+        e.max_impostor_texture_width = std::max<uint16_t>(e.max_impostor_texture_width, uint16_t(w));
+        e.max_impostor_texture_height = std::max<uint16_t>(e.max_impostor_texture_height, uint16_t(h));
+      }
+    e.max_cell_impostor_layers = std::max<uint32_t>(e.max_cell_impostor_layers, uint32_t(n));
+    e.max_cell_impostor_vertices = std::max<uint32_t>(e.max_cell_impostor_vertices, uint32_t(sv));
+    e.max_cell_impostor_triangles = std::max<uint32_t>(e.max_cell_impostor_triangles, uint32_t(st));
+    e.max_cell_impostor_blob_bytes = std::max(e.max_cell_impostor_blob_bytes, sb);
+    e.max_cell_impostor_texture_bytes = std::max(e.max_cell_impostor_texture_bytes, stex);
+  }
+  EXPECT_GT(layers_seen, 0u);
+  const package::PackageHeader& h = city().header();
+  const auto got = package::poolSizing(h), want = package::poolSizing(e);
+  ASSERT_EQ(got.size(), want.size());
+  for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].value, want[i].value) << got[i].name;
+  EXPECT_GT(h.max_cell_impostor_layers, 0u);
+  EXPECT_GE(h.max_block_triangles, h.max_block_lod0_triangles);
+}
+
+}  // namespace
+}  // namespace blvd
