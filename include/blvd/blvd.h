@@ -126,6 +126,12 @@ typedef struct blvd_runtime_desc {
   uint32_t ring_capacity;       /* tracking events between two frames; 0 means 512 */
   uint32_t route_capacity;      /* cells a blvd_set_route() may hold; 0 means 4096 */
   blvd_allocator allocator;     /* host allocator for the pools; alloc == NULL means the C heap */
+
+  /* ---- level of detail ---- */
+  float target_frame_ms; /* frame-time target: a polygon budget from the frame-time history is shared
+                          * by coverage across the blocks' LOD chains (Marvie). 0: no budget, each
+                          * block takes its coarsest level within lod_error_px */
+  float lod_error_px;    /* without a target: the screen-space error a level may show; 0 means 1 */
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */
@@ -216,6 +222,9 @@ typedef struct blvd_stats {
   double upload_ms_max;
   double frame_ms;               /* the last frame */
   uint64_t triangles;            /* the last frame */
+  uint64_t polygon_budget;       /* with target_frame_ms: block triangles allowed next frame; else 0 */
+  uint64_t block_triangles;      /* triangles of the block levels chosen for the last frame (visible ones) */
+  uint32_t budget_unreachable;   /* 1 when even the coarsest levels are predicted to miss the target */
 } blvd_stats;
 
 /* Fills *stats. Render thread. */

@@ -79,6 +79,7 @@ blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* in) {
   if (d.upload_budget_ms == 0) d.upload_budget_ms = 2.f;
   if (!d.ring_capacity) d.ring_capacity = 512;
   if (!d.route_capacity) d.route_capacity = 4096;
+  if (d.lod_error_px == 0) d.lod_error_px = 1.f;
   return d;
 }
 
@@ -108,6 +109,10 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
   if (!(d.upload_budget_ms > 0 && d.upload_budget_ms < 1000) || d.ring_capacity > (1u << 20) ||
       d.route_capacity > (1u << 24)) {
     t_create_error = "blvd_runtime_create: upload_budget_ms, ring_capacity or route_capacity out of range";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  if (!(d.target_frame_ms >= 0 && d.target_frame_ms < 10000) || !(d.lod_error_px > 0 && d.lod_error_px < 1e4)) {
+    t_create_error = "blvd_runtime_create: target_frame_ms or lod_error_px out of range";
     return BLVD_ERR_INVALID_ARG;
   }
   if (!d.allocator.alloc != !d.allocator.free) {

@@ -145,7 +145,7 @@ void CellLoader::decode(Staging& s) {
     std::lock_guard<std::mutex> lock(mu_);
     s.state = Staging::Failed;
   };
-  auto stage = [&](MeshKind kind, uint32_t item) {
+  auto stage = [&](MeshKind kind, uint32_t item, uint32_t level) {
     if (scratch_.empty()) return true;  // an empty block draws nothing
     if (s.mesh_count >= s.mesh_capacity) {
       fail("more meshes than the plan's largest cell");
@@ -158,6 +158,7 @@ void CellLoader::decode(Staging& s) {
     }
     m.kind = kind;
     m.item = item;
+    m.level = level;
     ++s.mesh_count;
     const uint64_t scratch_bytes = scratch_.positions.capacity() * 4 + scratch_.normals.capacity() * 4 +
                                    scratch_.colors.capacity() + scratch_.texcoords.capacity() * 4 +
@@ -166,11 +167,12 @@ void CellLoader::decode(Staging& s) {
     return true;
   };
   const graph::StreetGraph& g = city_.graph();
-  for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b) {
-    const core::Status st = city_.decodeBlock(*b, scratch_, err);
-    if (st != core::Status::Ok) return fail(err);
-    if (!stage(MeshKind::Block, *b)) return;
-  }
+  for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b)
+    for (uint32_t k = 0; k < city_.blocks()[*b].lod_count; ++k) {
+      const core::Status st = city_.decodeBlock(*b, k, scratch_, err);
+      if (st != core::Status::Ok) return fail(err);
+      if (!stage(MeshKind::Block, *b, k)) return;
+    }
   if (s.cell < city_.cellTables().impostors.size()) {
     const graph::CellImpostors& ci = city_.cellTables().impostors[s.cell];
     for (int single = 0; single < 2; ++single) {
@@ -178,7 +180,7 @@ void CellLoader::decode(Staging& s) {
       for (uint32_t i = 0; i < list.size(); ++i) {
         const core::Status st = city_.decodeImpostor(list[i], scratch_, err);
         if (st != core::Status::Ok) return fail(err);
-        if (!stage(single ? MeshKind::Single : MeshKind::Layered, i)) return;
+        if (!stage(single ? MeshKind::Single : MeshKind::Layered, i, 0)) return;
       }
     }
   }

@@ -28,7 +28,8 @@ enum class MeshKind : uint32_t { Block = 0, Layered = 1, Single = 2 };
 struct StagedMesh {
   render::PreparedMesh mesh;
   MeshKind kind = MeshKind::Block;
-  uint32_t item = 0;  // block id, or layer index within its list
+  uint32_t item = 0;   // block id, or layer index within its list
+  uint32_t level = 0;  // blocks: level of detail (0 = full)
 };
 
 struct Allocator {

@@ -28,14 +28,14 @@ CellNeed cellNeed(const stream::City& city, uint32_t cell) {
   const graph::StreetGraph& g = city.graph();
   for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) {
     const graph::BlockRecord& r = city.blocks()[*b];
-    if (r.blob == 0xffffffffu || r.triangle_count == 0) continue;
-    addMesh(n, uint64_t(r.triangle_count) * 3, r.triangle_count, 0, 0);
+    for (uint32_t k = 0; k < r.lod_count; ++k)
+      if (r.triangles[k]) addMesh(n, r.vertices[k], r.triangles[k], 0, 0);
   }
   if (cell < city.cellTables().impostors.size()) {
     const graph::CellImpostors& ci = city.cellTables().impostors[cell];
     for (const auto* list : {&ci.layered, &ci.single})
       for (const graph::ImpostorLayer& l : *list)
-        addMesh(n, uint64_t(l.triangles) * 3, l.triangles, l.texture_width, l.texture_height);
+        addMesh(n, l.vertices, l.triangles, l.texture_width, l.texture_height);
   }
   return n;
 }
@@ -60,6 +60,7 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
     p.slab.meshes = std::max(p.slab.meshes, n.meshes);
     p.slab.textures = std::max(p.slab.textures, n.textures);
     p.staging_arena_bytes = std::max(p.staging_arena_bytes, n.staging_bytes);
+    p.max_local_blocks = std::max(p.max_local_blocks, uint32_t(city.graph().local_blocks.count(c)));
     const uint64_t total = n.vertex_bytes + n.index_bytes + n.staging_bytes;
     if (total > most) most = total, p.largest_cell = c;
   }

@@ -21,8 +21,9 @@
 
 namespace blvd::capi {
 
-// What one cell needs resident. Block vertex counts come from the BLCK record
-// when the package has them, else the bound 3 × triangles.
+// What one cell needs resident: every level of each local block and every
+// impostor layer, with the exact vertex and triangle counts the BLCK and IMPO
+// records promise (the decoder checks them).
 struct CellNeed {
   uint64_t vertex_bytes = 0, index_bytes = 0;
   uint64_t staging_bytes = 0;  // render::preparedBytes summed over the meshes
@@ -41,6 +42,7 @@ struct MemoryPlan {
   uint64_t cpu_bytes = 0;            // staging + tables + tracking
   uint64_t gpu_bytes = 0;            // slabs
   uint32_t largest_cell = 0;         // the cell that needs the most bytes
+  uint32_t max_local_blocks = 0;     // most local blocks of one cell (LOD scratch size)
 };
 
 // Bytes of one staging slot's table of prepared meshes.

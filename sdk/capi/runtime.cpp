@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "core/log.h"
+#include "render/frustum.h"
 
 namespace blvd::capi {
 using core::Error;
@@ -43,11 +44,28 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   for (CellSlot& slot : slots_) {
     slot.slab = renderer_->createSlab(plan_.slab);
     if (slot.slab.id == 0) throw Error(Status::Backend, "cell slab: " + renderer_->lastError());
-    slot.blocks.reserve(plan_.slab.meshes);
+    slot.blocks.reserve(plan_.max_local_blocks);
     slot.layered.reserve(plan_.slab.textures);
     slot.single.reserve(plan_.slab.textures);
   }
   failed_cells_.assign(8, graph::kNone);
+  const size_t nb = plan_.max_local_blocks;
+  ach_.resize(nb);
+  chains_.resize(nb);
+  order_.resize(nb);
+  visible_.resize(nb);
+  level_.resize(nb);
+  visible_level_.resize(nb);
+  if (desc.target_frame_ms > 0) {
+    uint64_t most = 1;
+    for (uint32_t c = 0; c < city_.graph().cellCount(); ++c) {
+      uint64_t t = 0;
+      const graph::StreetGraph& g = city_.graph();
+      for (const uint32_t* b = g.local_blocks.begin(c); b != g.local_blocks.end(c); ++b) t += city_.blocks()[*b].triangle_count;
+      most = std::max(most, t);
+    }
+    budget_ = std::make_unique<stream::PolygonBudget>(desc.target_frame_ms, 0, most);
+  }
   residency_ = std::make_unique<stream::Residency>(city_.graph(), plan_.resident_cells, desc.route_capacity);
   draw_.reserve(city_.blocks().size() + plan_.slab.meshes + 1);
   setMode(desc.mode, desc.radius_m);
@@ -226,7 +244,17 @@ void Runtime::uploadStaged(double budget_ms) {
         ++stats_.load_errors;
         break;
       }
-      (m.kind == MeshKind::Block ? slot.blocks : m.kind == MeshKind::Layered ? slot.layered : slot.single).push_back(h);
+      if (m.kind == MeshKind::Block) {
+        // A block's levels arrive together, finest first.
+        if (slot.blocks.empty() || slot.blocks.back().block != m.item) slot.blocks.push_back(SlotBlock{m.item, 0, {}});
+        SlotBlock& sb = slot.blocks.back();
+        if (m.level < graph::kMaxBlockLods) {
+          sb.lod[m.level] = h;
+          sb.levels = std::max(sb.levels, m.level + 1);
+        }
+      } else {
+        (m.kind == MeshKind::Layered ? slot.layered : slot.single).push_back(h);
+      }
       spent = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       if (spent >= budget_ms) break;
     }
@@ -297,6 +325,58 @@ void Runtime::ensureReferenceBlocks() {
   }
 }
 
+float Runtime::coverage(uint32_t cell, uint32_t block) const {
+  const auto& vis = city_.cellTables().visibility;
+  if (cell >= vis.size()) return 0.f;
+  const auto& v = vis[cell];
+  const auto it = std::lower_bound(v.blocks.begin(), v.blocks.end(), block);
+  if (it == v.blocks.end() || *it != block) return 0.f;
+  const size_t i = size_t(it - v.blocks.begin());
+  return i < v.ach.size() ? v.ach[i] : 0.f;
+}
+
+void Runtime::chooseLevels(const CellSlot& slot) {
+  const size_t n = slot.blocks.size();
+  const glm::dvec3 eye = render::enuToGltf(cam_.eye_enu);
+  block_tris_ = 0;
+  if (!budget_) {
+    // No frame budget: the coarsest level whose simplification error stays
+    // within lod_error_px on screen at the block box's nearest point.
+    const double focal_px = cam_.height * 0.5 / std::tan(cam_.fov_y_deg * 3.14159265358979323846 / 360.0);
+    for (size_t i = 0; i < n; ++i) {
+      const graph::BlockRecord& r = city_.blocks()[slot.blocks[i].block];
+      const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
+      const double dist = std::max(glm::length(glm::max(glm::max(lo - eye, eye - hi), glm::dvec3(0.0))), 1e-3);
+      uint8_t level = 0;
+      for (uint32_t k = slot.blocks[i].levels; k-- > 1;)
+        if (r.error_m[k] * focal_px <= desc_.lod_error_px * dist) {
+          level = static_cast<uint8_t>(k);
+          break;
+        }
+      level_[i] = level;
+      block_tris_ += r.triangles[level];
+    }
+    return;
+  }
+  // Marvie et al.: frustum-cull, renormalise the cell's coverage hints over
+  // the visible blocks, and share the polygon budget P_i = ACH_i · P.
+  const render::Frustum frustum = render::Frustum::fromClip(render::viewProjectionRelative(cam_));
+  size_t nv = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const graph::BlockRecord& r = city_.blocks()[slot.blocks[i].block];
+    const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
+    level_[i] = static_cast<uint8_t>(slot.blocks[i].levels ? slot.blocks[i].levels - 1 : 0);  // culled anyway
+    if (!frustum.intersectsBox((lo + hi) * 0.5 - eye, (hi - lo) * 0.5)) continue;
+    visible_[nv] = static_cast<uint32_t>(i);
+    ach_[nv] = coverage(slot.cell, slot.blocks[i].block);
+    chains_[nv] = stream::LodChain{r.triangles, slot.blocks[i].levels};
+    ++nv;
+  }
+  block_tris_ = stream::shareBudget(budget_->budget(), ach_.data(), chains_.data(), nv, order_.data(),
+                                    visible_level_.data());
+  for (size_t j = 0; j < nv; ++j) level_[visible_[j]] = visible_level_[j];
+}
+
 void Runtime::buildDrawList(uint32_t cell) {
   draw_.clear();
   impostors_drawn_ = 0;
@@ -335,8 +415,10 @@ void Runtime::buildDrawList(uint32_t cell) {
         if (!slot) break;
       }
       last_drawn_cell_ = slot->cell;
-      // Sillion 97 §3.1: the local model as geometry ...
-      for (render::MeshHandle h : slot->blocks) draw_.push_back(h);
+      // Sillion 97 §3.1: the local model as geometry, each block at the
+      // level of detail the budget or the error bound gives it ...
+      chooseLevels(*slot);
+      for (size_t i = 0; i < slot->blocks.size(); ++i) draw_.push_back(slot->blocks[i].lod[level_[i]]);
       if (mode_ == BLVD_MODE_LOCAL) break;
       // ... plus the cell's impostors for the rest; the blocks they stand
       // for are never drawn with them (K06 §3.1.2): they are not local.
@@ -436,6 +518,12 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
     renderer_->setReadSize(int(W), int(H));
   }
   rendered_ = true;
+  if (budget_ && !(mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS)) {
+    budget_->next(fs.frame_ms, block_tris_);
+    stats_.polygon_budget = budget_->budget();
+    stats_.budget_unreachable = budget_->unreachable() ? 1 : 0;
+  }
+  stats_.block_triangles = block_tris_;
   ++stats_.frames;
   stats_.frame_ms = fs.frame_ms;
   stats_.triangles = fs.triangles;

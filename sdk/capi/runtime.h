@@ -12,6 +12,7 @@
 #include "render/renderer.h"
 #include "capi/cell_loader.h"
 #include "capi/memory_plan.h"
+#include "stream/frame_budget.h"
 #include "stream/residency.h"
 #include "stream/city.h"
 #include "track/tracker.h"
@@ -48,11 +49,17 @@ class Runtime {
  private:
   // One resident-cell slot: a GL slab and the handles of what was placed in
   // it (local blocks, layered and single impostors), in vectors reserved once.
+  struct SlotBlock {
+    uint32_t block = 0;
+    uint32_t levels = 0;
+    render::MeshHandle lod[graph::kMaxBlockLods];
+  };
   struct CellSlot {
     enum State { Empty, Loading, Resident } state = Empty;
     uint32_t cell = 0xffffffffu;
     render::SlabHandle slab;
-    std::vector<render::MeshHandle> blocks, layered, single;
+    std::vector<SlotBlock> blocks;
+    std::vector<render::MeshHandle> layered, single;
     uint64_t bytes = 0;  // slab bytes in use
   };
   // The camera from the tracker when it drives, then the current cell.
@@ -62,6 +69,10 @@ class Runtime {
   void buildDrawList(uint32_t cell);
   void ensureReferenceBlocks();
   const CellSlot* residentSlot(uint32_t cell) const;
+  // Level of detail per block of `slot` into level_: Marvie's budget when a
+  // target is set, else the coarsest level within lod_error_px.
+  void chooseLevels(const CellSlot& slot);
+  float coverage(uint32_t cell, uint32_t block) const;
 
   blvd_runtime_desc desc_;
   stream::City city_;
@@ -88,6 +99,13 @@ class Runtime {
   render::Camera cam_;
   bool rendered_ = false;
   blvd_stats stats_{};
+  std::unique_ptr<stream::PolygonBudget> budget_;  // with target_frame_ms
+  // chooseLevels scratch, sized for the largest cell at create.
+  std::vector<float> ach_;
+  std::vector<stream::LodChain> chains_;
+  std::vector<uint32_t> order_, visible_;
+  std::vector<uint8_t> level_, visible_level_;
+  uint64_t block_tris_ = 0;
   uint64_t gpu_high_water_ = 0;
   // The tracker drives the camera once it has a pose, until the host places
   // the camera itself (blvd_set_pose_*); the next feed hands it back.
