@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -18,6 +19,7 @@
 
 #include "can_feed.h"
 #include "can_input.h"
+#include "gnss_feed.h"
 #include "logs.h"
 #include "tracking.h"
 #if VCAN_DRIVE_CAPI
@@ -48,6 +50,10 @@ struct Options {
   std::string poses_path, odometry_path, stats_path, render_poses;
   double pose_interval_s = 0.1;
   std::vector<double> start;  // lat, lon[, heading]
+  std::string nmea;
+  double nmea_offset_s = 0;
+  double trace_t0 = 0;
+  bool has_trace_t0 = false;
   double idle_exit_s = 0, duration_s = 0;
   std::string ready_file;
   int rcvbuf = 4 << 20;
@@ -192,6 +198,10 @@ int main(int argc, char** argv) {
   app.add_option("--vehicle", opt.vehicle, "toyota, vw_mqb or hyundai")->capture_default_str();
   app.add_option("--start", opt.start, "LAT LON [HEADING]: where dead reckoning starts without GNSS")
       ->expected(2, 3);
+  app.add_option("--nmea", opt.nmea, "GNSS fixes from an NMEA log on the CAN trace's clock, fed in step with the bus");
+  app.add_option("--nmea-offset", opt.nmea_offset_s, "seconds added to the NMEA times to put them on the trace clock");
+  CLI::Option* t0_opt =
+      app.add_option("--trace-t0", opt.trace_t0, "on a live bus: the trace time of the first frame (default: first fix)");
   app.add_option("--poses", opt.poses_path, "write poses as JSON lines");
   app.add_option("--odometry", opt.odometry_path, "write the decoded odometry as JSON lines");
   app.add_option("--stats", opt.stats_path, "write the run's stats JSON");
@@ -216,18 +226,30 @@ int main(int argc, char** argv) {
   opt.no_render = true;
 #endif
   CLI11_PARSE(app, argc, argv);
+  opt.has_trace_t0 = t0_opt->count() > 0;
 
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
   const auto wall0 = Clock::now();
   std::string err;
 
+  GnssFeed gnss;
+  if (!opt.nmea.empty() && gnss.open(opt.nmea, opt.nmea_offset_s, err) != BLVD_OK) {
+    std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
+    return 2;
+  }
+
   TrackingDesc td;
   td.package = opt.package;
   td.width = opt.width;
   td.height = opt.height;
   td.backend = parseBackend(opt.backend);
-  if (!opt.start.empty()) td.origin_lat = opt.start[0], td.origin_lon = opt.start[1];
+  // Without a package the local frame sits at the start, else at the first fix.
+  blvd_gnss_fix first_fix{};
+  if (!opt.start.empty())
+    td.origin_lat = opt.start[0], td.origin_lon = opt.start[1];
+  else if (gnss.isOpen() && gnss.first(first_fix))
+    td.origin_lat = first_fix.lat, td.origin_lon = first_fix.lon;
 
   std::unique_ptr<Tracking> tracking;
 #if VCAN_DRIVE_CAPI
@@ -243,6 +265,11 @@ int main(int argc, char** argv) {
   if (tracking) {
     renderer.tracking = tracking.get();
     renderer.dir = opt.frames_dir;
+    std::error_code ec;
+    if (!opt.frames_dir.empty() && (std::filesystem::create_directories(opt.frames_dir, ec), ec)) {
+      std::fprintf(stderr, "vcan_drive: cannot create %s: %s\n", opt.frames_dir.c_str(), ec.message().c_str());
+      return 2;
+    }
     renderer.rgba.resize(size_t(tracking->width()) * tracking->height() * 4);
     if (opt.display && !(renderer.display = openDisplay(tracking->width(), tracking->height(), err))) {
       std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
@@ -268,8 +295,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (opt.package.empty() && opt.start.empty())
-    std::fprintf(stderr, "vcan_drive: no package and no --start: odometry is decoded, but poses stay invalid\n");
+  if (opt.package.empty() && opt.start.empty() && opt.nmea.empty())
+    std::fprintf(stderr, "vcan_drive: no --start and no --nmea: odometry is decoded, but poses stay invalid\n");
 
   blvd::can::Vehicle vehicle;
   if (!blvd::can::parseVehicle(opt.vehicle, vehicle)) {
@@ -302,6 +329,7 @@ int main(int argc, char** argv) {
   uint64_t pose_count = 0, valid = 0, matched = 0, bad_lines = 0;
   std::vector<uint32_t> cells;
   double first_t = 0, last_t = 0, next_pose_t = 0;
+  double to_rx = 0;  // receiving clock - trace clock
   bool started = false;
   auto last_frame_wall = Clock::now();
   int rc = 0;
@@ -332,8 +360,16 @@ int main(int argc, char** argv) {
       first_t = f.t;
       next_pose_t = f.t;
       if (!opt.start.empty()) feedStart(*tracking, opt.start, f.t);
+      // A candump file is its own trace clock; a live bus is placed on it at its first frame.
+      double t0 = f.t;  // this frame's time on the trace clock
+      if (opt.candump.empty() && opt.has_trace_t0)
+        t0 = opt.trace_t0;
+      else if (opt.candump.empty() && gnss.isOpen() && gnss.first(first_fix))
+        t0 = first_fix.t;
+      to_rx = f.t - t0;
     }
     last_t = f.t;
+    if (gnss.isOpen()) gnss.feedUntil(f.t - to_rx, to_rx, *tracking);
     if (feed.feed(f, *tracking, odo)) odolog.odometry(odo, f.id);
     if (f.t < next_pose_t) continue;
     next_pose_t = f.t + opt.pose_interval_s;
@@ -373,6 +409,9 @@ int main(int argc, char** argv) {
   j["error_frames"] = input.errorFrames();
   j["bus_off"] = input.busOffs();
   j["bad_lines"] = bad_lines;
+  j["gnss_fed"] = gnss.fed();
+  j["gnss_untimed"] = gnss.untimed();
+  j["nmea_diagnostics"] = gnss.diagnostics();
   j["first_t"] = first_t;
   j["last_t"] = last_t;
   j["poses"] = pose_count;

@@ -47,6 +47,10 @@ def run_in_guest(a, trace, out, summary):
     if a.package:
         files["/in/package.blvd"] = a.package
         drive_args += " --package /in/package.blvd"
+    if a.nmea:
+        # The bus is placed on the trace clock by the trace time of its first frame.
+        files["/in/drive.nmea"] = a.nmea
+        drive_args += " --nmea /in/drive.nmea --trace-t0 %.6f" % checks.read_candump(trace)[0][0]
     env = {"TRACE": "/in/trace.log", "MAP": a.map, "DRIVE": "/bin/" + os.path.basename(a.drive),
            "DRIVE_ARGS": drive_args}
     t = time.monotonic()
@@ -66,6 +70,8 @@ def run_on_host(a, trace, out, summary):
            os.path.join(out, "odometry.jsonl"), "--stats", os.path.join(out, "stats.json")]
     if a.package:
         cmd += ["--package", a.package]
+    if a.nmea:
+        cmd += ["--nmea", a.nmea]
     cmd += a.drive_args.split()
     t = time.monotonic()
     with open(os.path.join(out, "drive.err"), "w") as err:
@@ -91,6 +97,7 @@ def main():
     ap.add_argument("--map", default="vcan0=can0", help="canplayer assignment vcan0=LOGIFACE")
     ap.add_argument("--dbc", required=True)
     ap.add_argument("--package", help=".blvd package for map matching in the guest")
+    ap.add_argument("--nmea", help="NMEA log on the trace's clock, fed by the drive in step with the bus")
     ap.add_argument("--drive-args", default="", help="more vcan_drive_track arguments")
     ap.add_argument("--reference-csv", help="assert the decoded 0xAA speed against this CSV")
     ap.add_argument("--speed-tol", type=float, default=1e-6)
@@ -145,8 +152,11 @@ def main():
             sent = checks.read_candump(trace)
             summary["frames"] = checks.same_frames(sent, checks.read_candump(os.path.join(out, "capture.log")))
         stats = json.load(open(os.path.join(out, "stats.json")))
-        summary["drive"] = {k: stats[k] for k in ("frames", "odometry_fed", "kernel_dropped", "poses", "valid_poses",
-                                                   "matched_poses", "error_frames", "wall_s")}
+        summary["drive"] = {k: stats[k] for k in ("frames", "odometry_fed", "gnss_fed", "kernel_dropped", "poses",
+                                                   "valid_poses", "matched_poses", "error_frames", "wall_s")}
+        if a.nmea and not stats["gnss_fed"]:
+            raise checks.CheckError("no fix of %s was fed (gnss_untimed %d): are its times on the trace's clock?" %
+                                    (a.nmea, stats["gnss_untimed"]))
         if stats["kernel_dropped"]:
             raise checks.CheckError("vcan_drive_track's socket dropped %d frames" % stats["kernel_dropped"])
         if a.reference_csv:
