@@ -44,28 +44,70 @@ def read_jsonl(path):
         return [json.loads(line) for line in f if line.strip()]
 
 
-def speed_matches_reference(odometry, reference_csv, frame_id, tol_mps, time_tol_s):
-    """Every `frame_id` (0xAA, WHEEL_SPEEDS) sample's speed equals the reference
-    CSV row of the same index within tol_mps, and its time since the first such
-    sample equals the reference's within time_tol_s (the guest timestamps on
-    receipt, the reference carries the logged times)."""
-    got = [o for o in odometry if o["id"] == frame_id]
+def _reference(reference_csv):
     with open(reference_csv) as f:
-        ref = [(float(r["t_boot_s"]), float(r["speed_mps"])) for r in csv.DictReader(f)]
-    if len(got) != len(ref):
-        raise CheckError("%d decoded samples of frame 0x%X, the reference has %d rows" % (len(got), frame_id, len(ref)))
-    worst_v, worst_t = 0.0, 0.0
+        return [(float(r["t_boot_s"]), float(r["speed_mps"])) for r in csv.DictReader(f)]
+
+
+def _samples(odometry, frame_id, expected):
+    got = [o for o in odometry if o["id"] == frame_id]
+    if len(got) != expected:
+        raise CheckError("%d decoded samples of frame 0x%X, expected %d" % (len(got), frame_id, expected))
+    return got
+
+
+def speed_matches_reference(odometry, reference_csv, frame_id, tol_mps):
+    """Every `frame_id` (0xAA, WHEEL_SPEEDS) sample's speed equals the reference
+    CSV row of the same index (the CSV has one row per such frame) within tol_mps."""
+    ref = _reference(reference_csv)
+    got = _samples(odometry, frame_id, len(ref))
+    worst = 0.0
     for i, (o, (rt, rv)) in enumerate(zip(got, ref)):
         dv = abs(o["speed"] - rv)
-        dt = abs((o["t"] - got[0]["t"]) - (rt - ref[0][0]))
         if not dv <= tol_mps:
             raise CheckError("sample %d (reference t %.6f): speed %.9g, reference %.6f (|diff| %.3g > %g)" %
                              (i, rt, o["speed"], rv, dv, tol_mps))
-        if not dt <= time_tol_s:
-            raise CheckError("sample %d (reference t %.6f): %.3f s after the first, the reference %.3f s (|diff| %.3f > %g)" %
-                             (i, rt, o["t"] - got[0]["t"], rt - ref[0][0], dt, time_tol_s))
-        worst_v, worst_t = max(worst_v, dv), max(worst_t, dt)
-    return {"samples": len(got), "max_speed_diff_mps": worst_v, "max_time_diff_s": worst_t}
+        worst = max(worst, dv)
+    return {"samples": len(got), "max_speed_diff_mps": worst}
+
+
+def times_match_bus(odometry, bus, tol_s):
+    """Every odometry sample is stamped with the time its frame (same id) has on
+    the bus log (`bus`: read_candump of candump's capture, or of the trace
+    itself), in order: the tracker was fed at each frame's own time. Kernel
+    timestamps are shared by every socket; candump prints them truncated to
+    microseconds, hence tol_s."""
+    if not odometry:
+        raise CheckError("no odometry samples were decoded")
+    by_id = {}
+    for f in bus:
+        by_id.setdefault(int(f[2].split("#", 1)[0], 16), []).append(f[0])
+    pos, worst = {}, 0.0
+    for i, o in enumerate(odometry):
+        times = by_id.get(o["id"], [])
+        j = pos.get(o["id"], 0)
+        while j < len(times) and times[j] < o["t"] - tol_s:
+            j += 1
+        if j == len(times) or abs(times[j] - o["t"]) > tol_s:
+            raise CheckError("odometry sample %d (frame 0x%X) is stamped %.6f; no such frame on the bus at that time "
+                             "(next one at %s)" % (i, o["id"], o["t"], "%.6f" % times[j] if j < len(times) else "none"))
+        worst = max(worst, abs(times[j] - o["t"]))
+        pos[o["id"]] = j + 1
+    return {"samples": len(odometry), "max_diff_s": worst}
+
+
+def paced_like_reference(odometry, reference_csv, frame_id, median_tol_s, max_tol_s):
+    """The replay ran in real time: each sample's time since the first follows
+    the reference's. A TCG guest on a loaded host stalls now and then, so the
+    median offset is held tight and the worst one loosely."""
+    ref = _reference(reference_csv)
+    got = _samples(odometry, frame_id, len(ref))
+    d = sorted(abs((o["t"] - got[0]["t"]) - (rt - ref[0][0])) for o, (rt, _) in zip(got, ref))
+    median, worst = d[len(d) // 2], d[-1]
+    if median > median_tol_s or worst > max_tol_s:
+        raise CheckError("replay timing against the reference: median offset %.3f s (limit %g), worst %.3f s (limit %g)" %
+                         (median, median_tol_s, worst, max_tol_s))
+    return {"median_s": median, "max_s": worst}
 
 
 def distance_matches_reference(poses, reference_csv, tol_frac):
@@ -75,8 +117,7 @@ def distance_matches_reference(poses, reference_csv, tol_frac):
     if len(valid) < 2:
         raise CheckError("%d valid poses; dead reckoning needs --start" % len(valid))
     path = sum(math.hypot(b["x"] - a["x"], b["y"] - a["y"]) for a, b in zip(valid, valid[1:]))
-    with open(reference_csv) as f:
-        ref = [(float(r["t_boot_s"]), float(r["speed_mps"])) for r in csv.DictReader(f)]
+    ref = _reference(reference_csv)
     span = valid[-1]["t"] - valid[0]["t"]
     t0 = ref[0][0]
     integral = sum(0.5 * (a[1] + b[1]) * (b[0] - a[0]) for a, b in zip(ref, ref[1:]) if b[0] - t0 <= span)

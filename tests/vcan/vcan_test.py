@@ -39,6 +39,7 @@ def prepare_trace(src, log_iface, out):
 
 def run_in_guest(a, trace, out, summary):
     """The trace on vcan0 in the qemu guest; its /out lands in `out`."""
+    guest.require_qemu()
     t = time.monotonic()
     g = guest.fetch(a.cache)
     summary["fetch_s"] = time.monotonic() - t
@@ -101,7 +102,8 @@ def main():
     ap.add_argument("--drive-args", default="", help="more vcan_drive_track arguments")
     ap.add_argument("--reference-csv", help="assert the decoded 0xAA speed against this CSV")
     ap.add_argument("--speed-tol", type=float, default=1e-6)
-    ap.add_argument("--time-tol", type=float, default=0.25)
+    ap.add_argument("--time-tol", type=float, default=0.05, help="median replay timing offset, s")
+    ap.add_argument("--time-max", type=float, default=2.0, help="worst replay timing offset, s")
     ap.add_argument("--distance-tol", type=float, default=0)
     ap.add_argument("--expected-cells", help="assert the matched cell sequence against this file")
     ap.add_argument("--settle-s", type=float, default=10)
@@ -148,9 +150,10 @@ def main():
                 show(os.path.join(out, f), what)
             show(os.path.join(out, "console.log"), "guest console", 3000)
             raise checks.CheckError("the guest scenario exited with %s" % rc)
+        sent = checks.read_candump(trace)
+        bus = sent if a.host else checks.read_candump(os.path.join(out, "capture.log"))
         if not a.host:
-            sent = checks.read_candump(trace)
-            summary["frames"] = checks.same_frames(sent, checks.read_candump(os.path.join(out, "capture.log")))
+            summary["frames"] = checks.same_frames(sent, bus)
         stats = json.load(open(os.path.join(out, "stats.json")))
         summary["drive"] = {k: stats[k] for k in ("frames", "odometry_fed", "gnss_fed", "kernel_dropped", "poses",
                                                    "valid_poses", "matched_poses", "error_frames", "wall_s")}
@@ -159,9 +162,11 @@ def main():
                                     (a.nmea, stats["gnss_untimed"]))
         if stats["kernel_dropped"]:
             raise checks.CheckError("vcan_drive_track's socket dropped %d frames" % stats["kernel_dropped"])
+        odo = checks.read_jsonl(os.path.join(out, "odometry.jsonl"))
+        summary["stamps"] = checks.times_match_bus(odo, bus, 2e-6)
         if a.reference_csv:
-            odo = checks.read_jsonl(os.path.join(out, "odometry.jsonl"))
-            summary["speed"] = checks.speed_matches_reference(odo, a.reference_csv, 0xAA, a.speed_tol, a.time_tol)
+            summary["speed"] = checks.speed_matches_reference(odo, a.reference_csv, 0xAA, a.speed_tol)
+            summary["pacing"] = checks.paced_like_reference(odo, a.reference_csv, 0xAA, a.time_tol, a.time_max)
         poses = checks.read_jsonl(os.path.join(out, "poses.jsonl"))
         if a.distance_tol > 0:
             summary["distance"] = checks.distance_matches_reference(poses, a.reference_csv, a.distance_tol)
