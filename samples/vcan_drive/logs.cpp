@@ -1,9 +1,12 @@
 #include "logs.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 
 namespace vcan_drive {
 
@@ -53,6 +56,22 @@ double percentile(std::vector<double> v, double pct) {
   std::sort(v.begin(), v.end());
   const size_t rank = static_cast<size_t>(std::ceil(pct / 100.0 * static_cast<double>(v.size())));
   return v[std::min(v.size() - 1, rank ? rank - 1 : 0)];
+}
+
+void addRenderStats(nlohmann::json& j, const RenderStats& r) {
+  j["rendered_frames"] = r.frames;
+  j["blank_frames"] = r.blank;
+  j["png_written"] = r.written;
+  j["frame_ms_p50"] = percentile(r.frame_ms, 50);
+  j["frame_ms_p95"] = percentile(r.frame_ms, 95);
+  j["frame_ms_p99"] = percentile(r.frame_ms, 99);
+}
+
+bool writeStats(const std::string& path, const nlohmann::json& j) {
+  if (path.empty()) return true;
+  std::ofstream out(path);
+  out << j.dump(2) << "\n";
+  return static_cast<bool>(out.flush());
 }
 
 }  // namespace vcan_drive

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "blvd/blvd.h"
 
 namespace vcan_drive {
@@ -31,5 +33,15 @@ class JsonLines {
 
 // Percentile (0..100) by nearest rank of an unsorted sample; 0 when empty.
 double percentile(std::vector<double> v, double pct);
+
+struct RenderStats {
+  uint64_t frames = 0, blank = 0, written = 0;  // rendered, one-colour, PNGs written
+  std::vector<double> frame_ms;
+};
+
+// rendered_frames, blank_frames, png_written, frame_ms_p50/p95/p99 into `j`.
+void addRenderStats(nlohmann::json& j, const RenderStats& r);
+// Writes `j` (indented) to `path`; "" writes nothing. False when the write failed.
+bool writeStats(const std::string& path, const nlohmann::json& j);
 
 }  // namespace vcan_drive

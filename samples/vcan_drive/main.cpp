@@ -11,7 +11,6 @@
 
 #include <chrono>
 #include <csignal>
-#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -23,8 +22,7 @@
 #include "logs.h"
 #include "tracking.h"
 #if VCAN_DRIVE_CAPI
-#include "display.h"
-#include "png.h"
+#include "frames.h"
 #endif
 
 namespace {
@@ -32,7 +30,7 @@ namespace {
 using namespace vcan_drive;
 using Clock = std::chrono::steady_clock;
 
-volatile std::sig_atomic_t g_stop = 0;
+volatile std::sig_atomic_t g_stop = 0;  // SIGINT/SIGTERM
 void onSignal(int) { g_stop = 1; }
 
 struct Options {
@@ -59,66 +57,11 @@ struct Options {
   int rcvbuf = 4 << 20;
 };
 
-struct RenderStats {
-  uint64_t frames = 0, blank = 0, written = 0;
-  std::vector<double> frame_ms;
-};
-
 blvd_backend parseBackend(const std::string& s) {
   if (s == "surfaceless") return BLVD_BACKEND_EGL_SURFACELESS;
   if (s == "device") return BLVD_BACKEND_EGL_DEVICE;
   if (s == "osmesa") return BLVD_BACKEND_OSMESA;
   return BLVD_BACKEND_AUTO;
-}
-
-// Renders one frame (at `pose` if given) into the PNG sequence and the window.
-#if VCAN_DRIVE_CAPI
-struct Renderer {
-  Tracking* tracking = nullptr;
-  std::string dir;
-  std::unique_ptr<Display> display;
-  std::vector<unsigned char> rgba;
-  RenderStats stats;
-
-  bool frame(const blvd_pose* pose) {
-    double ms = 0;
-    uint32_t cell = 0;
-    if (tracking->render(pose, rgba.data(), ms, cell) != BLVD_OK) {
-      std::fprintf(stderr, "vcan_drive: render: %s\n", tracking->lastError().c_str());
-      return false;
-    }
-    stats.frame_ms.push_back(ms);
-    if (isBlank(rgba.data(), tracking->width(), tracking->height())) ++stats.blank;
-    if (!dir.empty()) {
-      char name[32];
-      std::snprintf(name, sizeof name, "/frame_%06llu.png", static_cast<unsigned long long>(stats.frames));
-      if (!writePng(dir + name, rgba.data(), tracking->width(), tracking->height())) {
-        std::fprintf(stderr, "vcan_drive: cannot write %s%s\n", dir.c_str(), name);
-        return false;
-      }
-      ++stats.written;
-    }
-    ++stats.frames;
-    if (display && !display->show(rgba.data())) g_stop = 1;  // window closed
-    return true;
-  }
-};
-#endif
-
-void addRenderStats(nlohmann::json& j, const RenderStats& r) {
-  j["rendered_frames"] = r.frames;
-  j["blank_frames"] = r.blank;
-  j["png_written"] = r.written;
-  j["frame_ms_p50"] = percentile(r.frame_ms, 50);
-  j["frame_ms_p95"] = percentile(r.frame_ms, 95);
-  j["frame_ms_p99"] = percentile(r.frame_ms, 99);
-}
-
-bool writeStats(const std::string& path, const nlohmann::json& j) {
-  if (path.empty()) return true;
-  std::ofstream out(path);
-  out << j.dump(2) << "\n";
-  return static_cast<bool>(out.flush());
 }
 
 // Cells in the order they were first entered, consecutive repeats collapsed.
@@ -149,43 +92,6 @@ void feedStart(Tracking& tr, const std::vector<double>& start, double t) {
     tr.feedOdometry(o);
   }
 }
-
-#if VCAN_DRIVE_CAPI
-// --render-poses: frames from poses recorded elsewhere (a track-only guest).
-int renderRecorded(const Options& opt, Renderer& r) {
-  std::ifstream in(opt.render_poses);
-  if (!in) {
-    std::fprintf(stderr, "vcan_drive: cannot read %s\n", opt.render_poses.c_str());
-    return 2;
-  }
-  std::string line;
-  uint64_t n = 0, valid = 0, lineno = 0;
-  while (std::getline(in, line) && !g_stop) {
-    ++lineno;
-    const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
-    if (j.is_discarded() || !j.contains("x") || !j.contains("flags")) {
-      std::fprintf(stderr, "vcan_drive: %s:%llu: not a pose line\n", opt.render_poses.c_str(),
-                   static_cast<unsigned long long>(lineno));
-      return 1;
-    }
-    blvd_pose p{};
-    p.struct_size = sizeof p;
-    p.x = j["x"].get<double>();
-    p.y = j["y"].get<double>();
-    p.heading_deg = j["heading"].get<double>();
-    p.flags = j["flags"].get<uint32_t>();
-    if (!(p.flags & BLVD_POSE_VALID)) continue;
-    if (valid++ % opt.render_every == 0 && !r.frame(&p)) return 1;
-    ++n;
-  }
-  nlohmann::json j;
-  j["mode"] = "render-poses";
-  j["poses"] = n;
-  addRenderStats(j, r.stats);
-  std::printf("%s\n", j.dump().c_str());
-  return writeStats(opt.stats_path, j) ? 0 : 1;
-}
-#endif
 
 }  // namespace
 
@@ -261,17 +167,9 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  Renderer renderer;
+  Frames frames;
   if (tracking) {
-    renderer.tracking = tracking.get();
-    renderer.dir = opt.frames_dir;
-    std::error_code ec;
-    if (!opt.frames_dir.empty() && (std::filesystem::create_directories(opt.frames_dir, ec), ec)) {
-      std::fprintf(stderr, "vcan_drive: cannot create %s: %s\n", opt.frames_dir.c_str(), ec.message().c_str());
-      return 2;
-    }
-    renderer.rgba.resize(size_t(tracking->width()) * tracking->height() * 4);
-    if (opt.display && !(renderer.display = openDisplay(tracking->width(), tracking->height(), err))) {
+    if (!frames.open(*tracking, opt.frames_dir, opt.display, err)) {
       std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
       return 2;
     }
@@ -284,7 +182,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "vcan_drive: --render-poses needs --package\n");
       return 2;
     }
-    return renderRecorded(opt, renderer);
+    return renderRecorded(opt.render_poses, opt.render_every, opt.stats_path, frames, g_stop);
   }
 #endif
   if (!tracking) {
@@ -336,6 +234,9 @@ int main(int argc, char** argv) {
   blvd::can::Frame f;
   blvd_odometry odo{};
   while (!g_stop) {
+#if VCAN_DRIVE_CAPI
+    if (frames.closed()) break;  // --display window closed
+#endif
     const auto now = Clock::now();
     if (opt.duration_s > 0 && std::chrono::duration<double>(now - wall0).count() >= opt.duration_s) break;
     if (opt.idle_exit_s > 0 && started &&
@@ -385,7 +286,7 @@ int main(int argc, char** argv) {
     if (p.flags & BLVD_POSE_MATCHED) ++matched;
     noteCell(cells, p);
 #if VCAN_DRIVE_CAPI
-    if (tracking->canRender() && !opt.no_render && (pose_count - 1) % opt.render_every == 0 && !renderer.frame(nullptr)) {
+    if (tracking->canRender() && !opt.no_render && (pose_count - 1) % opt.render_every == 0 && !frames.frame(nullptr)) {
       rc = 1;
       break;
     }
@@ -420,7 +321,7 @@ int main(int argc, char** argv) {
   j["cells_visited"] = cells;
   j["wall_s"] = std::chrono::duration<double>(Clock::now() - wall0).count();
 #if VCAN_DRIVE_CAPI
-  addRenderStats(j, renderer.stats);
+  addRenderStats(j, frames.stats());
 #else
   addRenderStats(j, RenderStats{});
 #endif
