@@ -327,7 +327,8 @@ def _boot_once(cmd, console, results, timeout_s, boot_deadline_s):
         if os.path.exists(p):
             os.remove(p)
     t0 = time.monotonic()
-    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+    qemu_log = open(os.path.join(os.path.dirname(console), "qemu.log"), "wb")  # a file: a pipe could fill and block qemu
+    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=qemu_log, stderr=subprocess.STDOUT,
                             preexec_fn=_die_with_parent)
     try:
         while True:
@@ -342,12 +343,13 @@ def _boot_once(cmd, console, results, timeout_s, boot_deadline_s):
             if boot_deadline_s and el > boot_deadline_s and BOOTED not in _read(results):
                 return "noboot", el
         if proc.returncode != 0:
-            raise GuestError("qemu exited with %d: %s" % (proc.returncode, proc.stdout.read().decode(errors="replace")[-2000:]))
+            raise GuestError("qemu exited with %d: %s" % (proc.returncode, _read(qemu_log.name).decode(errors="replace")[-2000:]))
         return "ok", time.monotonic() - t0
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+        qemu_log.close()
 
 
 def boot(guest, initrd, out_dir, timeout_s=240, accel="tcg", mem_mb=768, smp=2, kvm_boot_deadline_s=20):

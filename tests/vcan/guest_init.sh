@@ -1,7 +1,8 @@
 #!/bin/busybox sh
 # /init of the tests/vcan guest (guest.py builds the initramfs around it):
 # mounts the pseudo filesystems, loads the CAN modules listed in /modules.order,
-# brings up vcan0, runs /scenario.sh with /scenario.env, and sends /out back
+# brings up vcan0, runs /scenario.sh with /scenario.env (killed after
+# SCENARIO_TIMEOUT seconds), and sends /out back
 # over the second serial port (ttyS1) as base64 of a tar.gz between marker
 # lines, then powers off. Any failure still sends what /out holds, plus
 # /out/init.log saying what failed.
@@ -39,7 +40,8 @@ if setup; then
   set -a
   . /scenario.env
   set +a
-  sh /scenario.sh > /out/scenario.log 2>&1
+  # A hung scenario still sends its logs back: the host's own timeout is the last resort.
+  timeout -s KILL "${SCENARIO_TIMEOUT:-600}" sh /scenario.sh > /out/scenario.log 2>&1
   echo $? > /out/scenario.rc
   log "scenario exited with $(cat /out/scenario.rc); uptime $(cut -d' ' -f1 /proc/uptime) s"
 else

@@ -52,8 +52,12 @@ def run_in_guest(a, trace, out, summary):
         # The bus is placed on the trace clock by the trace time of its first frame.
         files["/in/drive.nmea"] = a.nmea
         drive_args += " --nmea /in/drive.nmea --trace-t0 %.6f" % checks.read_candump(trace)[0][0]
+    # The replay takes the trace's duration; the guest stops a scenario that
+    # hangs early enough to send its logs back before the host's timeout.
+    frames = checks.read_candump(trace)
+    scenario_s = max(10, min(frames[-1][0] - frames[0][0] + 60, a.timeout_s - 40))
     env = {"TRACE": "/in/trace.log", "MAP": a.map, "DRIVE": "/bin/" + os.path.basename(a.drive),
-           "DRIVE_ARGS": drive_args}
+           "DRIVE_ARGS": drive_args, "SCENARIO_TIMEOUT": int(scenario_s)}
     t = time.monotonic()
     initrd = guest.initramfs(g, os.path.join(a.work, "initrd.gz"), [a.drive], files,
                              os.path.join(guest.HERE, "scenario_replay.sh"), env)
@@ -149,7 +153,8 @@ def main():
                             ("candump.err", "candump")):
                 show(os.path.join(out, f), what)
             show(os.path.join(out, "console.log"), "guest console", 3000)
-            raise checks.CheckError("the guest scenario exited with %s" % rc)
+            raise checks.CheckError("the guest scenario exited with %s%s" %
+                                    (rc, " (killed by the guest's SCENARIO_TIMEOUT: it hung)" if rc == "137" else ""))
         sent = checks.read_candump(trace)
         bus = sent if a.host else checks.read_candump(os.path.join(out, "capture.log"))
         if not a.host:
