@@ -20,8 +20,6 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import checks  # noqa: E402
 import guest  # noqa: E402
 
-SKIP = 77
-
 
 def prepare_trace(src, log_iface, out):
     """The trace as plain text, only the frames of the logged interface that
@@ -137,11 +135,7 @@ def main():
         else:
             run_in_guest(a, trace, out, summary)
     except guest.Unavailable as e:
-        if os.environ.get("BLVD_VCAN_REQUIRE") == "1":
-            print("%s: FAIL: %s (BLVD_VCAN_REQUIRE=1)" % (a.name, e))
-            return 1
-        print("%s: SKIP: %s" % (a.name, e))
-        return SKIP
+        return guest.unavailable_status(a.name, e)
     except (guest.GuestError, checks.CheckError, subprocess.SubprocessError, OSError) as e:
         print("%s: FAIL: %s" % (a.name, e))
         return 1
