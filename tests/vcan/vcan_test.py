@@ -117,6 +117,12 @@ def main():
                     help="no guest: run the drive on the trace as a candump log (no capture check)")
     ap.add_argument("--accel", default=os.environ.get("BLVD_VCAN_ACCEL", "tcg"), choices=["tcg", "kvm", "auto"])
     a = ap.parse_args()
+    if a.distance_tol > 0 and not a.reference_csv:
+        ap.error("--distance-tol needs --reference-csv")
+    if a.render_with and not a.package:
+        ap.error("--render-with needs --package")
+    if "=" not in a.map:
+        ap.error("--map must look like vcan0=can0")
     # A CTest timeout or ^C: unwind, so guest.boot() stops qemu.
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
 
