@@ -9,6 +9,10 @@ pkgs=(
   libcgal-dev libgmp-dev libmpfr-dev libmeshoptimizer-dev libzstd-dev libcli11-dev
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
   libgtest-dev libgmock-dev libbenchmark-dev gpsd
+  libx11-dev
+  # tests/vcan: the qemu guest with a vcan bus. Its kernel, busybox-static and
+  # can-utils are fetched by `apt-get download` into the build folder, never installed.
+  qemu-system-x86 zstd xz-utils
 )
 missing=()
 for p in "${pkgs[@]}"; do

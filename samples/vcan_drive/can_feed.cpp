@@ -1,0 +1,42 @@
+#include "can_feed.h"
+
+namespace vcan_drive {
+
+using namespace blvd::can;
+
+static_assert(BLVD_ODO_SPEED == kOdoSpeed && BLVD_ODO_YAW_RATE == kOdoYawRate &&
+                  BLVD_ODO_WHEEL_SPEEDS == kOdoWheelSpeeds && BLVD_ODO_GEAR == kOdoGear,
+              "the profile's OdometryField bits are passed through as BLVD_ODO_* flags");
+
+blvd_status CanFeed::open(const std::string& dbc_path, Vehicle vehicle, std::string& err) {
+  blvd_status st = dbc_.load(dbc_path, err);
+  if (st != BLVD_OK) return st;
+  ProfileDesc pd;
+  pd.vehicle = vehicle;
+  return profile_.create(pd, dbc_, err);
+}
+
+bool CanFeed::feed(const Frame& f, Tracking& tracking, blvd_odometry& odo) {
+  ++stats_.frames;
+  Odometry o;
+  if (!profile_.consume(f, o)) return false;
+  ++stats_.mapped;
+  const uint32_t flags = o.updated & (BLVD_ODO_SPEED | BLVD_ODO_YAW_RATE | BLVD_ODO_WHEEL_SPEEDS | BLVD_ODO_GEAR);
+  if (!flags) return false;  // steering only: the tracker has no use for it
+  odo = blvd_odometry{};
+  odo.struct_size = sizeof odo;
+  odo.t = o.t;
+  odo.speed_mps = o.speed_mps;
+  odo.yaw_rate_dps = o.yaw_rate_dps;
+  for (int i = 0; i < 4; ++i) odo.wheel_speeds_mps[i] = o.wheel_speeds_mps[i];
+  odo.reverse = o.gear == Gear::Reverse;
+  odo.flags = flags;
+  if (tracking.feedOdometry(odo) != BLVD_OK) {
+    ++stats_.feed_errors;
+    return false;
+  }
+  ++stats_.odometry_fed;
+  return true;
+}
+
+}  // namespace vcan_drive

@@ -1,0 +1,86 @@
+#include "frames.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "png.h"
+
+namespace vcan_drive {
+
+bool Frames::open(Tracking& tracking, const std::string& dir, bool display, std::string& err) {
+  tracking_ = &tracking;
+  dir_ = dir;
+  std::error_code ec;
+  if (!dir.empty() && (std::filesystem::create_directories(dir, ec), ec)) {
+    err = "cannot create " + dir + ": " + ec.message();
+    return false;
+  }
+  rgba_.resize(size_t(tracking.width()) * tracking.height() * 4);
+  if (display && !(display_ = openDisplay(tracking.width(), tracking.height(), err))) return false;
+  return true;
+}
+
+bool Frames::frame(const blvd_pose* pose) {
+  double ms = 0;
+  uint32_t cell = 0;
+  if (tracking_->render(pose, rgba_.data(), ms, cell) != BLVD_OK) {
+    std::fprintf(stderr, "vcan_drive: render: %s\n", tracking_->lastError().c_str());
+    return false;
+  }
+  const uint32_t w = tracking_->width(), h = tracking_->height();
+  stats_.frame_ms.push_back(ms);
+  if (isBlank(rgba_.data(), w, h)) ++stats_.blank;
+  if (!dir_.empty()) {
+    char name[32];
+    std::snprintf(name, sizeof name, "/frame_%06llu.png", static_cast<unsigned long long>(stats_.frames));
+    if (!writePng(dir_ + name, rgba_.data(), w, h)) {
+      std::fprintf(stderr, "vcan_drive: cannot write %s%s\n", dir_.c_str(), name);
+      return false;
+    }
+    ++stats_.written;
+  }
+  ++stats_.frames;
+  if (display_ && !display_->show(rgba_.data())) closed_ = true;
+  return true;
+}
+
+int renderRecorded(const std::string& poses_path, unsigned render_every, const std::string& stats_path,
+                   Frames& frames, const volatile std::sig_atomic_t& stop) {
+  std::ifstream in(poses_path);
+  if (!in) {
+    std::fprintf(stderr, "vcan_drive: cannot read %s\n", poses_path.c_str());
+    return 2;
+  }
+  std::string line;
+  uint64_t n = 0, valid = 0, lineno = 0;
+  while (std::getline(in, line) && !stop && !frames.closed()) {
+    ++lineno;
+    const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_discarded() || !j.contains("x") || !j.contains("y") || !j.contains("heading") || !j.contains("flags")) {
+      std::fprintf(stderr, "vcan_drive: %s:%llu: not a pose line\n", poses_path.c_str(),
+                   static_cast<unsigned long long>(lineno));
+      return 1;
+    }
+    blvd_pose p{};
+    p.struct_size = sizeof p;
+    p.x = j["x"].get<double>();
+    p.y = j["y"].get<double>();
+    p.heading_deg = j["heading"].get<double>();
+    p.flags = j["flags"].get<uint32_t>();
+    ++n;
+    if (!(p.flags & BLVD_POSE_VALID)) continue;
+    if (valid++ % render_every == 0 && !frames.frame(&p)) return 1;
+  }
+  nlohmann::json j;
+  j["mode"] = "render-poses";
+  j["poses"] = n;
+  j["valid_poses"] = valid;
+  addRenderStats(j, frames.stats());
+  std::printf("%s\n", j.dump().c_str());
+  return writeStats(stats_path, j) ? 0 : 1;
+}
+
+}  // namespace vcan_drive

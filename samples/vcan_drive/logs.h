@@ -1,0 +1,47 @@
+// vcan_drive's outputs: poses and decoded odometry as JSON lines, and the
+// closing stats JSON. Lines are written with fixed formats (no JSON library on
+// the per-frame path) and read back by tests/vcan/vcan_test.py.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "blvd/blvd.h"
+
+namespace vcan_drive {
+
+// One JSON object per line to a file; a no-op when no path was given.
+class JsonLines {
+ public:
+  ~JsonLines();
+  bool open(const std::string& path, std::string& err);  // "" : disabled
+  bool enabled() const { return f_ != nullptr; }
+  // {"t":..,"x":..,"y":..,"heading":..,"speed":..,"cell":..,"flags":..} (cell -1: none)
+  void pose(const blvd_pose& p);
+  // {"t":..,"id":..,"speed":..,"yaw_rate":..,"wheels":[..],"flags":..}
+  void odometry(const blvd_odometry& o, uint32_t frame_id);
+  bool close(std::string& err);
+
+ private:
+  FILE* f_ = nullptr;
+  std::string path_;
+};
+
+// Percentile (0..100) by nearest rank of an unsorted sample; 0 when empty.
+double percentile(std::vector<double> v, double pct);
+
+struct RenderStats {
+  uint64_t frames = 0, blank = 0, written = 0;  // rendered, one-colour, PNGs written
+  std::vector<double> frame_ms;
+};
+
+// rendered_frames, blank_frames, png_written, frame_ms_p50/p95/p99 into `j`.
+void addRenderStats(nlohmann::json& j, const RenderStats& r);
+// Writes `j` (indented) to `path`; "" writes nothing. False when the write failed.
+bool writeStats(const std::string& path, const nlohmann::json& j);
+
+}  // namespace vcan_drive

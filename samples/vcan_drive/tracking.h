@@ -1,0 +1,58 @@
+// The tracker vcan_drive feeds, behind one small interface so the program does
+// not care which implementation it has:
+//
+//   makeCapiTracking()    the public C API: a blvd_runtime on a package, with a
+//                         GL backend; tracks and renders (tracking_capi.cpp).
+//   makeDirectTracking()  sdk/track's Tracker, with the package's street graph
+//                         when one is given, and no GL (tracking_direct.cpp).
+//
+// The second exists only because blvd_runtime_create() needs both a package and
+// a GL context, so a track-only host (the qemu guest of tests/vcan, an ECU
+// without a GPU) cannot use the C API today. Its inputs and outputs are the C
+// API's own structs, so when the C API gains a track-only runtime it is replaced
+// by makeCapiTracking() without touching the rest of the program.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "blvd/blvd.h"
+
+namespace vcan_drive {
+
+class Tracking {
+ public:
+  virtual ~Tracking() = default;
+  virtual const char* name() const = 0;  // "capi" or "direct"
+  virtual blvd_status feedOdometry(const blvd_odometry& odo) = 0;
+  virtual blvd_status feedGnss(const blvd_gnss_fix& fix) = 0;
+  virtual blvd_status getPose(double t, blvd_pose& out) = 0;
+  // Package origin (degrees); 0, 0 when there is none.
+  virtual void origin(double& lat, double& lon) const = 0;
+
+  // Rendering; only the C API implementation can.
+  virtual bool canRender() const { return false; }
+  // Renders at the tracked pose (or at `pose` when use_pose) and copies the
+  // frame into rgba (width*height*4). frame_ms and cell come from blvd_frame_stats.
+  virtual blvd_status render(const blvd_pose* pose, unsigned char* rgba, double& frame_ms, uint32_t& cell) {
+    (void)pose, (void)rgba, (void)frame_ms, (void)cell;
+    return BLVD_ERR_UNSUPPORTED;
+  }
+  virtual uint32_t width() const { return 0; }
+  virtual uint32_t height() const { return 0; }
+  // Text about the last failure.
+  virtual std::string lastError() const = 0;
+};
+
+struct TrackingDesc {
+  std::string package;      // .blvd; empty: none (direct tracking only)
+  uint32_t width = 800, height = 480;
+  blvd_backend backend = BLVD_BACKEND_AUTO;
+  double origin_lat = 0, origin_lon = 0;  // the local frame without a package
+};
+
+// Null with `err` set on failure.
+std::unique_ptr<Tracking> makeCapiTracking(const TrackingDesc& desc, std::string& err);
+std::unique_ptr<Tracking> makeDirectTracking(const TrackingDesc& desc, std::string& err);
+
+}  // namespace vcan_drive

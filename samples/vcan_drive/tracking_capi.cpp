@@ -1,0 +1,75 @@
+// Tracking through the public C API: a blvd_runtime that tracks and renders.
+#include <cstring>
+
+#include "tracking.h"
+
+namespace vcan_drive {
+namespace {
+
+class CapiTracking final : public Tracking {
+ public:
+  explicit CapiTracking(blvd_runtime* rt, const blvd_runtime_desc& d) : rt_(rt), width_(d.width), height_(d.height) {
+    blvd_runtime_info info{};
+    info.struct_size = sizeof info;
+    if (blvd_runtime_get_info(rt_, &info) == BLVD_OK) {
+      lat_ = info.origin_lat;
+      lon_ = info.origin_lon;
+    }
+  }
+  ~CapiTracking() override { blvd_runtime_destroy(rt_); }
+
+  const char* name() const override { return "capi"; }
+  blvd_status feedOdometry(const blvd_odometry& odo) override { return blvd_feed_odometry(rt_, &odo); }
+  blvd_status feedGnss(const blvd_gnss_fix& fix) override { return blvd_feed_gnss(rt_, &fix); }
+  blvd_status getPose(double t, blvd_pose& out) override {
+    out.struct_size = sizeof out;
+    return blvd_get_pose(rt_, t, &out);
+  }
+  void origin(double& lat, double& lon) const override { lat = lat_, lon = lon_; }
+
+  bool canRender() const override { return true; }
+  blvd_status render(const blvd_pose* pose, unsigned char* rgba, double& frame_ms, uint32_t& cell) override {
+    blvd_status st = BLVD_OK;
+    // A recorded pose places the eye itself; otherwise blvd_render follows the tracker.
+    if (pose) st = blvd_set_pose_local(rt_, pose->x, pose->y, static_cast<float>(pose->heading_deg), 0.0f);
+    if (st != BLVD_OK) return st;
+    blvd_frame_stats fs{};
+    fs.struct_size = sizeof fs;
+    if ((st = blvd_render(rt_, &fs)) != BLVD_OK) return st;
+    frame_ms = fs.frame_ms;
+    cell = fs.cell;
+    return blvd_read_pixels(rt_, rgba, static_cast<size_t>(width_) * height_ * 4);
+  }
+  uint32_t width() const override { return width_; }
+  uint32_t height() const override { return height_; }
+  std::string lastError() const override { return blvd_last_error(rt_); }
+
+ private:
+  blvd_runtime* rt_;
+  uint32_t width_, height_;
+  double lat_ = 0, lon_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Tracking> makeCapiTracking(const TrackingDesc& desc, std::string& err) {
+  if (desc.package.empty()) {
+    err = "the C API needs a package (--package)";
+    return nullptr;
+  }
+  blvd_runtime_desc d{};
+  d.struct_size = sizeof d;
+  d.package_path = desc.package.c_str();
+  d.width = desc.width;
+  d.height = desc.height;
+  d.backend = desc.backend;
+  d = blvd_runtime_desc_defaults(&d);
+  blvd_runtime* rt = nullptr;
+  if (blvd_runtime_create(&d, &rt) != BLVD_OK) {
+    err = blvd_last_error(nullptr);
+    return nullptr;
+  }
+  return std::make_unique<CapiTracking>(rt, d);
+}
+
+}  // namespace vcan_drive

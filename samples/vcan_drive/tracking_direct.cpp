@@ -1,0 +1,108 @@
+// Track-only tracking without GL: sdk/track's Tracker, on the package's street
+// graph when a package is given (stream::City opens it without a GL context),
+// else on no graph at all (fusion and dead reckoning only) in a local frame at
+// TrackingDesc's origin. It converts the C API's structs field for field, the
+// way sdk/capi/runtime.cpp does, so its poses are the ones a track-only runtime
+// would return (see tracking.h for why it exists).
+#include <memory>
+#include <stdexcept>
+
+#include "stream/city.h"
+#include "track/tracker.h"
+#include "tracking.h"
+
+namespace vcan_drive {
+namespace {
+
+using namespace blvd;
+
+class DirectTracking final : public Tracking {
+ public:
+  // `city` may be null (no package).
+  DirectTracking(std::unique_ptr<stream::City> city, const geo::LocalFrame& frame, double lat, double lon)
+      : city_(std::move(city)),
+        frame_(frame),
+        tracker_(frame_, city_ ? &city_->graph() : nullptr),
+        lat_(lat),
+        lon_(lon) {}
+
+  const char* name() const override { return "direct"; }
+
+  blvd_status feedOdometry(const blvd_odometry& o) override {
+    track::Odometry d;
+    d.t = o.t;
+    d.speed_mps = o.speed_mps;
+    d.yaw_rate_dps = o.yaw_rate_dps;
+    for (int i = 0; i < 4; ++i) d.wheel_speeds_mps[i] = o.wheel_speeds_mps[i];
+    d.heading_deg = o.heading_deg;
+    d.reverse = o.reverse != 0;
+    d.flags = o.flags;  // BLVD_ODO_* are track::OdometryFlag's bits (static_assert in sdk/capi)
+    tracker_.feedOdometry(d);
+    return BLVD_OK;
+  }
+
+  blvd_status feedGnss(const blvd_gnss_fix& f) override {
+    track::GnssFix g;
+    g.t = f.t;
+    g.lat = f.lat;
+    g.lon = f.lon;
+    g.alt = f.alt;
+    g.speed_mps = f.speed_mps;
+    g.track_deg = f.track_deg;
+    g.hdop = f.hdop;
+    g.h_acc_m = f.h_acc_m;
+    g.mode = f.mode;
+    g.flags = f.flags;  // BLVD_GNSS_HAS_* are track::GnssFlag's bits
+    tracker_.feedGnss(g);
+    return BLVD_OK;
+  }
+
+  blvd_status getPose(double t, blvd_pose& r) override {
+    const track::Pose& p = tracker_.update(t);
+    r = blvd_pose{};
+    r.struct_size = sizeof r;
+    r.t = p.t;
+    r.x = p.e;
+    r.y = p.n;
+    double h = 0;
+    frame_.reverse({p.e, p.n, 0}, r.lat, r.lon, h);
+    r.heading_deg = p.heading_deg;
+    r.speed_mps = p.speed_mps;
+    r.cell = p.cell;
+    r.arc_m = p.arc_m;
+    r.lateral_m = p.lateral_m;
+    r.confidence = p.confidence;
+    r.flags = p.flags;  // BLVD_POSE_* are track::PoseFlag's bits
+    return BLVD_OK;
+  }
+
+  void origin(double& lat, double& lon) const override { lat = lat_, lon = lon_; }
+  std::string lastError() const override { return {}; }
+
+ private:
+  std::unique_ptr<stream::City> city_;
+  geo::LocalFrame frame_;
+  track::Tracker tracker_;
+  double lat_, lon_;
+};
+
+}  // namespace
+
+std::unique_ptr<Tracking> makeDirectTracking(const TrackingDesc& desc, std::string& err) {
+  try {
+    if (desc.package.empty())
+      return std::make_unique<DirectTracking>(nullptr, geo::LocalFrame(desc.origin_lat, desc.origin_lon),
+                                              desc.origin_lat, desc.origin_lon);
+    auto city = std::make_unique<stream::City>();
+    if (city->open(desc.package, err) != core::Status::Ok) return nullptr;
+    double lat = 0, lon = 0, h = 0;
+    city->frame().reverse({0, 0, 0}, lat, lon, h);
+    const geo::LocalFrame frame = city->frame();
+    return std::make_unique<DirectTracking>(std::move(city), frame, lat, lon);
+  } catch (const std::exception& e) {  // GeographicLib throws on a bad origin
+    err = e.what();
+    return nullptr;
+  }
+}
+
+}  // namespace vcan_drive
