@@ -273,8 +273,8 @@ TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
   // Resident memory: once the route has been driven (slabs, staging and the
   // mapped package pages it needs all touched), driving it again and again
   // adds nothing: the later laps peak no higher than the first ones, within
-  // 1 MiB (the loader thread's malloc arenas and the driver's scene bins
-  // breathe by a few MiB from lap to lap, up and down).
+  // 2 MiB (the driver's scene bins breathe by about 1 MiB from lap to lap on
+  // a loaded machine; a leak of 2 KiB a frame would show over 3 laps).
   // glibc's adaptive mmap threshold would move big decode buffers between
   // mmap and the heap from lap to lap; pinned, RSS measures the runtime.
   mallopt(M_MMAP_THRESHOLD, 128 * 1024);
@@ -288,7 +288,7 @@ TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
   std::printf("RSS peak: %ld KiB over laps 1-3, %ld KiB over laps 4-6\n", early, late);
   RecordProperty("rss_peak_early_kib", std::to_string(early));
   RecordProperty("rss_peak_late_kib", std::to_string(late));
-  EXPECT_LE(late, early + 1024) << "RSS peaked at " << early << " KiB in laps 1-3 and " << late << " KiB in laps 4-6";
+  EXPECT_LE(late, early + 2048) << "RSS peaked at " << early << " KiB in laps 1-3 and " << late << " KiB in laps 4-6";
 }
 
 }  // namespace
