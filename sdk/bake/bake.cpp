@@ -106,7 +106,7 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
       sum.impostor_triangles += r.triangles;
       sum.impostor_bytes += r.bytes;
     }
-    if (opt.on_impostors) opt.on_impostors(g, ir);
+    if (opt.on_impostors) opt.on_impostors(g, ir, sum.lod);
   }
 
   const bool tiled = opt.tile.nx * opt.tile.ny > 1;

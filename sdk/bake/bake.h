@@ -20,9 +20,9 @@ struct BakeOptions {
   LodOptions lod;
   TileOptions tile;  // --tile NxM: N x M disconnected copies of the city (benchmarks)
   ImpostorOptions impostor;
-  // Called with the graph and the impostor results before the package is
-  // written (the CLI writes its HTML bake report from them).
-  std::function<void(const graph::StreetGraph&, const ImpostorBakeResult&)> on_impostors;
+  // Called with the graph, the impostor results and the LOD totals before the
+  // package is written (the CLI writes its HTML bake report from them).
+  std::function<void(const graph::StreetGraph&, const ImpostorBakeResult&, const LodStats&)> on_impostors;
   // Chooses the cells that get impostors (all when unset), e.g. a benchmark
   // route; called on the city before tiling (so on copy 0's ids).
   std::function<std::vector<uint32_t>(const graph::StreetGraph&)> select_cells;

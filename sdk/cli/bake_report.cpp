@@ -25,7 +25,7 @@ std::string fmt(double v, int decimals) {
 }  // namespace
 
 void writeBakeReport(const std::string& dir, const std::string& source, const graph::StreetGraph& g,
-                     const bake::ImpostorBakeResult& r) {
+                     const bake::ImpostorBakeResult& r, const bake::LodStats& lod) {
   ::mkdir(dir.c_str(), 0755);
   ::mkdir((dir + "/thumbs").c_str(), 0755);
 
@@ -80,6 +80,15 @@ void writeBakeReport(const std::string& dir, const std::string& source, const gr
   for (const auto& [layers, cells] : layer_hist)
     rows.push_back({"cells with " + std::to_string(layers) + " layer(s)", std::to_string(cells)});
   page.table(rows);
+  page.h2("Block levels of detail");
+  std::vector<std::vector<std::string>> lods = {{"level", "blocks", "triangles", "vertices"}};
+  for (uint32_t k = 0; k < graph::kMaxBlockLods; ++k)
+    lods.push_back({std::to_string(k), std::to_string(lod.blocks[k]), std::to_string(lod.triangles[k]),
+                    std::to_string(lod.vertices[k])});
+  page.table(lods);
+  page.paragraph("Simplified levels made by meshopt_simplifySloppy: " + std::to_string(lod.sloppy_levels) +
+                 "; with the border unlocked: " + std::to_string(lod.unlocked_levels) +
+                 "; largest error " + fmt(lod.max_error_m, 2) + " m; simplification " + fmt(lod.seconds, 2) + " s.");
   page.h2("Map");
   page.raw(map_svg);
 

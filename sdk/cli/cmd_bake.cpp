@@ -104,8 +104,9 @@ void addBake(CLI::App& app, Runner& run) {
         o->bake.select_cells = [n, seed = o->seed](const graph::StreetGraph& g) { return autoRoute(g, n, seed); };
       }
       if (!o->report_dir.empty())
-        o->bake.on_impostors = [o](const graph::StreetGraph& g, const bake::ImpostorBakeResult& r) {
-          writeBakeReport(o->report_dir, o->in, g, r);
+        o->bake.on_impostors = [o](const graph::StreetGraph& g, const bake::ImpostorBakeResult& r,
+                                   const bake::LodStats& lod) {
+          writeBakeReport(o->report_dir, o->in, g, r, lod);
         };
       const bake::BakeSummary s = bake::bakeCity(o->in, o->out, o->bake);
       std::printf(

@@ -1,4 +1,5 @@
-// Fuzz target for the GLB decoder (package::decodeGlb): any input must give
+// Fuzz target for the GLB decoder (package::decodeGlb, and decodeGlbLevel on
+// level 1 for MSFT_lod block blobs): any input must give
 // Ok with a consistent mesh, or an error with a message; never a crash, a
 // leak or undefined behaviour. A decoded mesh must also encode again.
 //
@@ -51,16 +52,20 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   textured.image_mime = "image/png";
   writeSeed(dir, "seed_textured_draco.glb", blvd::package::encodeGlb(textured));
   writeSeed(dir, "seed_textured_plain.glb", blvd::package::encodeGlb(textured, plain));
+  blvd::geo::MeshData lower = seedMesh();  // a block with a level of detail (MSFT_lod)
+  lower.indices.resize(3);
+  writeSeed(dir, "seed_levels_draco.glb", blvd::package::encodeGlbLevels({seedMesh(), lower}));
   return 0;
 }
 
-extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+namespace {
+void checkOne(const uint8_t* data, size_t size, uint32_t level) {
   blvd::geo::MeshData mesh;
   std::string err;
-  const blvd::core::Status s = blvd::package::decodeGlb(data, size, mesh, err);
+  const blvd::core::Status s = blvd::package::decodeGlbLevel(data, size, level, mesh, err);
   if (s != blvd::core::Status::Ok) {
-    if (err.empty()) std::abort();  // every failure must say why
-    return 0;
+    if (err.empty() || !mesh.empty()) std::abort();  // every failure must say why, and leave nothing
+    return;
   }
   // The decoder promises a consistent mesh; anything else is a bug.
   const size_t n = mesh.vertexCount();
@@ -78,5 +83,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::fprintf(stderr, "re-encode failed: %s\n", e.what());
     std::abort();
   }
+}
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  checkOne(data, size, 0);
+  checkOne(data, size, 1);
   return 0;
 }
