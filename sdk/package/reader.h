@@ -89,6 +89,13 @@ class PackageReader {
   // offset. Reads the whole file.
   core::Status verify(std::string& err) const;
 
+  // Tells the kernel the mapped pages wholly inside `s` are not needed now
+  // (madvise MADV_DONTNEED): they leave the process's resident set and are
+  // read again from the file if touched. The runtime calls it once a section
+  // is parsed or a blob decoded, so resident memory follows the cells in use,
+  // not the file's size. A no-op for a package read into memory.
+  void dropPages(const Span& s) const;
+
  private:
   core::Status validate(std::string& err);
 

@@ -26,6 +26,7 @@ core::Status City::open(const std::string& path, std::string& err) {
       if (tag == package::kSectionGraph) graph::parseGraph(s.data, s.size, s.offset, graph_);
       if (tag == package::kSectionCells) graph::parseCells(s.data, s.size, s.offset, graph_);
       if (tag == package::kSectionBlocks) graph::parseBlocks(s.data, s.size, s.offset, reader_.blobCount(), blocks_);
+      reader_.dropPages(s);  // parsed: the tables hold it now
     }
     // Optional sections: present when the bake made impostors.
     const uint32_t cells = static_cast<uint32_t>(graph_.halfedges.size());
@@ -36,6 +37,7 @@ core::Status City::open(const std::string& path, std::string& err) {
       if (st != core::Status::Ok) return st;
       if (tag == package::kSectionVisibility) graph::parseVisibility(s.data, s.size, s.offset, cells, nblocks, tables_);
       else graph::parseImpostors(s.data, s.size, s.offset, cells, nblocks, reader_.blobCount(), tables_);
+      reader_.dropPages(s);
     }
   } catch (const core::Error& e) {
     err = path + ": " + e.what();
@@ -97,6 +99,7 @@ core::Status City::decodeBlock(uint32_t b, uint32_t lod, geo::MeshData& out, std
   const std::string where =
       reader_.name() + ": block " + std::to_string(b) + " level " + std::to_string(lod) + " at offset " + std::to_string(s.offset) + ": ";
   st = package::decodeGlbLevel(s.data, s.size, lod, out, err);
+  reader_.dropPages(s);  // decoded: the file's pages need not stay resident
   if (st == core::Status::NotFound) st = core::Status::Corrupt;  // BLCK promised the level
   if (st != core::Status::Ok) {
     err = where + err;
@@ -118,6 +121,7 @@ core::Status City::decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshDa
   core::Status st = reader_.blob(layer.blob, s, err);
   if (st != core::Status::Ok) return st;
   st = package::decodeGlb(s.data, s.size, out, err);
+  reader_.dropPages(s);
   if (st != core::Status::Ok)
     err = reader_.name() + ": impostor blob " + std::to_string(layer.blob) + " at offset " + std::to_string(s.offset) +
           ": " + err;
