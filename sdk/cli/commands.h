@@ -17,6 +17,8 @@ void addBake(CLI::App& app, Runner& run);
 void addPack(CLI::App& app, Runner& run);
 void addView(CLI::App& app, Runner& run);
 void addBench(CLI::App& app, Runner& run);
+// `blvd bench track` (cmd_bench_track.cpp), added to `bench` by addBench.
+void addBenchTrack(CLI::App& bench, Runner& run);
 // "full", "local", "radius:R", "single", "layered"/"blvd" -> mode (+ radius).
 bool parseMode(const std::string& s, blvd_render_mode& mode, float& radius);
 // Defined in adapters/<x>/cli_<x>.cpp, compiled into the CLI when the adapter exists.
