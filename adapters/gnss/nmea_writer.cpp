@@ -101,9 +101,14 @@ void appendGga(const Fix& f, const NmeaWriterOptions& opt, std::string& out) {
 }
 
 void appendGst(const Fix& f, const NmeaWriterOptions& opt, std::string& out) {
-  if (!(f.flags & kFixHasHAcc) || !hasPosition(f)) return;
   std::string hms, dmy;
   timeFields(f.t_unix, hms, dmy);
+  if (!(f.flags & kFixHasHAcc) || !hasPosition(f)) {
+    // Receivers keep their sentence cycle without a fix (u-blox sends GST with
+    // empty fields), which lets a parser learn which sentence ends an epoch.
+    appendSentence(std::string(opt.talker) + "GST," + hms + ",,,,,,,", out);
+    return;
+  }
   const double axis = f.h_acc_m / std::sqrt(2.0);
   const double lat_err = std::isfinite(f.lat_err_m) ? f.lat_err_m : axis;
   const double lon_err = std::isfinite(f.lon_err_m) ? f.lon_err_m : axis;

@@ -7,8 +7,8 @@
 //   blvd::gnss::appendEpoch(fix, opt, out);     // "$GPRMC,...*hh\r\n$GPGGA,...\r\n$GPGST,...\r\n"
 //
 // A fix without kFixHasLatLon (or mode kModeNoFix) is written as a receiver
-// reports a lost fix: RMC status V and GGA quality 0 with empty position fields,
-// and no GST. Latitude and longitude are written as ddmm.mmmmmm (6 decimals of
+// reports a lost fix: RMC status V, GGA quality 0 and GST with empty fields (the
+// cycle stays RMC, GGA, GST, so a parser's epoch detection is not disturbed). Latitude and longitude are written as ddmm.mmmmmm (6 decimals of
 // a minute: 2 mm), time as hhmmss.ss, speed in knots with 3 decimals, course
 // with 2, the GST errors with 2 decimals of a metre.
 //
@@ -33,10 +33,10 @@ void appendSentence(const std::string& body, std::string& out);
 void appendRmc(const Fix& f, const NmeaWriterOptions& opt, std::string& out);
 void appendGga(const Fix& f, const NmeaWriterOptions& opt, std::string& out);
 // GST: rms, error ellipse (semi-major = semi-minor = h_acc / sqrt 2, orientation 0),
-// latitude, longitude and altitude errors. Nothing without kFixHasHAcc.
+// latitude, longitude and altitude errors; empty fields without kFixHasHAcc or a position.
 void appendGst(const Fix& f, const NmeaWriterOptions& opt, std::string& out);
 
-// RMC + GGA + GST of one epoch (GST only with kFixHasHAcc and a position).
+// RMC + GGA + GST of one epoch.
 void appendEpoch(const Fix& f, const NmeaWriterOptions& opt, std::string& out);
 
 }  // namespace blvd::gnss

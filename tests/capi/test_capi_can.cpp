@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "blvd/blvd.h"
+#include "common/test_runtime.h"
 #include "vehicle/dbc.h"
 
 namespace {
@@ -139,13 +140,8 @@ TEST(CapiCan, RefusesBadFramesAndDescriptors) {
 // wheel speeds and yaw rates); the tracker dead-reckons from them: driving
 // north-ish at 10 m/s for 2 s moves the pose about 20 m.
 TEST(CapiCan, FeedsFromManyThreadsReachTheTracker) {
-  blvd_runtime_desc rd{};
-  rd.struct_size = sizeof rd;
-  rd.package_path = BLVD_TEST_PACKAGE;
-  rd.width = 64;
-  rd.height = 64;
-  blvd_runtime* rt = nullptr;
-  ASSERT_EQ(blvd_runtime_create(&rd, &rt), BLVD_OK) << blvd_last_error(nullptr);
+  blvd_runtime* rt = blvd::test::createTrackingRuntime();
+  ASSERT_NE(rt, nullptr);
   blvd_can_profile_desc d{};
   d.dbc_path = kToyotaDbc.c_str();
   ProfileHandle h;
