@@ -454,10 +454,10 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   ms.route_cells = opt.route_cells;
   ms.tracker = opt.tracker;
   const std::string& tp = opt.trace_prefix;
-  const MatchResult m5 = benchMatching(ms, 5, true, tp.empty() ? "" : tp + "-match5.csv");
-  const MatchResult m15 = benchMatching(ms, 15, true, tp.empty() ? "" : tp + "-match15.csv");
-  const MatchResult g5 = benchMatching(ms, 5, false, "");
-  const MatchResult g15 = benchMatching(ms, 15, false, "");
+  const MatchResult m5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5.csv");
+  const MatchResult m15 = benchMatching(ms, opt.sigma_high, true, tp.empty() ? "" : tp + "-match15.csv");
+  const MatchResult g5 = benchMatching(ms, opt.sigma_low, false, "");
+  const MatchResult g15 = benchMatching(ms, opt.sigma_high, false, "");
   const double us = timeSteps(city.graph(), {&m5, &m15}, 3);
   const track::MapMatcher probe(city.graph());
 
@@ -485,6 +485,8 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   d["dr_err_max_m"] = fu.drift_max_err_m;
   d["dr_distance_m"] = fu.drift_dist_m;
   d["gnss_latency_s"] = opt.gnss_latency_s;
+  d["gnss_sigma_low_m"] = opt.sigma_low;
+  d["gnss_sigma_high_m"] = opt.sigma_high;
   d["match_sigma5"] = matchJson(m5);
   d["match_sigma15"] = matchJson(m15);
   d["match_sigma5_gnss_only"] = matchJson(g5);

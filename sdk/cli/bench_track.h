@@ -35,6 +35,7 @@ struct TrackBenchOptions {
   std::string osm;        // the OSM extract baked when `package` is empty; empty: data/osm/monaco-geofabrik-2026.osm.pbf
   uint32_t routes = 50;
   uint32_t route_cells = 60;
+  double sigma_low = 5, sigma_high = 15;  // GNSS noise of the two matching runs (the keys say 5 and 15)
   double gnss_latency_s = 0;
   std::string trace_prefix;  // writes per-pose CSVs PREFIX.csv, PREFIX-dr.csv, PREFIX-match5.csv, ...
   track::TrackerDesc tracker;  // for the matching runs (experiments: map aid, lane offset, ...)

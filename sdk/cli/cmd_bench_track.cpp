@@ -65,6 +65,10 @@ void addBenchTrack(CLI::App& bench, Runner& run) {
   t->add_option("--osm", c->bench.osm, "the extract baked when --package is not given");
   t->add_option("--routes", c->bench.routes, "simulated drives per noise level")->capture_default_str()->check(CLI::Range(1, 10000));
   t->add_option("--route-cells", c->bench.route_cells, "cells per drive")->capture_default_str()->check(CLI::Range(2, 100000));
+  t->add_option("--sigma-low", c->bench.sigma_low, "GNSS noise per axis of the on_cell_sigma5 run (experiments)")
+      ->capture_default_str();
+  t->add_option("--sigma-high", c->bench.sigma_high, "GNSS noise per axis of the on_cell_sigma15 run (experiments)")
+      ->capture_default_str();
   t->add_option("--gnss-latency", c->bench.gnss_latency_s, "comma2k19 fixes are valid this long before their stamp");
   t->add_option("--trace", c->bench.trace_prefix, "write per-pose CSVs PREFIX.csv, PREFIX-dr.csv, PREFIX-match5/15.csv");
   t->add_flag("--json", c->json, "print the JSON object (else a table)");
@@ -79,6 +83,14 @@ void addBenchTrack(CLI::App& bench, Runner& run) {
   t->add_option("--map-aid-confidence", c->bench.tracker.map_aid_min_confidence);
   t->add_option("--ambiguity", c->bench.tracker.ambiguity_sigmas);
   t->add_option("--lane-offset", c->bench.tracker.lane_offset_m);
+  t->add_option("--q-pos", c->bench.tracker.ekf.q_pos);
+  t->add_option("--q-speed", c->bench.tracker.ekf.q_speed);
+  t->add_option("--odo-speed-sigma", c->bench.tracker.ekf.odo_speed_sigma);
+  t->add_option("--gnss-speed-sigma", c->bench.tracker.ekf.gnss_speed_sigma);
+  t->add_option("--lag", c->bench.tracker.matcher.lag);
+  t->add_option("--candidates", c->bench.tracker.matcher.max_candidates);
+  t->add_option("--road-sigma", c->bench.tracker.matcher.road_sigma_m);
+  t->add_option("--beta", c->bench.tracker.matcher.beta_m);
   t->callback([c, &run] { run = [c] { return runTrack(*c); }; });
 }
 
