@@ -114,6 +114,21 @@ struct Collect final : GpsdClient::Handler {
   void onError(const std::string& m) override { errors.push_back(m); }
 };
 
+// Connects `client` to 127.0.0.1:port, retrying while the server process starts.
+::testing::AssertionResult connectWhileAlive(GpsdProcess& proc, GpsdClient& client, uint16_t port,
+                                             std::chrono::seconds limit) {
+  GpsdClient::Options opt;
+  opt.port = port;
+  std::string err;
+  for (auto until = Clock::now() + limit; Clock::now() < until;) {
+    if (!proc.alive()) return ::testing::AssertionFailure() << "the server exited; its output:\n" << proc.output();
+    if (client.open(opt, &err)) return ::testing::AssertionSuccess();
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return ::testing::AssertionFailure() << "cannot connect to 127.0.0.1:" << port << ": " << err << "\n"
+                                       << proc.output();
+}
+
 // The log's fixes with a position, decoded by our parser (which tests/adapters/gnss
 // checks against gpsd's own expected output for every shared log).
 std::vector<Fix> logFixes(const std::string& log) {
@@ -242,19 +257,7 @@ TEST(GpsdClient, ReceivesTheLogsPositionsFromARealGpsd) {
 
   // Wait for gpsd to listen.
   GpsdClient client;
-  GpsdClient::Options opt;
-  opt.port = port;
-  std::string err;
-  bool connected = false;
-  for (auto until = Clock::now() + std::chrono::seconds(10); Clock::now() < until;) {
-    ASSERT_TRUE(proc.alive()) << "gpsd exited; its output:\n" << proc.output();
-    if (client.open(opt, &err)) {
-      connected = true;
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  ASSERT_TRUE(connected) << "cannot connect to gpsd on 127.0.0.1:" << port << ": " << err << "\n" << proc.output();
+  ASSERT_TRUE(connectWhileAlive(proc, client, port, std::chrono::seconds(10)));
 
   Collect got;
   // Let gpsd answer the WATCH before the data flows.
@@ -342,20 +345,7 @@ TEST(GpsdClient, ReceivesTheLogsPositionsThroughGpsfake) {
   proc.group = true;
 
   GpsdClient client;
-  GpsdClient::Options opt;
-  opt.port = port;
-  std::string err;
-  bool connected = false;
-  for (auto until = Clock::now() + std::chrono::seconds(15); Clock::now() < until;) {
-    ASSERT_TRUE(proc.alive()) << "gpsfake exited; its output:\n" << proc.output();
-    if (client.open(opt, &err)) {
-      connected = true;
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  ASSERT_TRUE(connected) << "cannot connect to gpsfake's gpsd on 127.0.0.1:" << port << ": " << err << "\n"
-                         << proc.output();
+  ASSERT_TRUE(connectWhileAlive(proc, client, port, std::chrono::seconds(15)));
   Collect got;
   const size_t with_position = collectPositions(client, got, 60, std::chrono::seconds(40));
   EXPECT_FALSE(client.version().empty()) << "no VERSION report from gpsd";
