@@ -1,4 +1,4 @@
-// Fuzz target for the DBC parser and the signal codec (adapters/can): any input
+// Fuzz target for the DBC parser and the signal codec (sdk/vehicle): any input
 // must load or fail with "source:line: reason", never crash; for a file that
 // loads, decoding a frame made of the input bytes and encoding the values again
 // must reproduce every signal bit (encode(decode(frame)) == frame).
