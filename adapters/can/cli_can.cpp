@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "can/candump.h"
-#include "can/dbc.h"
-#include "can/profile.h"
+#include "vehicle/dbc.h"
+#include "vehicle/profile.h"
 #include "cli/commands.h"
 
 namespace blvd::cli {
@@ -87,7 +87,7 @@ void putTime(std::string& s, const can::Record& r) {
   s += buf;
 }
 
-bool openInputs(const CanOptions& o, can::Database& db, can::CandumpReader& reader, Out& out, int& code) {
+bool openInputs(const CanOptions& o, vehicle::Database& db, can::CandumpReader& reader, Out& out, int& code) {
   std::string err;
   if (db.load(o.dbc, err) != BLVD_OK) {
     std::fprintf(stderr, "blvd can: %s\n", err.c_str());
@@ -111,13 +111,13 @@ bool openInputs(const CanOptions& o, can::Database& db, can::CandumpReader& read
 }
 
 int decodeLog(const CanOptions& o) {
-  can::Database db;
+  vehicle::Database db;
   can::CandumpReader reader;
   Out out;
   int code = 0;
   if (!openInputs(o, db, reader, out, code)) return code;
   can::Record rec;
-  std::vector<can::DecodedSignal> sig;
+  std::vector<vehicle::DecodedSignal> sig;
   uint64_t decoded = 0, unknown = 0, other_iface = 0, special = 0;
   std::string line;
   for (;;) {
@@ -140,12 +140,12 @@ int decodeLog(const CanOptions& o) {
       ++special;
       continue;
     }
-    const can::Message* m = db.find(f);
+    const vehicle::Message* m = db.find(f);
     if (!m) {
       ++unknown;
       continue;
     }
-    can::decode(*m, f, sig);
+    vehicle::decode(*m, f, sig);
     ++decoded;
     line.clear();
     if (o.json) {
@@ -191,28 +191,28 @@ int decodeLog(const CanOptions& o) {
 }
 
 int odometryLog(const CanOptions& o) {
-  can::ProfileDesc desc;
-  if (!can::parseVehicle(o.vehicle, desc.vehicle)) {
+  vehicle::ProfileDesc desc;
+  if (!vehicle::parseVehicle(o.vehicle, desc.vehicle)) {
     std::fprintf(stderr, "blvd can odometry: unknown vehicle '%s' (toyota, vw_mqb, hyundai)\n", o.vehicle.c_str());
     return 2;
   }
-  desc.speed = o.speed == "wheels" ? can::SpeedSource::WheelMean
-               : o.speed == "vehicle" ? can::SpeedSource::VehicleSignal
-                                      : can::SpeedSource::Auto;
+  desc.speed = o.speed == "wheels" ? vehicle::SpeedSource::WheelMean
+               : o.speed == "vehicle" ? vehicle::SpeedSource::VehicleSignal
+                                      : vehicle::SpeedSource::Auto;
   desc.iface = o.iface;
-  can::Database db;
+  vehicle::Database db;
   can::CandumpReader reader;
   Out out;
   int code = 0;
   if (!openInputs(o, db, reader, out, code)) return code;
-  can::Profile profile;
+  vehicle::Profile profile;
   std::string err;
   if (profile.create(desc, db, err) != BLVD_OK) {
     std::fprintf(stderr, "blvd can odometry: %s\n", err.c_str());
     return 2;
   }
   can::Record rec;
-  can::Odometry odo;
+  vehicle::Odometry odo;
   uint64_t updates = 0;
   std::string line;
   for (;;) {
@@ -236,11 +236,11 @@ int odometryLog(const CanOptions& o) {
     };
     line += j ? "{\"t\":" : "";
     putTime(line, rec);
-    field("speed_mps", odo.speed_mps, can::kOdoSpeed);
-    field("vehicle_speed_mps", odo.vehicle_speed_mps, can::kOdoVehicleSpeed);
-    field("yaw_rate_dps", odo.yaw_rate_dps, can::kOdoYawRate);
-    field("steering_deg", odo.steering_deg, can::kOdoSteering);
-    if (odo.valid & can::kOdoWheelSpeeds) {
+    field("speed_mps", odo.speed_mps, vehicle::kOdoSpeed);
+    field("vehicle_speed_mps", odo.vehicle_speed_mps, vehicle::kOdoVehicleSpeed);
+    field("yaw_rate_dps", odo.yaw_rate_dps, vehicle::kOdoYawRate);
+    field("steering_deg", odo.steering_deg, vehicle::kOdoSteering);
+    if (odo.valid & vehicle::kOdoWheelSpeeds) {
       line += j ? ",\"wheel_speeds_mps\":[" : " wheel_speeds_mps=";
       for (int i = 0; i < 4; ++i) {
         if (i) line.push_back(',');
@@ -248,9 +248,9 @@ int odometryLog(const CanOptions& o) {
       }
       if (j) line.push_back(']');
     }
-    if (odo.valid & can::kOdoGear) {
+    if (odo.valid & vehicle::kOdoGear) {
       line += j ? ",\"gear\":\"" : " gear=";
-      line += can::gearName(odo.gear);
+      line += vehicle::gearName(odo.gear);
       if (j) line.push_back('"');
     }
     line += j ? "}\n" : "\n";

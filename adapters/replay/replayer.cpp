@@ -26,7 +26,7 @@ blvd_gnss_fix toBlvd(const gnss::Fix& f) {
   return out;
 }
 
-blvd_odometry toBlvd(const can::Odometry& o) {
+blvd_odometry toBlvd(const vehicle::Odometry& o) {
   blvd_odometry out{};
   out.struct_size = sizeof out;
   out.t = o.t;
@@ -34,11 +34,15 @@ blvd_odometry toBlvd(const can::Odometry& o) {
   out.yaw_rate_dps = o.yaw_rate_dps;
   for (int i = 0; i < 4; ++i) out.wheel_speeds_mps[i] = o.wheel_speeds_mps[i];
   out.heading_deg = 0;
-  out.reverse = o.gear == can::Gear::Reverse ? 1 : 0;
-  if (o.valid & (can::kOdoSpeed | can::kOdoVehicleSpeed)) out.flags |= BLVD_ODO_SPEED;
-  if (o.valid & can::kOdoYawRate) out.flags |= BLVD_ODO_YAW_RATE;
-  if (o.valid & can::kOdoWheelSpeeds) out.flags |= BLVD_ODO_WHEEL_SPEEDS;
-  if (o.valid & can::kOdoGear) out.flags |= BLVD_ODO_GEAR;
+  out.reverse = o.gear == vehicle::Gear::Reverse ? 1 : 0;
+  // Only what this frame changed: the tracker takes every flagged field as a new
+  // measurement, so re-sending the last speed with each yaw-rate frame would count
+  // one wheel-speed reading several times. (The profile's ground speed is
+  // kOdoSpeed; a vehicle speed signal that is not the selected source is not.)
+  if (o.updated & vehicle::kOdoSpeed) out.flags |= BLVD_ODO_SPEED;
+  if (o.updated & vehicle::kOdoYawRate) out.flags |= BLVD_ODO_YAW_RATE;
+  if (o.updated & vehicle::kOdoWheelSpeeds) out.flags |= BLVD_ODO_WHEEL_SPEEDS;
+  if (o.updated & vehicle::kOdoGear) out.flags |= BLVD_ODO_GEAR;
   return out;
 }
 
@@ -125,8 +129,8 @@ blvd_status Replayer::open(const ReplayDesc& desc, std::string& err) {
     }
     blvd_status s = dbc_.load(desc_.dbc_path, err);
     if (s != BLVD_OK) return s;
-    can::ProfileDesc pd = desc_.profile;
-    if (!desc_.vehicle.empty() && !can::parseVehicle(desc_.vehicle, pd.vehicle)) {
+    vehicle::ProfileDesc pd = desc_.profile;
+    if (!desc_.vehicle.empty() && !vehicle::parseVehicle(desc_.vehicle, pd.vehicle)) {
       err = "replay: unknown vehicle profile \"" + desc_.vehicle + "\" (toyota, vw_mqb, hyundai)";
       return BLVD_ERR_INVALID_ARG;
     }
@@ -173,13 +177,14 @@ bool Replayer::pullGnss() {
 
 bool Replayer::pullOdometry() {
   can::Record rec;
-  can::Odometry odo;
+  vehicle::Odometry odo;
   while (!have_odo_ && !can_done_ && error_.empty()) {
     switch (candump_.next(rec)) {
       case can::CandumpReader::Result::Frame:
         ++stats_.frames;
-        // Steering alone is not part of blvd_odometry: no event for it.
-        if (profile_.consume(rec.frame, odo) && (odo.updated & ~static_cast<uint32_t>(can::kOdoSteering))) {
+        // A frame that changed nothing blvd_odometry carries (the steering angle, a
+        // vehicle speed that is not the selected source) makes no event.
+        if (profile_.consume(rec.frame, odo) && toBlvd(odo).flags != 0) {
           odo_head_ = Event{};
           odo_head_.type = EventType::Odometry;
           odo_head_.odometry = toBlvd(odo);

@@ -37,8 +37,8 @@
 
 #include "blvd/blvd.h"
 #include "can/candump.h"
-#include "can/dbc.h"
-#include "can/profile.h"
+#include "vehicle/dbc.h"
+#include "vehicle/profile.h"
 #include "gnss/fix.h"
 #include "gnss/nmea.h"
 
@@ -89,7 +89,7 @@ struct ReplayDesc {
   std::istream* candump_stream = nullptr;
   std::string dbc_path;             // required with a candump log
   std::string vehicle = "toyota";   // "toyota", "vw_mqb", "hyundai"; overrides profile.vehicle
-  can::ProfileDesc profile;         // speed source, wheel staleness, interface filter
+  vehicle::ProfileDesc profile;         // speed source, wheel staleness, interface filter
   // candump clock -> replay clock: t_replay = t_candump + offset_s.
   bool has_offset = false;          // false: align the first events of both streams
   double offset_s = 0;
@@ -155,8 +155,8 @@ class Replayer {
   bool nmea_done_ = true;
   // candump stream.
   can::CandumpReader candump_;
-  can::Database dbc_;
-  can::Profile profile_;
+  vehicle::Database dbc_;
+  vehicle::Profile profile_;
   bool can_done_ = true;
   // Heads of both streams (odo_head_.t on the candump clock).
   bool have_gnss_ = false, have_odo_ = false;
@@ -173,6 +173,6 @@ class Replayer {
 
 // Conversions used by the replayer (also handy for a host's own loop).
 blvd_gnss_fix toBlvd(const gnss::Fix& f);
-blvd_odometry toBlvd(const can::Odometry& o);
+blvd_odometry toBlvd(const vehicle::Odometry& o);
 
 }  // namespace blvd::replay

@@ -360,6 +360,87 @@ BLVD_API blvd_status blvd_feed_odometry(blvd_runtime* rt, const blvd_odometry* o
  * active). */
 BLVD_API blvd_status blvd_get_pose(blvd_runtime* rt, double t, blvd_pose* pose);
 
+/* ---- CAN frames through a vehicle profile ---------------------------------------
+ * A profile reads one vehicle's CAN signals, as its DBC file describes them
+ * (opendbc's files), and turns them into odometry: speed, yaw rate, wheel speeds
+ * and gear. Use one profile per CAN bus: it holds the latest value of every
+ * signal. Typical use:
+ *   blvd_can_profile_desc pd = {sizeof pd};  pd.dbc_path = "toyota_new_mc_pt_generated.dbc";
+ *   blvd_can_profile_create(&pd, &profile);
+ *   per received frame (any thread): blvd_feed_can_frame(rt, profile, &frame);
+ *   blvd_can_profile_destroy(profile) after the last feed. */
+typedef struct blvd_can_profile blvd_can_profile; /* opaque */
+
+/* Which signals a profile reads (the message and signal names of each are
+ * listed in docs/decisions/0005-can-profiles-in-sdk.md). */
+typedef enum blvd_vehicle {
+  BLVD_VEHICLE_TOYOTA = 0,  /* opendbc toyota_new_mc_pt_generated.dbc (checked on a RAV4 log) */
+  BLVD_VEHICLE_VW_MQB = 1,  /* opendbc vw_mqb.dbc */
+  BLVD_VEHICLE_HYUNDAI = 2, /* opendbc hyundai_2015_ccan.dbc */
+  BLVD_VEHICLE_FORCE_32 = 0x7fffffff
+} blvd_vehicle;
+
+/* Where blvd_odometry.speed_mps comes from. */
+typedef enum blvd_can_speed_source {
+  BLVD_CAN_SPEED_AUTO = 0,    /* the mean wheel speed while fresh, else the vehicle speed signal */
+  BLVD_CAN_SPEED_WHEELS = 1,  /* only the mean of the four wheel speeds */
+  BLVD_CAN_SPEED_VEHICLE = 2, /* only the vehicle speed signal */
+  BLVD_CAN_SPEED_FORCE_32 = 0x7fffffff
+} blvd_can_speed_source;
+
+typedef struct blvd_can_profile_desc {
+  uint32_t struct_size;        /* sizeof(blvd_can_profile_desc); 0 is treated as the current size */
+  blvd_vehicle vehicle;        /* 0 means BLVD_VEHICLE_TOYOTA */
+  const char* dbc_path;        /* required: the vehicle's DBC file; read once by create */
+  blvd_can_speed_source speed; /* 0 means BLVD_CAN_SPEED_AUTO */
+  float wheel_stale_s;         /* AUTO falls back to the vehicle speed after this long; 0 means 0.5 */
+} blvd_can_profile_desc;
+
+/* The vehicle named "toyota", "vw_mqb" or "hyundai". Any thread.
+ * Errors: BLVD_ERR_INVALID_ARG for NULL; BLVD_ERR_NOT_FOUND for another name. */
+BLVD_API blvd_status blvd_vehicle_from_name(const char* name, blvd_vehicle* out);
+
+/* Reads the DBC and binds the vehicle's signals. Ownership: the caller frees
+ * *out with blvd_can_profile_destroy. Thread: any. Memory: allocates the parsed
+ * DBC here, nothing afterwards. Errors (*out NULL, blvd_last_error(NULL) says
+ * why, naming the file and line or each missing message and signal):
+ * BLVD_ERR_INVALID_ARG, BLVD_ERR_IO, BLVD_ERR_CORRUPT, BLVD_ERR_NOT_FOUND. */
+BLVD_API blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_profile** out);
+
+/* Frees a profile. NULL is a no-op. No feed may be using it. */
+BLVD_API void blvd_can_profile_destroy(blvd_can_profile* profile);
+
+/* Bits of blvd_can_frame.flags. */
+#define BLVD_CAN_EXTENDED 0x1u /* 29-bit identifier */
+#define BLVD_CAN_RTR 0x2u      /* remote transmission request */
+#define BLVD_CAN_ERROR 0x4u    /* error frame */
+#define BLVD_CAN_FD 0x8u       /* CAN FD frame */
+
+typedef struct blvd_can_frame {
+  uint32_t struct_size; /* sizeof(blvd_can_frame); 0 is treated as the current size */
+  double t;             /* host clock, seconds (the clock of the other feeds) */
+  uint32_t id;          /* identifier without flag bits */
+  uint32_t flags;       /* BLVD_CAN_* */
+  uint8_t len;          /* payload bytes: 0..8, or a CAN FD length up to 64 */
+  uint8_t data[64];
+} blvd_can_frame;
+
+/* Decodes one frame through the profile: *odo gets the state after it, its
+ * flags the BLVD_ODO_* fields this frame changed. Any thread (the profile
+ * locks itself); no allocation. Errors: BLVD_ERR_NOT_FOUND when the frame
+ * changed none of the fields blvd_odometry holds (another id, an error or RTR
+ * frame, or only the steering angle; *odo untouched); BLVD_ERR_INVALID_ARG
+ * for NULL arguments, len > 64, or len > 8 without BLVD_CAN_FD. */
+BLVD_API blvd_status blvd_can_profile_decode(blvd_can_profile* profile, const blvd_can_frame* frame,
+                                             blvd_odometry* odo);
+
+/* Decodes a frame through the profile and queues what it carried as
+ * blvd_feed_odometry does. A frame with none of the profile's signals is
+ * ignored (BLVD_OK): pass the whole bus. Any thread; no allocation.
+ * Errors: BLVD_ERR_MISUSE for a NULL rt or profile; BLVD_ERR_INVALID_ARG as
+ * blvd_can_profile_decode. */
+BLVD_API blvd_status blvd_feed_can_frame(blvd_runtime* rt, blvd_can_profile* profile, const blvd_can_frame* frame);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

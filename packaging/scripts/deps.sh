@@ -8,7 +8,7 @@ pkgs=(
   libosmium2-dev libprotozero-dev zlib1g-dev libbz2-dev libexpat1-dev liblz4-dev
   libcgal-dev libgmp-dev libmpfr-dev libmeshoptimizer-dev libzstd-dev libcli11-dev
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
-  libgtest-dev libgmock-dev libbenchmark-dev gpsd
+  libgtest-dev libgmock-dev libbenchmark-dev gpsd gpsd-clients
   libx11-dev
   # tests/vcan: the qemu guest with a vcan bus. Its kernel, busybox-static and
   # can-utils are fetched by `apt-get download` into the build folder, never installed.

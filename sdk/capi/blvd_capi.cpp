@@ -6,6 +6,7 @@
 #include <string>
 
 #include "blvd/blvd.h"
+#include "capi/create_error.h"
 #include "capi/runtime.h"
 #include "core/status.h"
 
@@ -13,8 +14,12 @@ struct blvd_runtime {
   blvd::capi::Runtime* impl;
 };
 
+namespace blvd::capi {
+thread_local std::string t_create_error;  // blvd_last_error(NULL); capi/create_error.h
+}  // namespace blvd::capi
+using blvd::capi::t_create_error;
+
 namespace {
-thread_local std::string t_create_error;  // blvd_last_error(NULL)
 
 blvd_status toStatus(blvd::core::Status s) { return static_cast<blvd_status>(static_cast<int>(s)); }
 

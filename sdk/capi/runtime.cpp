@@ -1,4 +1,5 @@
 #include "capi/runtime.h"
+#include "capi/track_convert.h"
 
 #include <algorithm>
 #include <chrono>
@@ -117,47 +118,17 @@ static_assert(BLVD_POSE_VALID == track::kPoseValid && BLVD_POSE_MATCHED == track
                   BLVD_POSE_HEADING_VALID == track::kPoseHeadingValid,
               "pose flag bits");
 
-namespace {
-template <typename T>
-T sized(const T& in) {
-  // Structs only grow at the end: copy what the caller's version has.
-  T out{};
-  const size_t n = in.struct_size && in.struct_size < sizeof(T) ? in.struct_size : sizeof(T);
-  std::memcpy(&out, &in, n);
-  return out;
-}
-}  // namespace
-
 blvd_status Runtime::feedGnss(const blvd_gnss_fix& in) {
-  const blvd_gnss_fix f = sized(in);
-  track::GnssFix g;
-  g.t = f.t;
-  g.lat = f.lat;
-  g.lon = f.lon;
-  g.alt = f.alt;
-  g.speed_mps = f.speed_mps;
-  g.track_deg = f.track_deg;
-  g.hdop = f.hdop;
-  g.h_acc_m = f.h_acc_m;
-  g.mode = f.mode;
-  g.flags = f.flags;  // BLVD_GNSS_HAS_* == track::GnssFlag bits
-  tracker_->feedGnss(g);
+  const track::GnssFix f = toTrack(in);
+  tracker_->feedGnss(f);
   last_feed_t_ = std::max(last_feed_t_.load(), f.t);
   manual_pose_ = false;
   return BLVD_OK;
 }
 
 blvd_status Runtime::feedOdometry(const blvd_odometry& in) {
-  const blvd_odometry o = sized(in);
-  track::Odometry d;
-  d.t = o.t;
-  d.speed_mps = o.speed_mps;
-  d.yaw_rate_dps = o.yaw_rate_dps;
-  for (int i = 0; i < 4; ++i) d.wheel_speeds_mps[i] = o.wheel_speeds_mps[i];
-  d.heading_deg = o.heading_deg;
-  d.reverse = o.reverse != 0;
-  d.flags = o.flags;  // BLVD_ODO_* == track::OdometryFlag bits
-  tracker_->feedOdometry(d);
+  const track::Odometry o = toTrack(in);
+  tracker_->feedOdometry(o);
   last_feed_t_ = std::max(last_feed_t_.load(), o.t);
   manual_pose_ = false;
   return BLVD_OK;

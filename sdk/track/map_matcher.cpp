@@ -406,11 +406,15 @@ CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double h
                                              : 0.0;
   auto cost = [&](const CellPoint& p) { return 0.5 * p.dist_m * p.dist_m / s2 + kappa * (1 - std::cos(p.heading_rad - heading_rad)); };
   CellPoint cur = project(from.cell, e, n);
+  // Near the junction at the cell's end, within a lane and a half of it: on the
+  // inside of a turn the vehicle cuts the corner and its projection on this cell
+  // never reaches the end, so the street it is on is the one it is nearer to (the
+  // bisector of the corner), as long as it lies along that street.
+  const double near_end_m = std::max(3.0, 1.5 * d_.road_sigma_m);
   for (int hop = 0; hop < 2; ++hop) {
     const double len = g_.halfedges[cur.cell].length;
-    if (cur.arc_m < len - 0.01) break;  // within the cell
-    // Past its end: onto the successor that fits best, when the position lies
-    // along it (or at least nearer to it).
+    const bool past_end = cur.arc_m >= len - 0.01;
+    if (!past_end && cur.arc_m < len - near_end_m) break;  // within the cell
     CellPoint best;
     double best_cost = 1e300;
     for (const uint32_t* s = g_.successors.begin(cur.cell); s != g_.successors.end(cur.cell); ++s) {
@@ -418,7 +422,17 @@ CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double h
       const double c = cost(p);
       if (p.cell != graph::kNone && c < best_cost) best = p, best_cost = c;
     }
-    if (best.cell == graph::kNone || !(best.arc_m > 0.01 || best.dist_m < cur.dist_m)) break;
+    if (best.cell == graph::kNone) break;
+    if (past_end) {
+      // Past the end: onto the successor that fits best when the position lies
+      // along it or is no farther from it. A position beyond the end whose nearest
+      // point on the successor is its start (the outside of a turn: every point
+      // there is nearest to the junction vertex) is a tie; the vehicle has left the
+      // cell, so the tie goes to the successor it is heading into.
+      if (!(best.arc_m > 0.01 || best.dist_m <= cur.dist_m + 1e-9)) break;
+    } else if (!(best.arc_m > 0.01 && best_cost < cost(cur))) {
+      break;
+    }
     cur = best;
   }
   return cur;

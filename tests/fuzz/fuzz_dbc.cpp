@@ -1,4 +1,4 @@
-// Fuzz target for the DBC parser and the signal codec (adapters/can): any input
+// Fuzz target for the DBC parser and the signal codec (sdk/vehicle): any input
 // must load or fail with "source:line: reason", never crash; for a file that
 // loads, decoding a frame made of the input bytes and encoding the values again
 // must reproduce every signal bit (encode(decode(frame)) == frame).
@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "can/dbc.h"
+#include "vehicle/dbc.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   const char* dir = std::getenv("BLVD_FUZZ_SEED_DIR");
@@ -31,7 +31,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  blvd::can::Database db;
+  blvd::vehicle::Database db;
   std::string err;
   const blvd_status st = db.parse(text, "fuzz.dbc", err);
   if (st != BLVD_OK) {
@@ -40,28 +40,28 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   for (const auto& d : db.diagnostics())
     if (d.rfind("fuzz.dbc:", 0) != 0) std::abort();
-  blvd::can::DbcOptions strict;
+  blvd::vehicle::DbcOptions strict;
   strict.reject_unsupported = true;
-  blvd::can::Database db2;
+  blvd::vehicle::Database db2;
   (void)db2.parse(text, "fuzz.dbc", err, strict);
 
-  std::vector<blvd::can::DecodedSignal> values;
+  std::vector<blvd::vehicle::DecodedSignal> values;
   size_t n = 0;
   for (const auto& m : db.messages()) {
     if (++n > 256) break;
     if (db.find(m.id, m.extended) != &m) std::abort();
-    blvd::can::Frame f;
+    blvd::vehicle::Frame f;
     f.id = m.id;
     f.extended = m.extended;
     f.dlc = 64;
     f.fd = true;
     for (size_t i = 0; i < 64; ++i) f.data[i] = size ? data[(i * 7 + m.id) % size] : 0;
-    blvd::can::decode(m, f, values);
-    blvd::can::Frame g;
+    blvd::vehicle::decode(m, f, values);
+    blvd::vehicle::Frame g;
     g.dlc = f.dlc;
-    if (blvd::can::encode(m, values, g, err) != BLVD_OK) std::abort();
+    if (blvd::vehicle::encode(m, values, g, err) != BLVD_OK) std::abort();
     uint8_t mask[64] = {};
-    for (const auto& v : values) blvd::can::insertRaw(*v.signal, ~uint64_t{0}, mask);
+    for (const auto& v : values) blvd::vehicle::insertRaw(*v.signal, ~uint64_t{0}, mask);
     for (size_t i = 0; i < 64; ++i)
       if ((g.data[i] & mask[i]) != (f.data[i] & mask[i])) std::abort();
   }

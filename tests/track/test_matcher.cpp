@@ -148,6 +148,33 @@ TEST(MapMatcher, FollowMovesOntoTheSuccessor) {
   EXPECT_EQ(m.follow(p, 0, -1, 0, 0.1).cell, t.stem);
 }
 
+// Turns at a junction, the vehicle 1.8 m right of the centre line: the street it
+// is on is the one nearer to it (the corner's bisector), on the inside of a turn
+// (where its projection on the first street never reaches the end) as on the
+// outside (where every point beyond the end is nearest the junction itself).
+TEST(MapMatcher, FollowTakesTheNearerStreetAtATurn) {
+  blvd_test::GraphBuilder b;
+  const uint32_t a = b.vertex(0, -100), j = b.vertex(0, 0), east = b.vertex(100, 0), west = b.vertex(-100, 0);
+  const uint32_t north = b.street(a, j), to_east = b.street(j, east), to_west = b.street(j, west);
+  const auto g = b.finish();
+  MapMatcher m(g);
+  const CellPoint p = m.project(north, 1.8, -10);
+  ASSERT_EQ(p.cell, north);
+  const double h = kPi / 4;  // half-way through a right turn (north-east)
+  // Right turn, inside of the corner: before the bisector, still the first street ...
+  EXPECT_EQ(m.follow(p, 1.0, -2.5, h, 0.1).cell, north);
+  // ... past it, the street it turned into, at the arc along it.
+  const CellPoint q = m.follow(p, 3.0, -1.8, h, 0.1);
+  EXPECT_EQ(q.cell, to_east);
+  EXPECT_NEAR(q.arc_m, 3.0, 1e-9);
+  // Left turn, outside of the corner: beyond the end, nearest the junction vertex
+  // on both streets; heading north-west, it is on the street to the west.
+  EXPECT_EQ(m.follow(p, 1.8, 0.5, -h, 0.1).cell, to_west);
+  // Going straight on past the end with no street ahead stays on the last one
+  // (no successor lies along the way and none is nearer).
+  EXPECT_EQ(m.follow(p, 0.3, -0.5, 0, 0.1).cell, north);
+}
+
 TEST(MapMatcher, GridFindsEverySegmentInReach) {
   const auto g = blvd_test::makeGrid(6, 80);
   SegmentGrid grid;

@@ -21,12 +21,16 @@
 #include <sstream>
 
 #include "can/candump.h"
-#include "can/dbc.h"
-#include "can/profile.h"
+#include "vehicle/dbc.h"
+#include "vehicle/profile.h"
 #include "can_test_util.h"
 
 namespace blvd::can {
 namespace {
+
+// The DBC subset and the profiles are the SDK's sdk/vehicle module; the candump
+// reader that feeds these tests is the adapter's.
+using namespace blvd::vehicle;
 
 struct Row {
   std::string field[7];  // t, speed, steering, fl, fr, rl, rr as text

@@ -9,11 +9,15 @@
 #include <sstream>
 
 #include "can/candump.h"
-#include "can/dbc.h"
+#include "vehicle/dbc.h"
 #include "can_test_util.h"
 
 namespace blvd::can {
 namespace {
+
+// The DBC subset and the profiles are the SDK's sdk/vehicle module; the candump
+// reader that feeds these tests is the adapter's.
+using namespace blvd::vehicle;
 
 Database parseDbc(const std::string& text) {
   Database db;

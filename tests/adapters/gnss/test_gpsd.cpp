@@ -45,7 +45,8 @@ std::string readFile(const std::string& path) {
   return ss.str();
 }
 
-std::string findGpsd() {
+// An executable on PATH or in the sbin folders (gpsd lives in /usr/sbin).
+std::string findProgram(const std::string& name) {
   std::vector<std::string> dirs = {"/usr/sbin", "/usr/local/sbin", "/sbin"};
   if (const char* path = std::getenv("PATH")) {
     std::stringstream ss(path);
@@ -54,11 +55,13 @@ std::string findGpsd() {
       if (!d.empty()) dirs.push_back(d);
   }
   for (const auto& d : dirs) {
-    const std::string p = d + "/gpsd";
+    const std::string p = d + "/" + name;
     if (::access(p.c_str(), X_OK) == 0) return p;
   }
   return {};
 }
+
+std::string findGpsd() { return findProgram("gpsd"); }
 
 uint16_t freeLoopbackPort() {
   const int s = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
@@ -75,10 +78,11 @@ uint16_t freeLoopbackPort() {
 // gpsd as a child process, stopped and reaped in the destructor.
 struct GpsdProcess {
   pid_t pid = -1;
+  bool group = false;  // pid leads a process group (gpsfake and its gpsd): signal all of it
   std::string dir, log;
   ~GpsdProcess() {
     if (pid > 0) {
-      ::kill(pid, SIGTERM);
+      ::kill(group ? -pid : pid, SIGTERM);
       for (int i = 0; i < 50; ++i) {
         if (::waitpid(pid, nullptr, WNOHANG) == pid) {
           pid = -1;
@@ -87,7 +91,7 @@ struct GpsdProcess {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
       }
       if (pid > 0) {
-        ::kill(pid, SIGKILL);
+        ::kill(group ? -pid : pid, SIGKILL);
         ::waitpid(pid, nullptr, 0);
       }
     }
@@ -109,6 +113,73 @@ struct Collect final : GpsdClient::Handler {
   void onReport(std::string_view cls, std::string_view) override { ++classes[std::string(cls)]; }
   void onError(const std::string& m) override { errors.push_back(m); }
 };
+
+// Connects `client` to 127.0.0.1:port, retrying while the server process starts.
+::testing::AssertionResult connectWhileAlive(GpsdProcess& proc, GpsdClient& client, uint16_t port,
+                                             std::chrono::seconds limit) {
+  GpsdClient::Options opt;
+  opt.port = port;
+  std::string err;
+  for (auto until = Clock::now() + limit; Clock::now() < until;) {
+    if (!proc.alive()) return ::testing::AssertionFailure() << "the server exited; its output:\n" << proc.output();
+    if (client.open(opt, &err)) return ::testing::AssertionSuccess();
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return ::testing::AssertionFailure() << "cannot connect to 127.0.0.1:" << port << ": " << err << "\n"
+                                       << proc.output();
+}
+
+// The log's fixes with a position, decoded by our parser (which tests/adapters/gnss
+// checks against gpsd's own expected output for every shared log).
+std::vector<Fix> logFixes(const std::string& log) {
+  std::vector<Fix> reference;
+  struct R final : NmeaDecoder::Handler {
+    std::vector<Fix>* out;
+    void onFix(const Fix& f) override {
+      if (f.mode >= kMode2D) out->push_back(f);
+    }
+    void onDiagnostic(const NmeaDiagnostic&) override {}
+  } r;
+  r.out = &reference;
+  NmeaDecoder d;
+  d.feed(log.data(), log.size(), r);
+  d.finish(r);
+  return reference;
+}
+
+// Polls until `want` TPVs with a position arrived (or the time is up); returns how many did.
+size_t collectPositions(GpsdClient& client, Collect& got, size_t want, std::chrono::seconds limit) {
+  size_t with_position = 0;
+  for (auto until = Clock::now() + limit; Clock::now() < until && with_position < want;) {
+    const ReadStatus st = client.poll(got, 200);
+    if (st == ReadStatus::End || st == ReadStatus::Error) break;
+    with_position = 0;
+    for (const Fix& f : got.fixes) with_position += (f.mode >= kMode2D && (f.flags & kFixHasLatLon)) ? 1 : 0;
+  }
+  return with_position;
+}
+
+// Every position gpsd reports is one of the log's, to 1e-7 degrees; returns how
+// many of them also carry the time our fix of that position has.
+size_t checkPositionsInLog(const std::vector<Fix>& fixes, const std::vector<Fix>& reference) {
+  size_t timed_same = 0;
+  for (const Fix& f : fixes) {
+    if (f.mode < kMode2D || !(f.flags & kFixHasLatLon)) continue;
+    bool found = false;
+    for (const Fix& r : reference) {
+      if (std::fabs(r.lat - f.lat) <= 1e-7 && std::fabs(r.lon - f.lon) <= 1e-7) {
+        found = true;
+        if ((f.flags & kFixHasTime) && (r.flags & kFixHasTime) && std::fabs(r.t_unix - f.t_unix) < 0.0005)
+          ++timed_same;
+        break;
+      }
+    }
+    char where[96];
+    std::snprintf(where, sizeof where, "%.9f,%.9f", f.lat, f.lon);
+    EXPECT_TRUE(found) << "gpsd reported a position that is not in the log: " << where;
+  }
+  return timed_same;
+}
 
 TEST(GpsdClient, ParsesTpv) {
   Fix f;
@@ -147,22 +218,7 @@ TEST(GpsdClient, ReceivesTheLogsPositionsFromARealGpsd) {
   const std::string log = readFile(log_path);
   ASSERT_FALSE(log.empty());
 
-  // What the log says, decoded by our parser (which tests/adapters/gnss
-  // checks against gpsd's own expected output for this log).
-  std::vector<Fix> reference;
-  {
-    struct R final : NmeaDecoder::Handler {
-      std::vector<Fix>* out;
-      void onFix(const Fix& f) override {
-        if (f.mode >= kMode2D) out->push_back(f);
-      }
-      void onDiagnostic(const NmeaDiagnostic&) override {}
-    } r;
-    r.out = &reference;
-    NmeaDecoder d;
-    d.feed(log.data(), log.size(), r);
-    d.finish(r);
-  }
+  const std::vector<Fix> reference = logFixes(log);
   ASSERT_GT(reference.size(), 100u);
 
   // The receiver: a pseudo-terminal.
@@ -201,19 +257,7 @@ TEST(GpsdClient, ReceivesTheLogsPositionsFromARealGpsd) {
 
   // Wait for gpsd to listen.
   GpsdClient client;
-  GpsdClient::Options opt;
-  opt.port = port;
-  std::string err;
-  bool connected = false;
-  for (auto until = Clock::now() + std::chrono::seconds(10); Clock::now() < until;) {
-    ASSERT_TRUE(proc.alive()) << "gpsd exited; its output:\n" << proc.output();
-    if (client.open(opt, &err)) {
-      connected = true;
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  ASSERT_TRUE(connected) << "cannot connect to gpsd on 127.0.0.1:" << port << ": " << err << "\n" << proc.output();
+  ASSERT_TRUE(connectWhileAlive(proc, client, port, std::chrono::seconds(10)));
 
   Collect got;
   // Let gpsd answer the WATCH before the data flows.
@@ -246,13 +290,7 @@ TEST(GpsdClient, ReceivesTheLogsPositionsFromARealGpsd) {
     }
   });
 
-  size_t with_position = 0;
-  for (auto until = Clock::now() + std::chrono::seconds(30); Clock::now() < until && with_position < 40;) {
-    const ReadStatus st = client.poll(got, 200);
-    if (st == ReadStatus::End || st == ReadStatus::Error) break;
-    with_position = 0;
-    for (const Fix& f : got.fixes) with_position += (f.mode >= kMode2D && (f.flags & kFixHasLatLon)) ? 1 : 0;
-  }
+  const size_t with_position = collectPositions(client, got, 40, std::chrono::seconds(30));
   stop = true;
   feeder.join();
   ::close(master);
@@ -262,27 +300,61 @@ TEST(GpsdClient, ReceivesTheLogsPositionsFromARealGpsd) {
                                 << " with a position; gpsd's output:\n"
                                 << proc.output();
 
-  // Every position gpsd reports is one of the log's, to 1e-7 degrees; and
-  // where gpsd gives a time, our fix of that time has the same position.
-  size_t timed_same = 0;
-  for (const Fix& f : got.fixes) {
-    if (f.mode < kMode2D || !(f.flags & kFixHasLatLon)) continue;
-    bool found = false;
-    for (const Fix& r : reference) {
-      if (std::fabs(r.lat - f.lat) <= 1e-7 && std::fabs(r.lon - f.lon) <= 1e-7) {
-        found = true;
-        if ((f.flags & kFixHasTime) && (r.flags & kFixHasTime) && std::fabs(r.t_unix - f.t_unix) < 0.0005)
-          ++timed_same;
-        break;
-      }
-    }
-    char where[96];
-    std::snprintf(where, sizeof where, "%.9f,%.9f", f.lat, f.lon);
-    EXPECT_TRUE(found) << "gpsd reported a position that is not in the log: " << where;
-  }
-  EXPECT_GE(timed_same, 30u);
+  const size_t timed_same = checkPositionsInLog(got.fixes, reference);
   std::printf("[gpsd] %s: %zu TPVs, %zu with a position (all in the log), %zu with the same time as ours\n",
               client.version().c_str(), got.fixes.size(), with_position, timed_same);
+}
+
+// The setup: gpsd fed by gpsfake (Debian's gpsd-clients), which starts
+// its own gpsd on a pty, waits for a client and plays the log once.
+TEST(GpsdClient, ReceivesTheLogsPositionsThroughGpsfake) {
+  const std::string gpsd = findGpsd();
+  ASSERT_FALSE(gpsd.empty()) << "gpsd is not installed (apt-get install gpsd; packaging/scripts/deps.sh)";
+  const std::string gpsfake = findProgram("gpsfake");
+  ASSERT_FALSE(gpsfake.empty()) << "gpsfake is not installed: it is in Debian's 'gpsd-clients' package "
+                                   "(apt-get install gpsd-clients; packaging/scripts/deps.sh installs it)";
+  const std::string log_path = std::string(BLVD_TEST_DATA_DIR) + "/nmea/nmea-rtk.log";
+  const std::vector<Fix> reference = logFixes(readFile(log_path));
+  ASSERT_GT(reference.size(), 100u);
+
+  GpsdProcess proc;
+  char dir_template[] = "/tmp/blvd-gpsfake-XXXXXX";
+  ASSERT_NE(::mkdtemp(dir_template), nullptr);
+  proc.dir = dir_template;
+  proc.log = proc.dir + "/gpsfake.log";
+  const uint16_t port = freeLoopbackPort();
+  ASSERT_NE(port, 0);
+  const std::string port_s = std::to_string(port);
+  // gpsfake runs the gpsd it finds on PATH.
+  const std::string path = gpsd.substr(0, gpsd.rfind('/')) + ":" + (std::getenv("PATH") ? std::getenv("PATH") : "/usr/bin");
+  proc.pid = ::fork();
+  ASSERT_GE(proc.pid, 0);
+  if (proc.pid == 0) {
+    const int out = ::open(proc.log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (out >= 0) {
+      ::dup2(out, 1);
+      ::dup2(out, 2);
+    }
+    ::setpgid(0, 0);  // gpsfake's gpsd child goes down with it (GpsdProcess kills the group)
+    ::setenv("PATH", path.c_str(), 1);
+    // -1 play the log once, -c seconds between sentences, -P gpsd's port.
+    ::execl(gpsfake.c_str(), "gpsfake", "-1", "-c", "0.01", "-P", port_s.c_str(), log_path.c_str(),
+            static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  proc.group = true;
+
+  GpsdClient client;
+  ASSERT_TRUE(connectWhileAlive(proc, client, port, std::chrono::seconds(15)));
+  Collect got;
+  const size_t with_position = collectPositions(client, got, 60, std::chrono::seconds(40));
+  EXPECT_FALSE(client.version().empty()) << "no VERSION report from gpsd";
+  ASSERT_GE(with_position, 60u) << "gpsd sent " << got.fixes.size() << " TPVs, " << with_position
+                                << " with a position; gpsfake's output:\n"
+                                << proc.output();
+  // gpsd's first reports, before it has locked onto the log's cycle, may carry
+  // another epoch's time; most must agree.
+  EXPECT_GE(checkPositionsInLog(got.fixes, reference), 40u);
 }
 
 }  // namespace

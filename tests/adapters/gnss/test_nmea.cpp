@@ -602,7 +602,7 @@ TEST(NmeaEpoch, GstBeforeItsGgaStillApplies) {
 // sentence, not one cycle later when the next one starts.
 TEST(NmeaEpoch, EarlyEmissionAfterLearningTheCycle) {
   auto cycle = [](int sec) {
-    char t[16];
+    char t[24];  // room for any int (GCC checks the bound under the sanitizers)
     std::snprintf(t, sizeof t, "1200%02d.00", sec);
     return withSum(std::string("$GPRMC,") + t + ",A,4807.038,N,01131.000,E,1.0,10.0,010120,,") +
            withSum(std::string("$GPGGA,") + t + ",4807.038,N,01131.000,E,1,05,0.9,545.4,M,46.9,M,,") + kGsa;

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "can/candump.h"
-#include "can/dbc.h"
+#include "vehicle/dbc.h"
 #include "can_test_util.h"
 #include "replay/recorder.h"
 #include "replay/replayer.h"
@@ -51,10 +51,10 @@ std::string nmeaTrace(double t0, int n) {
 
 // Toyota WHEEL_SPEEDS frames, every wheel at `kmh`, at candump times t0 + k * dt.
 std::string wheelTrace(double t0, double dt, int n, double kmh) {
-  can::Database db;
+  vehicle::Database db;
   std::string err;
   EXPECT_EQ(db.load(kToyotaDbc, err), BLVD_OK) << err;
-  const can::Message* m = db.findByName("WHEEL_SPEEDS");
+  const vehicle::Message* m = db.findByName("WHEEL_SPEEDS");
   EXPECT_NE(m, nullptr);
   std::ostringstream out;
   Recorder rec;
@@ -64,7 +64,7 @@ std::string wheelTrace(double t0, double dt, int n, double kmh) {
     f.dlc = 8;
     f.iface = "can0";
     f.t = t0 + k * dt;
-    EXPECT_EQ(can::encode(*m,
+    EXPECT_EQ(vehicle::encode(*m,
                           {{"WHEEL_SPEED_FL", kmh}, {"WHEEL_SPEED_FR", kmh}, {"WHEEL_SPEED_RL", kmh},
                            {"WHEEL_SPEED_RR", kmh}},
                           f, err),

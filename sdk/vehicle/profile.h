@@ -37,10 +37,10 @@
 #include <vector>
 
 #include "blvd/blvd.h"
-#include "can/dbc.h"
-#include "can/frame.h"
+#include "vehicle/dbc.h"
+#include "vehicle/frame.h"
 
-namespace blvd::can {
+namespace blvd::vehicle {
 
 enum class Gear : uint8_t { Unknown = 0, Park, Reverse, Neutral, Drive, Sport };
 const char* gearName(Gear g);
@@ -99,6 +99,13 @@ class Profile {
   const Odometry& state() const { return state_; }
   // Forgets every value (valid = 0), keeping the bindings.
   void reset();
+  // The inverse of consume(), for simulators and tests: writes `o` (the fields
+  // set in o.valid; the others as zero) into one frame per message the profile
+  // reads, in id order, stamped `t`. consume() of those frames gives `o` back to
+  // the DBC's resolution. Toyota messages with a CHECKSUM signal get Toyota's
+  // checksum. BLVD_ERR_INVALID_ARG with `err` naming the signal when a value does
+  // not fit it.
+  blvd_status encode(const Odometry& o, double t, std::vector<Frame>& out, std::string& err) const;
   // (id, extended) of every message the profile reads, e.g. for SocketCAN filters.
   std::vector<std::pair<uint32_t, bool>> messageIds() const;
 
@@ -125,4 +132,4 @@ class Profile {
   double wheel_t_ = 0;
 };
 
-}  // namespace blvd::can
+}  // namespace blvd::vehicle

@@ -29,9 +29,9 @@
 #include <vector>
 
 #include "blvd/blvd.h"
-#include "can/frame.h"
+#include "vehicle/frame.h"
 
-namespace blvd::can {
+namespace blvd::vehicle {
 
 enum class ByteOrder : uint8_t { Intel, Motorola };  // @1 little endian, @0 big endian
 enum class ValueType : uint8_t { Integer, Float32, Float64 };  // SIG_VALTYPE_ 0 / 1 / 2
@@ -132,4 +132,4 @@ blvd_status encode(const Message& m, const std::vector<DecodedSignal>& values, F
 blvd_status encode(const Message& m, const std::vector<std::pair<std::string, double>>& values, Frame& f,
                    std::string& err);
 
-}  // namespace blvd::can
+}  // namespace blvd::vehicle

@@ -1,9 +1,9 @@
-#include "can/profile.h"
+#include "vehicle/profile.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace blvd::can {
+namespace blvd::vehicle {
 namespace {
 
 constexpr double kKmh = 3.6;  // km/h per m/s
@@ -81,6 +81,36 @@ Gear vwGear(int64_t v) {
     case 14: return Gear::Drive;
     default: return Gear::Unknown;
   }
+}
+
+int toyotaGearCode(Gear g) {
+  switch (g) {
+    case Gear::Drive: return 0;
+    case Gear::Sport: return 1;
+    case Gear::Neutral: return 8;
+    case Gear::Reverse: return 16;
+    case Gear::Park: return 32;
+    default: return -1;
+  }
+}
+
+int vwGearCode(Gear g) {
+  switch (g) {
+    case Gear::Park: return 5;
+    case Gear::Reverse: return 6;
+    case Gear::Neutral: return 7;
+    case Gear::Drive: return 8;
+    case Gear::Sport: return 9;
+    default: return -1;
+  }
+}
+
+// opendbc's toyota_checksum: the id's bytes, the length and every payload byte
+// but the last, summed modulo 256.
+uint8_t toyotaChecksum(const Frame& f) {
+  unsigned sum = (f.id & 0xFFu) + ((f.id >> 8) & 0xFFu) + f.dlc;
+  for (unsigned i = 0; i + 1 < f.dlc; ++i) sum += f.data[i];
+  return static_cast<uint8_t>(sum & 0xFFu);
 }
 
 }  // namespace
@@ -167,6 +197,76 @@ std::vector<std::pair<uint32_t, bool>> Profile::messageIds() const {
   std::vector<std::pair<uint32_t, bool>> ids;
   for (const auto& [k, b] : bound_) ids.emplace_back(b.message->id, b.message->extended);
   return ids;
+}
+
+blvd_status Profile::encode(const Odometry& o, double t, std::vector<Frame>& out, std::string& err) const {
+  std::vector<const Bound*> msgs;
+  for (const auto& [k, b] : bound_) msgs.push_back(&b);
+  std::sort(msgs.begin(), msgs.end(), [](const Bound* a, const Bound* b) {
+    return std::make_pair(a->message->extended, a->message->id) < std::make_pair(b->message->extended, b->message->id);
+  });
+  const auto put = [&](const Signal& s, double value, Frame& f) {
+    uint64_t raw = 0;
+    if (!toRaw(s, value, raw)) {
+      err = "profile " + std::string(vehicleName(desc_.vehicle)) + ": signal " + s.name + ": value " +
+            std::to_string(value) + " does not fit";
+      return false;
+    }
+    insertRaw(s, raw, f.data);
+    return true;
+  };
+  const auto has = [&](uint32_t bit) { return (o.valid & bit) != 0; };
+  for (const Bound* b : msgs) {
+    Frame f;
+    f.t = t;
+    f.id = b->message->id;
+    f.extended = b->message->extended;
+    f.dlc = static_cast<uint8_t>(std::min<uint32_t>(b->message->size, kMaxFdLen));
+    f.fd = f.dlc > kMaxClassicLen;
+    for (const Item& it : b->items) {
+      double v = 0;
+      bool gear_code = false;
+      switch (it.target) {
+        case VehicleSpeed: v = has(kOdoVehicleSpeed) ? o.vehicle_speed_mps : 0; break;
+        case YawRate: v = has(kOdoYawRate) ? o.yaw_rate_dps : 0; break;
+        case Steering: v = has(kOdoSteering) ? o.steering_deg : 0; break;
+        case WheelFL:
+        case WheelFR:
+        case WheelRL:
+        case WheelRR: v = has(kOdoWheelSpeeds) ? o.wheel_speeds_mps[it.target - WheelFL] : 0; break;
+        case GearCode: {
+          const int code = desc_.vehicle == Vehicle::VwMqb ? vwGearCode(o.gear) : toyotaGearCode(o.gear);
+          if (!has(kOdoGear) || code < 0) continue;  // no value to send: the bits stay 0
+          v = code;
+          gear_code = true;
+          break;
+        }
+        case GearP: v = has(kOdoGear) && o.gear == Gear::Park; break;
+        case GearR: v = has(kOdoGear) && o.gear == Gear::Reverse; break;
+        case GearN: v = has(kOdoGear) && o.gear == Gear::Neutral; break;
+        case GearD: v = has(kOdoGear) && (o.gear == Gear::Drive || o.gear == Gear::Sport); break;
+      }
+      if (!gear_code) v *= it.divisor;
+      if (it.sign) {  // magnitude plus a sign bit (VW)
+        if (!put(*it.sign, v < 0 ? 1 : 0, f)) return BLVD_ERR_INVALID_ARG;
+        v = std::fabs(v);
+      }
+      if (it.add) {  // coarse signal plus a fine one (Toyota STEER_ANGLE + STEER_FRACTION)
+        uint64_t raw = 0;
+        if (!toRaw(*it.signal, v, raw)) return put(*it.signal, v, f), BLVD_ERR_INVALID_ARG;
+        insertRaw(*it.signal, raw, f.data);
+        const double rest = v - toPhysical(*it.signal, raw);
+        if (!put(*it.add, rest, f)) return BLVD_ERR_INVALID_ARG;
+        continue;
+      }
+      if (!put(*it.signal, v, f)) return BLVD_ERR_INVALID_ARG;
+    }
+    if (desc_.vehicle == Vehicle::Toyota)
+      if (const Signal* cs = b->message->signal("CHECKSUM"); cs && cs->supported && cs->bytes_needed <= f.dlc)
+        insertRaw(*cs, toyotaChecksum(f), f.data);
+    out.push_back(f);
+  }
+  return BLVD_OK;
 }
 
 bool Profile::consume(const Frame& f, Odometry& out) {
@@ -256,4 +356,4 @@ bool Profile::consume(const Frame& f, Odometry& out) {
   return true;
 }
 
-}  // namespace blvd::can
+}  // namespace blvd::vehicle

@@ -1,4 +1,4 @@
-#include "can/dbc.h"
+#include "vehicle/dbc.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace blvd::can {
+namespace blvd::vehicle {
 namespace {
 
 constexpr uint32_t kExtendedBit = 0x80000000u;  // DBC: bit 31 of a BO_ id marks a 29-bit id
@@ -586,4 +586,4 @@ blvd_status encode(const Message& m, const std::vector<std::pair<std::string, do
   return BLVD_OK;
 }
 
-}  // namespace blvd::can
+}  // namespace blvd::vehicle

@@ -1,0 +1,155 @@
+// The CAN part of the C API: vehicle profiles (sdk/vehicle) behind an opaque
+// handle, and blvd_feed_can_frame(), which decodes a frame through a profile
+// and queues the odometry exactly as blvd_feed_odometry() does. Design:
+// docs/decisions/0005-can-profiles-in-sdk.md.
+#include <cstring>
+#include <mutex>
+#include <new>
+#include <string>
+
+#include "blvd/blvd.h"
+#include "capi/create_error.h"
+#include "capi/sized.h"
+#include "vehicle/dbc.h"
+#include "vehicle/profile.h"
+
+namespace vehicle = blvd::vehicle;
+
+// One vehicle's CAN decoding state. Feeds may come from several threads (two
+// buses' reader threads, say), and Profile::consume keeps the latest signal
+// values, so every use takes the lock; nothing in it allocates.
+struct blvd_can_profile {
+  std::mutex mu;
+  vehicle::Database dbc;    // must outlive `profile` (it points into it): declared first
+  vehicle::Profile profile;
+};
+
+namespace {
+
+static_assert(BLVD_ODO_SPEED == vehicle::kOdoSpeed && BLVD_ODO_YAW_RATE == vehicle::kOdoYawRate &&
+                  BLVD_ODO_WHEEL_SPEEDS == vehicle::kOdoWheelSpeeds && BLVD_ODO_GEAR == vehicle::kOdoGear,
+              "the profile's odometry bits are the C API's");
+constexpr uint32_t kOdoBits = BLVD_ODO_SPEED | BLVD_ODO_YAW_RATE | BLVD_ODO_WHEEL_SPEEDS | BLVD_ODO_GEAR;
+
+blvd_status fail(blvd_status st, std::string why) {
+  blvd::capi::t_create_error = std::move(why);
+  return st;
+}
+
+// The C frame as the profile's Frame. BLVD_ERR_INVALID_ARG for a length or id
+// that no CAN bus can carry.
+blvd_status toFrame(const blvd_can_frame& in, vehicle::Frame& f) {
+  const blvd_can_frame c = blvd::capi::sized(in);
+  f.t = c.t;
+  f.extended = (c.flags & BLVD_CAN_EXTENDED) != 0;
+  f.rtr = (c.flags & BLVD_CAN_RTR) != 0;
+  f.error = (c.flags & BLVD_CAN_ERROR) != 0;
+  f.fd = (c.flags & BLVD_CAN_FD) != 0;
+  if (c.len > vehicle::kMaxFdLen || (!f.fd && c.len > vehicle::kMaxClassicLen) || (f.fd && !vehicle::isFdLength(c.len)))
+    return BLVD_ERR_INVALID_ARG;
+  if (!f.error && c.id > (f.extended ? vehicle::kEffMask : vehicle::kSffMask)) return BLVD_ERR_INVALID_ARG;
+  f.id = c.id;
+  f.dlc = c.len;
+  std::memcpy(f.data, c.data, c.len);
+  return BLVD_OK;
+}
+
+blvd_status decodeLocked(blvd_can_profile* p, const blvd_can_frame& frame, blvd_odometry& odo) {
+  vehicle::Frame f;
+  if (const blvd_status st = toFrame(frame, f); st != BLVD_OK) return st;
+  vehicle::Odometry o;
+  {
+    std::lock_guard<std::mutex> lock(p->mu);
+    if (!p->profile.consume(f, o)) return BLVD_ERR_NOT_FOUND;
+  }
+  const uint32_t flags = o.updated & kOdoBits;
+  if (!flags) return BLVD_ERR_NOT_FOUND;  // e.g. only the steering angle
+  blvd_odometry r{};
+  r.struct_size = odo.struct_size && odo.struct_size < sizeof r ? odo.struct_size : sizeof r;
+  r.t = o.t;
+  r.speed_mps = o.speed_mps;
+  r.yaw_rate_dps = o.yaw_rate_dps;
+  for (int i = 0; i < 4; ++i) r.wheel_speeds_mps[i] = o.wheel_speeds_mps[i];
+  r.reverse = o.gear == vehicle::Gear::Reverse;
+  r.flags = flags;
+  std::memcpy(&odo, &r, r.struct_size);
+  return BLVD_OK;
+}
+
+}  // namespace
+
+extern "C" {
+
+blvd_status blvd_vehicle_from_name(const char* name, blvd_vehicle* out) {
+  if (!name || !out) return BLVD_ERR_INVALID_ARG;
+  vehicle::Vehicle v;
+  if (!vehicle::parseVehicle(name, v)) return BLVD_ERR_NOT_FOUND;
+  *out = static_cast<blvd_vehicle>(v);
+  return BLVD_OK;
+}
+
+static_assert(static_cast<int>(vehicle::Vehicle::Toyota) == BLVD_VEHICLE_TOYOTA &&
+                  static_cast<int>(vehicle::Vehicle::VwMqb) == BLVD_VEHICLE_VW_MQB &&
+                  static_cast<int>(vehicle::Vehicle::Hyundai) == BLVD_VEHICLE_HYUNDAI,
+              "vehicle enums");
+static_assert(static_cast<int>(vehicle::SpeedSource::Auto) == BLVD_CAN_SPEED_AUTO &&
+                  static_cast<int>(vehicle::SpeedSource::WheelMean) == BLVD_CAN_SPEED_WHEELS &&
+                  static_cast<int>(vehicle::SpeedSource::VehicleSignal) == BLVD_CAN_SPEED_VEHICLE,
+              "speed source enums");
+
+blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_profile** out) {
+  if (!out) return fail(BLVD_ERR_MISUSE, "blvd_can_profile_create: out is NULL");
+  *out = nullptr;
+  if (!desc) return fail(BLVD_ERR_MISUSE, "blvd_can_profile_create: desc is NULL");
+  const blvd_can_profile_desc d = blvd::capi::sized(*desc);
+  if (!d.dbc_path || !*d.dbc_path) return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: desc.dbc_path is required");
+  if (static_cast<int>(d.vehicle) < 0 || d.vehicle > BLVD_VEHICLE_HYUNDAI)
+    return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: unknown vehicle " + std::to_string(d.vehicle));
+  if (static_cast<int>(d.speed) < 0 || d.speed > BLVD_CAN_SPEED_VEHICLE)
+    return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: unknown speed source " + std::to_string(d.speed));
+  if (!(d.wheel_stale_s >= 0 && d.wheel_stale_s < 3600))
+    return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: wheel_stale_s out of range");
+  try {
+    auto* p = new blvd_can_profile;
+    std::string err;
+    blvd_status st = p->dbc.load(d.dbc_path, err);
+    if (st == BLVD_OK) {
+      vehicle::ProfileDesc pd;
+      pd.vehicle = static_cast<vehicle::Vehicle>(d.vehicle);
+      pd.speed = static_cast<vehicle::SpeedSource>(d.speed);
+      pd.wheel_stale_s = d.wheel_stale_s;
+      st = p->profile.create(pd, p->dbc, err);
+    }
+    if (st != BLVD_OK) {
+      delete p;
+      return fail(st, "blvd_can_profile_create: " + err);
+    }
+    *out = p;
+    blvd::capi::t_create_error.clear();
+    return BLVD_OK;
+  } catch (const std::bad_alloc&) {
+    return fail(BLVD_ERR_NOMEM, "out of memory");
+  } catch (...) {
+    return fail(BLVD_ERR_INTERNAL, "internal error in blvd_can_profile_create");
+  }
+}
+
+void blvd_can_profile_destroy(blvd_can_profile* profile) { delete profile; }
+
+blvd_status blvd_can_profile_decode(blvd_can_profile* profile, const blvd_can_frame* frame, blvd_odometry* odo) {
+  if (!profile || !frame || !odo) return BLVD_ERR_INVALID_ARG;
+  return decodeLocked(profile, *frame, *odo);
+}
+
+blvd_status blvd_feed_can_frame(blvd_runtime* rt, blvd_can_profile* profile, const blvd_can_frame* frame) {
+  if (!rt || !profile) return BLVD_ERR_MISUSE;  // no last error: feeds may run on any thread
+  if (!frame) return BLVD_ERR_INVALID_ARG;
+  blvd_odometry odo{};
+  odo.struct_size = sizeof odo;
+  const blvd_status st = decodeLocked(profile, *frame, odo);
+  if (st == BLVD_ERR_NOT_FOUND) return BLVD_OK;  // nothing for the profile on this frame
+  if (st != BLVD_OK) return st;
+  return blvd_feed_odometry(rt, &odo);
+}
+
+}  // extern "C"

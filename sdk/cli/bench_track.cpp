@@ -1,0 +1,501 @@
+// The tracking benchmark (bench_track.h says what each figure measures).
+#include "cli/bench_track.h"
+
+#include <GeographicLib/Geocentric.hpp>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bake/bake.h"
+#include "can/candump.h"
+#include "capi/track_convert.h"
+#include "cli/read_files.h"
+#include "core/status.h"
+#include "replay/replayer.h"
+#include "sim/sim_feed.h"
+#include "stream/city.h"
+#include "track/map_matcher.h"
+#include "vehicle/dbc.h"
+#include "vehicle/profile.h"
+
+namespace blvd::cli {
+namespace {
+
+using core::Error;
+using core::Status;
+
+std::vector<std::vector<double>> readCsv(const std::string& path) {
+  std::istringstream in(readFile(path));
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<std::vector<double>> rows;
+  while (std::getline(in, line)) {
+    std::vector<double> r;
+    std::istringstream ls(line);
+    std::string f;
+    while (std::getline(ls, f, ',')) r.push_back(std::stod(f));
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const double idx = q * static_cast<double>(v.size() - 1);
+  const size_t i = static_cast<size_t>(idx);
+  const double f = idx - static_cast<double>(i);
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+// One input in time order.
+struct Input {
+  double t;
+  bool gnss;
+  track::GnssFix fix;
+  track::Odometry odo;
+};
+
+void sortInputs(std::vector<Input>& in) {
+  std::stable_sort(in.begin(), in.end(), [](const Input& a, const Input& b) { return a.t < b.t; });
+}
+
+// ---------------------------------------------------------------------------
+// Fusion on the comma2k19 RAV4 minute
+
+struct RefPose {
+  double t, e, n;
+};
+
+struct FusionResult {
+  double err_p50 = NAN, err_p95 = NAN, raw_gnss_p50 = NAN;
+  double drift_pct = NAN, drift_err_m = NAN, drift_max_err_m = NAN, drift_dist_m = NAN;
+  size_t gnss = 0, odometry = 0, poses = 0;
+  uint64_t rejected = 0;
+};
+
+FusionResult benchFusion(const std::string& data, double gnss_latency_s, const std::string& trace_path) {
+  FusionResult res;
+  // Reference pose, ECEF -> geodetic -> the local frame of its first pose.
+  const auto pose_rows = readCsv(data + "/track/comma2k19_rav4_seg40_global_pose.csv");
+  const GeographicLib::Geocentric& earth = GeographicLib::Geocentric::WGS84();
+  double lat0, lon0, h0;
+  earth.Reverse(pose_rows[0][3], pose_rows[0][4], pose_rows[0][5], lat0, lon0, h0);
+  const geo::LocalFrame frame(lat0, lon0, 0);
+  std::vector<RefPose> ref;
+  for (const auto& r : pose_rows) {
+    double lat, lon, h;
+    earth.Reverse(r[3], r[4], r[5], lat, lon, h);
+    const geo::Enu p = frame.forward(lat, lon, 0);
+    ref.push_back({r[0], p.e, p.n});
+  }
+  auto refAt = [&](double t, double& e, double& n) {
+    if (t < ref.front().t || t > ref.back().t) return false;
+    size_t i = std::upper_bound(ref.begin(), ref.end(), t, [](double x, const RefPose& p) { return x < p.t; }) - ref.begin();
+    i = std::clamp<size_t>(i, 1, ref.size() - 1);
+    const double u = (t - ref[i - 1].t) / (ref[i].t - ref[i - 1].t);
+    e = ref[i - 1].e + u * (ref[i].e - ref[i - 1].e);
+    n = ref[i - 1].n + u * (ref[i].n - ref[i - 1].n);
+    return true;
+  };
+
+  std::vector<Input> inputs;
+  std::vector<double> raw;
+  for (const auto& r : readCsv(data + "/track/comma2k19_rav4_seg40_gnss_ublox.csv")) {
+    Input in{};
+    in.t = r[0];
+    in.gnss = true;
+    in.fix.t = r[0];
+    in.fix.lat = r[1];
+    in.fix.lon = r[2];
+    in.fix.speed_mps = static_cast<float>(r[3]);
+    in.fix.alt = r[5];
+    in.fix.track_deg = static_cast<float>(r[6]);
+    in.fix.mode = track::kGnssMode3D;
+    in.fix.flags = track::kGnssHasLatLon | track::kGnssHasAlt | track::kGnssHasSpeed | track::kGnssHasTrack;
+    inputs.push_back(in);
+    double e, n;
+    const geo::Enu p = frame.forward(r[1], r[2], 0);
+    if (refAt(r[0], e, n)) raw.push_back(std::hypot(p.e - e, p.n - n));
+    ++res.gnss;
+  }
+  res.raw_gnss_p50 = percentile(raw, 0.5);
+
+  // CAN: the Toyota profile over the candump, powertrain bus only.
+  vehicle::Database db;
+  std::string err;
+  if (db.load(data + "/can/dbc/toyota_new_mc_pt_generated.dbc", err) != BLVD_OK) throw core::Error(core::Status::Io, err);
+  vehicle::ProfileDesc pd;
+  pd.iface = "can0";
+  vehicle::Profile profile;
+  if (profile.create(pd, db, err) != BLVD_OK) throw core::Error(core::Status::NotFound, err);
+  std::istringstream log(readZstd(data + "/can/comma2k19_rav4_seg40_candump.log.zst"));
+  can::CandumpReader reader;
+  reader.attach(log, "comma2k19_rav4_seg40_candump.log");
+  can::Record rec;
+  vehicle::Odometry co;
+  for (;;) {
+    const auto r = reader.next(rec);
+    if (r == can::CandumpReader::Result::End || r == can::CandumpReader::Result::IoError) break;
+    if (r != can::CandumpReader::Result::Frame || !profile.consume(rec.frame, co)) continue;
+    Input in{};
+    in.t = co.t;
+    in.odo.t = co.t;
+    if (co.updated & vehicle::kOdoSpeed) in.odo.flags |= track::kOdoSpeed, in.odo.speed_mps = co.speed_mps;
+    if (co.updated & vehicle::kOdoYawRate) in.odo.flags |= track::kOdoYawRate, in.odo.yaw_rate_dps = co.yaw_rate_dps;
+    if (co.updated & vehicle::kOdoWheelSpeeds) {
+      in.odo.flags |= track::kOdoWheelSpeeds;
+      std::memcpy(in.odo.wheel_speeds_mps, co.wheel_speeds_mps, sizeof co.wheel_speeds_mps);
+    }
+    if (co.gear == vehicle::Gear::Reverse) in.odo.flags |= track::kOdoGear, in.odo.reverse = true;
+    if (!(in.odo.flags & (track::kOdoSpeed | track::kOdoYawRate | track::kOdoWheelSpeeds))) continue;
+    inputs.push_back(in);
+    ++res.odometry;
+  }
+  sortInputs(inputs);
+
+  double first_gnss = 1e300;
+  for (const auto& in : inputs)
+    if (in.gnss) first_gnss = std::min(first_gnss, in.t);
+
+  auto run = [&](double withhold_after, std::vector<double>& errs, std::vector<double>& err_t) {
+    track::TrackerDesc desc;
+    desc.gnss_latency_s = gnss_latency_s;
+    track::Tracker tr(frame, nullptr, desc);
+    FILE* trace = nullptr;
+    if (!trace_path.empty()) {
+      trace = std::fopen((trace_path + (withhold_after < 1e299 ? "-dr.csv" : ".csv")).c_str(), "w");
+      if (trace) std::fprintf(trace, "t,ref_e,ref_n,e,n,heading_deg,speed_mps,bias_dps,sigma_m\n");
+    }
+    size_t k = 0;
+    for (const RefPose& rp : ref) {
+      for (; k < inputs.size() && inputs[k].t <= rp.t; ++k) {
+        if (inputs[k].gnss) {
+          if (inputs[k].t <= withhold_after) tr.feedGnss(inputs[k].fix);
+        } else {
+          tr.feedOdometry(inputs[k].odo);
+        }
+      }
+      const track::Pose& p = tr.update(rp.t);
+      if (trace)
+        std::fprintf(trace, "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.3f\n", rp.t, rp.e, rp.n, p.e, p.n, p.heading_deg,
+                     p.speed_mps, tr.filter().bias() * 57.29577951308232, p.pos_sigma_m);
+      if (!(p.flags & track::kPoseValid) || rp.t < first_gnss + 1.0) continue;
+      errs.push_back(std::hypot(p.e - rp.e, p.n - rp.n));
+      err_t.push_back(rp.t);
+    }
+    if (trace) std::fclose(trace);
+    return tr.stats().gnss_rejected;
+  };
+  std::vector<double> errs, err_t;
+  res.rejected = run(1e300, errs, err_t);
+  res.err_p50 = percentile(errs, 0.5);
+  res.err_p95 = percentile(errs, 0.95);
+  res.poses = errs.size();
+
+  // Dead reckoning: GNSS withheld for the last 30 s of the reference.
+  const double t_cut = ref.back().t - 30.0;
+  std::vector<double> derrs, derr_t;
+  run(t_cut, derrs, derr_t);
+  double dist = 0, max_err = 0;
+  for (size_t i = 1; i < ref.size(); ++i)
+    if (ref[i].t > t_cut) dist += std::hypot(ref[i].e - ref[i - 1].e, ref[i].n - ref[i - 1].n);
+  for (size_t i = 0; i < derrs.size(); ++i)
+    if (derr_t[i] > t_cut) max_err = std::max(max_err, derrs[i]);
+  res.drift_err_m = derrs.empty() ? NAN : derrs.back();
+  res.drift_max_err_m = max_err;
+  res.drift_dist_m = dist;
+  res.drift_pct = 100.0 * res.drift_err_m / dist;
+  return res;
+}
+
+// ---------------------------------------------------------------------------
+// Map matching on Monaco, from simulated NMEA + candump parsed by the adapters
+
+struct MatchResult {
+  size_t epochs = 0, on_cell = 0, fix_epochs = 0, fix_on_cell = 0, settled = 0, settled_ok = 0;
+  size_t warm_epochs = 0, warm_on_cell = 0;    // after the first 10 s of each drive
+  size_t inner_epochs = 0, inner_on_cell = 0;  // truth at least 2 m from both ends of its cell
+  size_t drives = 0;
+  double km = 0;
+  uint64_t breaks = 0, steps = 0, gnss = 0, odometry = 0, nmea_bytes = 0, can_frames = 0, bad_lines = 0;
+  std::vector<track::MatchObservation> observations;
+  std::vector<size_t> drive_starts;
+};
+
+struct MatchSetup {
+  const stream::City* city;
+  const vehicle::Profile* profile;
+  std::string dbc_path;
+  uint32_t routes, route_cells;
+  track::TrackerDesc tracker;
+};
+
+MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry, const std::string& trace_path) {
+  MatchResult res;
+  FILE* tf = trace_path.empty() ? nullptr : std::fopen(trace_path.c_str(), "w");
+  if (tf)
+    std::fprintf(tf, "drive,t,fix,true_cell,true_arc,true_len,cell,arc,conf,err_m,sigma_m,true_e,true_n,e,n,heading,"
+                     "true_heading,est_arc_on_true,est_dist_on_true\n");
+  const graph::StreetGraph& g = ms.city->graph();
+  for (uint32_t r = 0; r < ms.routes; ++r) {
+    sim::FeedDesc fd;
+    fd.drive.seed = 1000 + r;
+    fd.drive.route_cells = ms.route_cells;
+    fd.drive.gnss_sigma_m = sigma;
+    sim::Feed feed;
+    std::string err;
+    const blvd_status fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
+    if (fst == BLVD_ERR_NOT_FOUND) continue;
+    if (fst != BLVD_OK) throw Error(Status::Internal, err);
+    ++res.drives;
+    res.km += feed.distance_m / 1000.0;
+    res.nmea_bytes += feed.nmea.size();
+    res.can_frames += feed.frames.size();
+
+    // The device bytes, parsed back by the adapters.
+    std::istringstream nmea(feed.nmea), can_log(with_odometry ? sim::candumpText(feed, "can0") : std::string());
+    replay::ReplayDesc rd;
+    rd.nmea_path = "sim-" + std::to_string(fd.drive.seed) + ".nmea";
+    rd.nmea_stream = &nmea;
+    if (with_odometry) {
+      rd.candump_path = "sim-" + std::to_string(fd.drive.seed) + ".log";
+      rd.candump_stream = &can_log;
+      rd.dbc_path = ms.dbc_path;
+      rd.vehicle = "toyota";
+      rd.has_offset = true;  // both streams are on the simulator's UTC clock
+      rd.offset_s = 0;
+    }
+    rd.strict = true;  // the simulator's output must parse without a single bad line
+    replay::Replayer replayer;
+    if (replayer.open(rd, err) != BLVD_OK) throw Error(Status::Io, err);
+
+    track::Tracker tr(ms.city->frame(), &g, ms.tracker);
+    res.drive_starts.push_back(res.observations.size());
+    uint64_t steps = 0, fed = 0;
+    const auto noteStep = [&] {
+      if (tr.matcher()->stats().steps != steps) {
+        steps = tr.matcher()->stats().steps;
+        res.observations.push_back(tr.matcher()->lastObservation());
+      }
+    };
+    replay::Event ev;
+    bool have = false, done = false;
+    std::vector<std::pair<double, uint32_t>> truth;  // (t, cell) per epoch, for the settled check
+    for (size_t e = 0; e < feed.truth.size(); ++e) {
+      const sim::TruthRow& s = feed.truth[e];
+      truth.emplace_back(s.t, s.cell);
+      while (!done) {
+        if (!have) {
+          const replay::Replayer::Step st = replayer.next(ev);
+          if (st == replay::Replayer::Step::End) {
+            done = true;
+            break;
+          }
+          if (st == replay::Replayer::Step::Error) throw Error(Status::Corrupt, replayer.error());
+          have = true;
+        }
+        if (ev.t > s.t + 1e-6) break;
+        have = false;
+        if (ev.type == replay::EventType::Gnss) {
+          tr.feedGnss(capi::toTrack(ev.gnss));
+          ++res.gnss;
+        } else {
+          tr.feedOdometry(capi::toTrack(ev.odometry));
+          ++res.odometry;
+          // Keep the ring from overflowing: update between odometry bursts.
+          if (++fed % 64 == 0) tr.update(ev.t);
+        }
+        noteStep();
+      }
+      const track::Pose& p = tr.update(s.t);
+      noteStep();
+      ++res.epochs;
+      const bool ok = p.cell == s.cell;
+      if (tf) {
+        const track::CellPoint q = tr.matcher()->project(s.cell, p.e, p.n);
+        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f\n", r,
+                     s.t - feed.start_unix, s.fix ? 1 : 0, s.cell, s.arc_m, g.halfedges[s.cell].length, p.cell, p.arc_m,
+                     p.confidence, std::hypot(p.e - s.e, p.n - s.n), p.pos_sigma_m, s.e, s.n, p.e, p.n, p.heading_deg,
+                     s.heading_deg, q.arc_m, q.dist_m);
+      }
+      res.on_cell += ok;
+      if (s.fix) ++res.fix_epochs, res.fix_on_cell += ok;
+      if (s.t - feed.start_unix > 10.0) ++res.warm_epochs, res.warm_on_cell += ok;
+      if (s.arc_m >= 2.0 && g.halfedges[s.cell].length - s.arc_m >= 2.0) ++res.inner_epochs, res.inner_on_cell += ok;
+      if (p.settled_cell != track::kNoCell) {
+        for (auto it = truth.rbegin(); it != truth.rend(); ++it)
+          if (std::fabs(it->first - p.settled_t) < 1e-6) {
+            ++res.settled;
+            res.settled_ok += it->second == p.settled_cell;
+            break;
+          }
+      }
+    }
+    res.bad_lines += replayer.stats().bad_lines;
+    res.breaks += tr.stats().match.breaks;
+    res.steps += tr.stats().match.steps;
+  }
+  if (tf) std::fclose(tf);
+  return res;
+}
+
+// Replays recorded observations through fresh matchers, timing each step.
+double timeSteps(const graph::StreetGraph& g, const std::vector<const MatchResult*>& runs, int repeats) {
+  std::vector<double> us;
+  track::MapMatcher m(g);
+  for (int rep = 0; rep < repeats; ++rep)
+    for (const MatchResult* r : runs)
+      for (size_t d = 0; d < r->drive_starts.size(); ++d) {
+        m.reset();
+        const size_t end = d + 1 < r->drive_starts.size() ? r->drive_starts[d + 1] : r->observations.size();
+        for (size_t i = r->drive_starts[d]; i < end; ++i) {
+          const auto t0 = std::chrono::steady_clock::now();
+          m.step(r->observations[i]);
+          const auto t1 = std::chrono::steady_clock::now();
+          us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+        }
+      }
+  return percentile(us, 0.5);
+}
+
+double share(size_t a, size_t b) { return b ? static_cast<double>(a) / static_cast<double>(b) : NAN; }
+
+nlohmann::json matchJson(const MatchResult& r) {
+  return {{"drives", r.drives},
+          {"km", r.km},
+          {"epochs", r.epochs},
+          {"on_cell", share(r.on_cell, r.epochs)},
+          {"on_cell_fix_epochs", share(r.fix_on_cell, r.fix_epochs)},
+          {"on_cell_after_10s", share(r.warm_on_cell, r.warm_epochs)},
+          {"on_cell_2m_from_junctions", share(r.inner_on_cell, r.inner_epochs)},
+          {"settled_on_cell", share(r.settled_ok, r.settled)},
+          {"hmm_steps", r.steps},
+          {"hmm_breaks", r.breaks},
+          {"gnss_fixes_parsed", r.gnss},
+          {"odometry_events_parsed", r.odometry},
+          {"nmea_bytes", r.nmea_bytes},
+          {"can_frames", r.can_frames},
+          {"bad_lines", r.bad_lines}};
+}
+
+bool isFile(const std::string& p) {
+  struct stat st {};
+  return ::stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+// tests/data and data/ from the working directory or one of its parents (the
+// repository root, or a build folder inside it), else the source tree this was
+// built from.
+std::string findDir(const std::string& rel, const std::string& probe) {
+  std::string up;
+  for (int i = 0; i < 4; ++i, up += "../")
+    if (isFile(up + rel + "/" + probe)) return up + rel;
+#ifdef BLVD_SOURCE_DIR
+  if (isFile(std::string(BLVD_SOURCE_DIR) + "/" + rel + "/" + probe)) return std::string(BLVD_SOURCE_DIR) + "/" + rel;
+#endif
+  throw Error(Status::NotFound, "cannot find " + rel + "/" + probe +
+                                    " from the working directory; run from the repository or give --data / --package");
+}
+
+}  // namespace
+
+std::string benchPackage(const std::string& osm, bool quiet) {
+  struct stat src {};
+  if (::stat(osm.c_str(), &src) != 0) throw Error(Status::Io, osm + ": cannot open");
+  const char* tmp = std::getenv("TMPDIR");
+  // The cache name carries the source's size and time, so a changed extract is baked again.
+  const std::string path = std::string(tmp && *tmp ? tmp : "/tmp") + "/blvd-bench-track-" +
+                           std::to_string(static_cast<long long>(src.st_size)) + "-" +
+                           std::to_string(static_cast<long long>(src.st_mtime)) + ".blvd";
+  if (isFile(path)) return path;
+  bake::BakeOptions bo;
+  bo.quiet = true;
+  bo.impostor.mode = bake::ImpostorMode::None;  // tracking needs the street graph only
+  if (!quiet) std::fprintf(stderr, "blvd bench track: baking %s (no impostors) into %s\n", osm.c_str(), path.c_str());
+  const std::string part = path + ".part";
+  bake::bakeCity(osm, part, bo);
+  if (std::rename(part.c_str(), path.c_str()) != 0) throw Error(Status::Io, path + ": cannot write");
+  return path;
+}
+
+nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
+  const std::string data = opt.data_dir.empty() ? findDir("tests/data", "can/dbc/toyota_new_mc_pt_generated.dbc")
+                                                : opt.data_dir;
+  std::string package = opt.package;
+  if (package.empty())
+    package = benchPackage(opt.osm.empty() ? findDir("data/osm", "monaco-geofabrik-2026.osm.pbf") +
+                                                 "/monaco-geofabrik-2026.osm.pbf"
+                                           : opt.osm,
+                           opt.quiet);
+  const FusionResult fu = benchFusion(data, opt.gnss_latency_s, opt.trace_prefix);
+
+  stream::City city;
+  std::string err;
+  if (city.open(package, err) != core::Status::Ok) throw Error(Status::Io, err);
+  MatchSetup ms;
+  ms.city = &city;
+  ms.dbc_path = data + "/can/dbc/toyota_new_mc_pt_generated.dbc";
+  vehicle::Database db;
+  if (db.load(ms.dbc_path, err) != BLVD_OK) throw Error(Status::Io, err);
+  vehicle::Profile profile;
+  if (profile.create(vehicle::ProfileDesc{}, db, err) != BLVD_OK) throw Error(Status::NotFound, err);
+  ms.profile = &profile;
+  ms.routes = opt.routes;
+  ms.route_cells = opt.route_cells;
+  ms.tracker = opt.tracker;
+  const std::string& tp = opt.trace_prefix;
+  const MatchResult m5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5.csv");
+  const MatchResult m15 = benchMatching(ms, opt.sigma_high, true, tp.empty() ? "" : tp + "-match15.csv");
+  const MatchResult g5 = benchMatching(ms, opt.sigma_low, false, "");
+  const MatchResult g15 = benchMatching(ms, opt.sigma_high, false, "");
+  const double us = timeSteps(city.graph(), {&m5, &m15}, 3);
+  const track::MapMatcher probe(city.graph());
+
+  const double on5 = share(m5.on_cell, m5.epochs), on15 = share(m15.on_cell, m15.epochs);
+  nlohmann::json j;
+  j["on_cell_sigma5"] = on5;
+  j["on_cell_sigma15"] = on15;
+  j["update_us_p50"] = us;
+  j["fusion_err_m_p50"] = fu.err_p50;
+  j["dr_drift_pct"] = fu.drift_pct;
+  j["targets"] = {{"on_cell_sigma5", {{"min", 0.99}, {"met", on5 >= 0.99}}},
+                  {"on_cell_sigma15", {{"min", 0.95}, {"met", on15 >= 0.95}}},
+                  {"update_us_p50", {{"max", 20}, {"met", us <= 20}}},
+                  {"fusion_err_m_p50", {{"max", 1.5}, {"met", fu.err_p50 <= 1.5}}},
+                  {"dr_drift_pct", {{"max", 2}, {"met", fu.drift_pct <= 2}}}};
+  nlohmann::json d;
+  d["package"] = package;
+  d["fusion_err_m_p95"] = fu.err_p95;
+  d["gnss_raw_err_m_p50"] = fu.raw_gnss_p50;
+  d["fusion_poses"] = fu.poses;
+  d["fusion_gnss_fixes"] = fu.gnss;
+  d["fusion_odometry_samples"] = fu.odometry;
+  d["fusion_gnss_rejected"] = fu.rejected;
+  d["dr_err_end_m"] = fu.drift_err_m;
+  d["dr_err_max_m"] = fu.drift_max_err_m;
+  d["dr_distance_m"] = fu.drift_dist_m;
+  d["gnss_latency_s"] = opt.gnss_latency_s;
+  d["gnss_sigma_low_m"] = opt.sigma_low;
+  d["gnss_sigma_high_m"] = opt.sigma_high;
+  d["match_sigma5"] = matchJson(m5);
+  d["match_sigma15"] = matchJson(m15);
+  d["match_sigma5_gnss_only"] = matchJson(g5);
+  d["match_sigma15_gnss_only"] = matchJson(g15);
+  d["graph_cells"] = city.graph().cellCount();
+  d["index_entries"] = probe.grid().entryCount();
+  d["matcher_bytes"] = probe.bytes();
+  j["detail"] = d;
+  return j;
+}
+
+}  // namespace blvd::cli

@@ -1,0 +1,159 @@
+// A sim_feed Monaco drive (NMEA + candump + truth, written by the sample in the
+// CTest fixture sim_feed_trace) replayed through the public C API as a host
+// would: NMEA bytes -> gnss adapter -> blvd_feed_gnss, candump lines ->
+// blvd_can_frame -> blvd_feed_can_frame with a Toyota profile; blvd_get_pose at
+// every truth epoch. The matched cells must follow the truth's route.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "blvd/blvd.h"
+#include "common/test_runtime.h"
+#include "can/candump.h"
+#include "replay/replayer.h"
+
+namespace {
+
+struct Truth {
+  double t;
+  uint32_t cell;
+};
+
+std::vector<Truth> readTruth(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line.rfind("t,e,n,lat,lon,heading_deg,speed_mps,cell,arc_m,fix", 0), 0u) << path;
+  std::vector<Truth> rows;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::stringstream ls(line);
+    for (std::string x; std::getline(ls, x, ',');) f.push_back(x);
+    if (f.size() != 10) {
+      ADD_FAILURE() << path << ": bad row " << line;
+      continue;
+    }
+    rows.push_back({std::stod(f[0]), static_cast<uint32_t>(std::stoul(f[7]))});
+  }
+  return rows;
+}
+
+// Everything the host feeds, in time order (a fix first on a tie, as the replayer does).
+struct Input {
+  double t;
+  bool gnss;
+  blvd_gnss_fix fix;
+  blvd_can_frame frame;
+};
+
+std::vector<Input> readInputs() {
+  std::vector<Input> in;
+  // NMEA through the gnss adapter (the replayer drives its decoder and clock).
+  blvd::replay::ReplayDesc rd;
+  rd.nmea_path = BLVD_SIM_TRACE ".nmea";
+  rd.strict = true;
+  blvd::replay::Replayer r;
+  std::string err;
+  EXPECT_EQ(r.open(rd, err), BLVD_OK) << err;
+  blvd::replay::Event ev;
+  while (r.next(ev) == blvd::replay::Replayer::Step::Event) in.push_back({ev.t, true, ev.gnss, {}});
+  EXPECT_TRUE(r.error().empty()) << r.error();
+  // candump lines, raw: blvd decodes them with its profile.
+  blvd::can::CandumpReader reader;
+  EXPECT_EQ(reader.open(BLVD_SIM_TRACE ".log"), BLVD_OK) << reader.error();
+  blvd::can::Record rec;
+  for (;;) {
+    const auto res = reader.next(rec);
+    if (res == blvd::can::CandumpReader::Result::End) break;
+    EXPECT_EQ(res, blvd::can::CandumpReader::Result::Frame) << reader.error();
+    if (res != blvd::can::CandumpReader::Result::Frame) break;
+    blvd_can_frame f{};
+    f.struct_size = sizeof f;
+    f.t = rec.frame.t;
+    f.id = rec.frame.id;
+    f.flags = (rec.frame.extended ? BLVD_CAN_EXTENDED : 0u) | (rec.frame.fd ? BLVD_CAN_FD : 0u);
+    f.len = rec.frame.dlc;
+    std::copy(rec.frame.data, rec.frame.data + rec.frame.dlc, f.data);
+    in.push_back({f.t, false, {}, f});
+  }
+  std::stable_sort(in.begin(), in.end(), [](const Input& a, const Input& b) {
+    return a.t < b.t || (a.t == b.t && a.gnss && !b.gnss);
+  });
+  return in;
+}
+
+TEST(TraceReplay, SimFeedMonacoCellsFollowTruth) {
+  const std::vector<Truth> truth = readTruth(BLVD_SIM_TRACE ".csv");
+  ASSERT_GT(truth.size(), 120u);
+  const std::vector<Input> inputs = readInputs();
+  size_t fixes = 0, frames = 0;
+  for (const Input& i : inputs) (i.gnss ? fixes : frames)++;
+  EXPECT_EQ(fixes, truth.size());  // one per epoch (lost ones as "no fix")
+  EXPECT_GT(frames, 50 * truth.size());
+
+  blvd_runtime* rt = blvd::test::createTrackingRuntime();
+  ASSERT_NE(rt, nullptr);
+  blvd_can_profile_desc pd{};
+  pd.struct_size = sizeof pd;
+  pd.vehicle = BLVD_VEHICLE_TOYOTA;
+  pd.dbc_path = BLVD_TEST_DATA_DIR "/can/dbc/toyota_new_mc_pt_generated.dbc";
+  blvd_can_profile* prof = nullptr;
+  ASSERT_EQ(blvd_can_profile_create(&pd, &prof), BLVD_OK) << blvd_last_error(nullptr);
+
+  // The route, in order, from the truth (each cell once).
+  std::vector<uint32_t> route;
+  for (const Truth& t : truth)
+    if (route.empty() || route.back() != t.cell) route.push_back(t.cell);
+  std::map<uint32_t, size_t> index;
+  for (size_t i = 0; i < route.size(); ++i) index.emplace(route[i], i);
+
+  const double t0 = truth.front().t, warmup_s = 10;
+  size_t k = 0, epochs = 0, on_cell = 0, off_route = 0, backwards = 0;
+  size_t last_index = 0;
+  std::vector<uint32_t> matched;  // run-length sequence of matched cells after the warm-up
+  for (const Truth& tr : truth) {
+    for (; k < inputs.size() && inputs[k].t <= tr.t + 1e-6; ++k) {
+      const blvd_status st =
+          inputs[k].gnss ? blvd_feed_gnss(rt, &inputs[k].fix) : blvd_feed_can_frame(rt, prof, &inputs[k].frame);
+      ASSERT_EQ(st, BLVD_OK) << "input " << k;
+    }
+    blvd_pose p{};
+    p.struct_size = sizeof p;
+    ASSERT_EQ(blvd_get_pose(rt, tr.t, &p), BLVD_OK) << blvd_last_error(rt);
+    if (tr.t - t0 < warmup_s) continue;
+    ASSERT_TRUE(p.flags & BLVD_POSE_MATCHED) << "t=" << tr.t - t0;
+    ++epochs;
+    on_cell += p.cell == tr.cell;
+    if (!matched.empty() && matched.back() == p.cell) continue;
+    matched.push_back(p.cell);
+    const auto it = index.find(p.cell);
+    if (it == index.end()) {
+      ++off_route;
+      continue;
+    }
+    if (it->second < last_index) ++backwards;
+    last_index = std::max(last_index, it->second);
+  }
+  blvd_can_profile_destroy(prof);
+  blvd_runtime_destroy(rt);
+
+  // The matched sequence follows the route: a cell off the route or a step back
+  // is a wrong match that lasted at least one epoch. Allow a few (junctions at
+  // sigma 5 m), never many.
+  const double share = static_cast<double>(on_cell) / static_cast<double>(epochs);
+  EXPECT_GE(share, 0.95) << on_cell << " of " << epochs << " epochs on the true cell";
+  EXPECT_LE(off_route, 3u) << "matched cells not on the route";
+  EXPECT_LE(backwards, 2u) << "steps back along the route";
+  // Every route cell after the warm-up was matched at some epoch, but for short
+  // ones crossed between two epochs.
+  size_t seen = 0;
+  for (uint32_t c : matched) seen += index.count(c);
+  EXPECT_GE(seen + 8, route.size() - route.size() / 10) << "matched " << seen << " of " << route.size() << " route cells";
+}
+
+}  // namespace
