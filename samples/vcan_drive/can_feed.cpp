@@ -3,6 +3,7 @@
 namespace vcan_drive {
 
 using namespace blvd::can;
+using namespace blvd::vehicle;
 
 static_assert(BLVD_ODO_SPEED == kOdoSpeed && BLVD_ODO_YAW_RATE == kOdoYawRate &&
                   BLVD_ODO_WHEEL_SPEEDS == kOdoWheelSpeeds && BLVD_ODO_GEAR == kOdoGear,

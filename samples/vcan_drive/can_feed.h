@@ -9,9 +9,9 @@
 #include <utility>
 #include <vector>
 
-#include "can/dbc.h"
+#include "vehicle/dbc.h"
 #include "can/frame.h"
-#include "can/profile.h"
+#include "vehicle/profile.h"
 #include "tracking.h"
 
 namespace vcan_drive {
@@ -26,7 +26,7 @@ struct CanFeedStats {
 class CanFeed {
  public:
   // Loads the DBC and binds the vehicle profile. `err` says what is missing.
-  blvd_status open(const std::string& dbc_path, blvd::can::Vehicle vehicle, std::string& err);
+  blvd_status open(const std::string& dbc_path, blvd::vehicle::Vehicle vehicle, std::string& err);
 
   // Feeds one frame. Returns true when it changed the odometry; `odo` is then
   // what was fed (also for the caller's odometry log).
@@ -34,12 +34,12 @@ class CanFeed {
 
   // (id, extended) of the messages the profile reads: the socket's filters.
   std::vector<std::pair<uint32_t, bool>> messageIds() const { return profile_.messageIds(); }
-  const blvd::can::Odometry& state() const { return profile_.state(); }
+  const blvd::vehicle::Odometry& state() const { return profile_.state(); }
   const CanFeedStats& stats() const { return stats_; }
 
  private:
-  blvd::can::Database dbc_;
-  blvd::can::Profile profile_;
+  blvd::vehicle::Database dbc_;
+  blvd::vehicle::Profile profile_;
   CanFeedStats stats_;
 };
 

@@ -196,8 +196,8 @@ int main(int argc, char** argv) {
   if (opt.package.empty() && opt.start.empty() && opt.nmea.empty())
     std::fprintf(stderr, "vcan_drive: no --start and no --nmea: odometry is decoded, but poses stay invalid\n");
 
-  blvd::can::Vehicle vehicle;
-  if (!blvd::can::parseVehicle(opt.vehicle, vehicle)) {
+  blvd::vehicle::Vehicle vehicle;
+  if (!blvd::vehicle::parseVehicle(opt.vehicle, vehicle)) {
     std::fprintf(stderr, "vcan_drive: unknown vehicle %s\n", opt.vehicle.c_str());
     return 2;
   }
