@@ -10,7 +10,7 @@ jobs=$(nproc)
 # 1. Sanitizers on the code that reads untrusted bytes (packages, GLB, graph).
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DBLVD_SANITIZE=ON -DBLVD_WERROR=ON > /dev/null
 cmake --build build-asan -j"$jobs" --target test_package test_graph_serialize test_gnss test_can \
-  fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc
+  fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc fuzz_can_frame
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" -L "asan|fuzz")
 
 # 2. Everything, warnings as errors.
