@@ -235,6 +235,7 @@ void addBench(CLI::App& app, Runner& run) {
   r->add_option("--pictures", o->pictures, "poses shown in the HTML page")->capture_default_str();
   r->callback([o, &run] { run = [o] { return runRoute(*o); }; });
   addBenchMemory(*bench, run);
+  addBenchBudget(*bench, run);
 #ifdef BLVD_HAVE_BENCH_TRACK
   addBenchTrack(*bench, run);
 #endif

@@ -19,6 +19,8 @@ void addView(CLI::App& app, Runner& run);
 void addBench(CLI::App& app, Runner& run);
 // `blvd bench memory` and its per-package child `bench memory-drive`, under `bench`.
 void addBenchMemory(CLI::App& bench, Runner& run);
+// `blvd bench budget` (cmd_bench_budget.cpp).
+void addBenchBudget(CLI::App& bench, Runner& run);
 // `blvd bench track` (cmd_bench_track.cpp), added to `bench` by addBench.
 void addBenchTrack(CLI::App& bench, Runner& run);
 // "full", "local", "radius:R", "single", "layered"/"blvd" -> mode (+ radius).

@@ -1,0 +1,250 @@
+// `blvd bench budget PKG`: the frame-time budget (issue 4, Marvie seed 004)
+// on a route, measured side by side in one run:
+//   0. blvd with every block at its coarsest level: the fastest the machine
+//      can draw the route (the floor no polygon budget goes below);
+//   1. the local model alone at full detail (LOD 0 everywhere), which must
+//      exceed the target for the benchmark to mean anything;
+//   With --target-ms auto the target is halfway between 0 and 1: one the
+//   machine can hold by choosing levels, and the local model cannot.
+//   2. blvd without a budget (each block at its 1-pixel-error level);
+//   3. blvd with target_frame_ms: the polygon budget from the frame-time
+//      history, shared by coverage hints across the blocks' LOD chains.
+// It reports p50/p95 against the target, the stutter ratio (p99 of the frames
+// that enter a new cell over p99 of the others) and what the budget costs in
+// SSIM against run 2's image of the same pose.
+#include <sys/stat.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/bench_util.h"
+#include "cli/commands.h"
+#include "cli/report.h"
+#include "cli/route.h"
+#include "render/metrics.h"
+#include "stream/city.h"
+
+namespace blvd::cli {
+namespace {
+
+struct BudgetOpts {
+  std::string package, route = "auto:60", size = "800x480", json_path, html_dir, target = "auto";
+  uint64_t seed = 1;
+  double step = 6;
+  int laps = 2;
+  double auto_fraction = 0.5;  // of the way from the coarsest blvd p50 to the local LOD-0 p50
+};
+
+using Runtime = std::unique_ptr<blvd_runtime, void (*)(blvd_runtime*)>;
+
+Runtime create(const BudgetOpts& o, int w, int h, blvd_render_mode mode, float target_ms, float lod_error_px) {
+  blvd_runtime_desc d{};
+  d.struct_size = sizeof d;
+  d.package_path = o.package.c_str();
+  d.width = uint32_t(w);
+  d.height = uint32_t(h);
+  d.mode = mode;
+  d.target_frame_ms = target_ms;
+  d.lod_error_px = lod_error_px;
+  blvd_runtime* rt = nullptr;
+  check(blvd_runtime_create(&d, &rt), nullptr, "create runtime");
+  return Runtime(rt, blvd_runtime_destroy);
+}
+
+struct Frame {
+  double ms;       // wall time of blvd_render (streaming, uploads, drawing, glFinish)
+  bool boundary;   // the first frame in a new cell
+  uint64_t tris;
+  uint32_t cell;
+};
+
+// Drives `laps` laps (the first warms up and is not kept). A frame whose cell
+// is not resident yet is waited for and drawn again; the kept time is the
+// second one (residency is `bench memory`'s subject, not this one's).
+std::vector<Frame> drive(blvd_runtime* rt, const std::vector<Pose>& poses, const std::vector<uint32_t>& route,
+                         int laps, std::vector<std::vector<uint8_t>>* images, size_t image_every, int w, int h) {
+  check(blvd_set_route(rt, route.data(), route.size()), rt, "route");
+  std::vector<Frame> out;
+  uint32_t last_cell = 0xffffffffu;
+  for (int lap = 0; lap < laps; ++lap)
+    for (size_t i = 0; i < poses.size(); ++i) {
+      const Pose& p = poses[i];
+      check(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), rt, "pose");
+      blvd_frame_stats fs{};
+      fs.struct_size = sizeof fs;
+      auto t0 = std::chrono::steady_clock::now();
+      check(blvd_render(rt, &fs), rt, "render");
+      if (fs.flags & BLVD_FRAME_DEGRADED) {
+        check(blvd_wait_resident(rt, 60000), rt, "wait");
+        t0 = std::chrono::steady_clock::now();
+        check(blvd_render(rt, &fs), rt, "render");
+      }
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      const bool boundary = fs.cell != last_cell;
+      last_cell = fs.cell;
+      if (lap + 1 < laps) continue;
+      out.push_back({ms, boundary, fs.triangles, fs.cell});
+      if (images && i % image_every == 0) {
+        images->emplace_back(size_t(w) * h * 4);
+        check(blvd_read_pixels(rt, images->back().data(), images->back().size()), rt, "pixels");
+      }
+    }
+  return out;
+}
+
+std::vector<double> times(const std::vector<Frame>& f, int which /* -1 all, 0 inside, 1 boundary */) {
+  std::vector<double> v;
+  for (const Frame& x : f)
+    if (which < 0 || int(x.boundary) == which) v.push_back(x.ms);
+  return v;
+}
+
+int runBudget(const BudgetOpts& o) {
+  int w = 0, h = 0;
+  if (std::sscanf(o.size.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16)
+    throw core::Error(core::Status::InvalidArg, "--size must be WIDTHxHEIGHT");
+  unsigned n = 0;
+  if (std::sscanf(o.route.c_str(), "auto:%u", &n) != 1 || n == 0)
+    throw core::Error(core::Status::InvalidArg, "--route must be auto:N");
+  std::vector<uint32_t> route;
+  std::vector<Pose> poses;
+  {
+    stream::City city;
+    std::string err;
+    const core::Status st = city.open(o.package, err);
+    if (st != core::Status::Ok) throw core::Error(st, err);
+    if (!city.hasImpostors())
+      throw core::Error(core::Status::Unsupported, o.package + " has no impostors: bake it with --impostor both");
+    route = autoRoute(city.graph(), n, o.seed);
+    poses = samplePoses(city.graph(), route, o.step);
+  }
+  const size_t image_every = std::max<size_t>(1, poses.size() / 40);
+
+  // 1. The local model alone at full detail: a tiny error bound keeps LOD 0.
+  std::fprintf(stderr, "bench budget: %zu cells, %zu poses; local model at LOD 0 ...\n", route.size(), poses.size());
+  std::vector<Frame> local;
+  {
+    Runtime rt = create(o, w, h, BLVD_MODE_LOCAL, 0.f, 1e-6f);
+    local = drive(rt.get(), poses, route, o.laps, nullptr, image_every, w, h);
+  }
+  const double local_p50 = pct(times(local, -1), 50);
+  std::fprintf(stderr, "bench budget: blvd at the coarsest levels ...\n");
+  std::vector<Frame> coarsest;
+  {
+    Runtime rt = create(o, w, h, BLVD_MODE_BLVD, 0.f, 5000.f);  // any error passes
+    coarsest = drive(rt.get(), poses, route, o.laps, nullptr, image_every, w, h);
+  }
+  const double floor_p50 = pct(times(coarsest, -1), 50);
+  double target = 0;
+  std::string target_rule;
+  if (o.target == "auto") {
+    target = floor_p50 + o.auto_fraction * (local_p50 - floor_p50);
+    char b[128];
+    std::snprintf(b, sizeof b, "coarsest blvd p50 + %.2f × (local LOD-0 p50 − coarsest blvd p50)", o.auto_fraction);
+    target_rule = b;
+  } else {
+    target = std::stod(o.target);
+    target_rule = "given";
+  }
+  if (!(target > 0)) throw core::Error(core::Status::InvalidArg, "--target-ms must be > 0 or auto");
+
+  // 2. blvd without a budget, 3. with it.
+  std::fprintf(stderr, "bench budget: blvd without a budget ...\n");
+  std::vector<std::vector<uint8_t>> free_images, budget_images;
+  std::vector<Frame> unbudgeted, budgeted;
+  {
+    Runtime rt = create(o, w, h, BLVD_MODE_BLVD, 0.f, 0.f);
+    unbudgeted = drive(rt.get(), poses, route, o.laps, &free_images, image_every, w, h);
+  }
+  std::fprintf(stderr, "bench budget: blvd with a %.2f ms target ...\n", target);
+  blvd_stats bs{};
+  bs.struct_size = sizeof bs;
+  {
+    Runtime rt = create(o, w, h, BLVD_MODE_BLVD, float(target), 0.f);
+    budgeted = drive(rt.get(), poses, route, o.laps, &budget_images, image_every, w, h);
+    check(blvd_runtime_stats(rt.get(), &bs), rt.get(), "stats");
+  }
+  std::vector<double> ssim;
+  for (size_t i = 0; i < std::min(free_images.size(), budget_images.size()); ++i)
+    ssim.push_back(render::compareImages(free_images[i].data(), budget_images[i].data(), w, h).ssim);
+
+  const std::vector<double> all = times(budgeted, -1);
+  const double p50 = pct(all, 50), p95 = pct(all, 95);
+  const double p99_inside = pct(times(budgeted, 0), 99), p99_boundary = pct(times(budgeted, 1), 99);
+  std::vector<double> tris_local, tris_budget;
+  for (const Frame& f : local) tris_local.push_back(double(f.tris));
+  for (const Frame& f : budgeted) tris_budget.push_back(double(f.tris));
+  nlohmann::json j;
+  j["target_ms"] = target;
+  j["target_rule"] = target_rule;
+  j["frame_ms_p50"] = p50;
+  j["frame_ms_p95"] = p95;
+  j["stutter_ratio"] = p99_boundary / p99_inside;
+  j["p99_boundary_ms"] = p99_boundary;
+  j["p99_inside_ms"] = p99_inside;
+  j["local_lod0_ms_p50"] = local_p50;
+  j["coarsest_ms_p50"] = floor_p50;
+  j["local_lod0_triangles_p50"] = pct(tris_local, 50);
+  j["unbudgeted_ms_p50"] = pct(times(unbudgeted, -1), 50);
+  j["budgeted_triangles_p50"] = pct(tris_budget, 50);
+  j["ssim_cost_p50"] = 1.0 - pct(ssim, 50);
+  j["ssim_vs_unbudgeted_p50"] = pct(ssim, 50);
+  j["ssim_vs_unbudgeted_p5"] = pct(ssim, 5);
+  j["budget_unreachable_at_end"] = bs.budget_unreachable != 0;
+  j["frames"] = budgeted.size();
+  j["checks"] = {{"local_exceeds_target", local_p50 > target},
+                 {"p50_within_10pct", std::fabs(p50 - target) <= 0.1 * target},
+                 {"p95_within_1_25x", p95 <= 1.25 * target},
+                 {"stutter_at_most_1_2", p99_boundary / p99_inside <= 1.2}};
+  const std::string text = j.dump(2);
+  std::printf("%s\n", text.c_str());
+  if (!o.json_path.empty()) {
+    std::ofstream f(o.json_path);
+    f << text << "\n";
+    if (!f) throw core::Error(core::Status::Io, "cannot write " + o.json_path);
+  }
+  if (!o.html_dir.empty()) {
+    PlotSpec ft;
+    ft.title = "Frame time along the route (last lap)";
+    ft.x_label = "frame";
+    ft.y_label = "ms";
+    Series a{"local, LOD 0", {}, ""}, b{"blvd, no budget", {}, ""}, c{"blvd, budget", {}, ""}, t{"target", {}, ""};
+    for (const Frame& f : local) a.y.push_back(f.ms);
+    for (const Frame& f : unbudgeted) b.y.push_back(f.ms);
+    for (const Frame& f : budgeted) c.y.push_back(f.ms), t.y.push_back(target);
+    ft.series = {a, b, c, t};
+    HtmlPage page("blvd bench budget: " + o.package);
+    page.paragraph(std::to_string(route.size()) + " cells, " + std::to_string(poses.size()) + " frames a lap, " +
+                   o.size + ". Target " + std::to_string(target) + " ms (" + target_rule + ").");
+    page.raw(svgLinePlot(ft));
+    std::string err;
+    ::mkdir(o.html_dir.c_str(), 0755);
+    if (!page.write(o.html_dir + "/index.html", err)) throw core::Error(core::Status::Io, err);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void addBenchBudget(CLI::App& bench, Runner& run) {
+  auto o = std::make_shared<BudgetOpts>();
+  auto* b = bench.add_subcommand("budget", "frame-time budget on a route: p50/p95 vs target, stutter, SSIM cost");
+  b->add_option("package", o->package)->required()->check(CLI::ExistingFile);
+  b->add_option("--route", o->route, "auto:N")->capture_default_str();
+  b->add_option("--seed", o->seed)->capture_default_str();
+  b->add_option("--step", o->step, "metres between frames")->capture_default_str();
+  b->add_option("--laps", o->laps, "laps; all but the last warm up")->capture_default_str()->check(CLI::Range(1, 20));
+  b->add_option("--target-ms", o->target, "frame-time target in ms, or auto (a fraction of the local model's p50)")
+      ->capture_default_str();
+  b->add_option("--auto-fraction", o->auto_fraction, "auto target: this far from the coarsest p50 to the local LOD-0 p50")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  b->add_option("--size", o->size)->capture_default_str();
+  b->add_option("--json", o->json_path, "write the JSON here too");
+  b->add_option("--html", o->html_dir, "write an HTML page with the frame-time plot");
+  b->callback([o, &run] { run = [o] { return runBudget(*o); }; });
+}
+
+}  // namespace blvd::cli

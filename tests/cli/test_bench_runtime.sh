@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# `blvd bench memory` and `blvd bench budget` end to end on small inputs: the
+# JSON keys scripts rely on are there and hold numbers, and the checks that do
+# not depend on the machine's speed hold: no heap allocation by blvd on the
+# render thread after warm-up (1x and a 2x2-tiled 4x package), the same route
+# driven on both. Timings and the RSS ratio are reported, not asserted (speed
+# targets live in benchmarks; README "Measured" has the full runs).
+# Usage: test_bench_runtime.sh BLVD_EXE OSM PACKAGE WORKDIR
+set -euo pipefail
+blvd=$1 osm=$2 pkg=$3 work=$4
+mkdir -p "$work"
+for t in 1x1 2x2; do
+  "$blvd" bake --quiet "$osm" -o "$work/$t.blvd" --impostor layered --impostor-route auto:8 --seed 3 --tile $t > /dev/null
+done
+"$blvd" bench memory "$work/1x1.blvd" "$work/2x2.blvd" --route auto:8 --seed 3 --laps 2 --size 320x192 \
+  --json "$work/memory.json" > /dev/null
+"$blvd" bench budget "$pkg" --route auto:6 --seed 7 --laps 1 --size 320x192 --json "$work/budget.json" > /dev/null
+python3 - "$work/memory.json" "$work/budget.json" <<'PY'
+import json, math, sys
+m, b = (json.load(open(p)) for p in sys.argv[1:3])
+for k in ("rss_peak_1x", "rss_peak_4x", "allocs_per_frame_max"):
+    assert isinstance(m[k], (int, float)), k
+assert m["rss_peak_1x"] > 0 and m["rss_peak_4x"] > 0
+assert m["allocs_per_frame_max"] == 0, m["allocs_per_frame_max"]
+assert m["runs"]["1x"]["frames"] == m["runs"]["4x"]["frames"] > 0
+assert m["runs"]["4x"]["table_bytes"] > 3 * m["runs"]["1x"]["table_bytes"]  # the 4x package really is bigger
+for k in ("target_ms", "frame_ms_p50", "frame_ms_p95", "stutter_ratio", "ssim_vs_unbudgeted_p50"):
+    assert isinstance(b[k], float) and math.isfinite(b[k]) and b[k] > 0, (k, b[k])
+assert b["frames"] > 0
+print("memory: rss 1x %.1f MiB, 4x %.1f MiB (%+.2f %%), allocs/frame %d (driver %d); budget: target %.2f ms, p50 %.2f, p95 %.2f, stutter %.2f"
+      % (m["rss_peak_1x"] / 2**20, m["rss_peak_4x"] / 2**20, m["rss_diff_pct"], m["allocs_per_frame_max"],
+         m["driver_allocs_per_frame_max"], b["target_ms"], b["frame_ms_p50"], b["frame_ms_p95"], b["stutter_ratio"]))
+PY
