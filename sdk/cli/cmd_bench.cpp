@@ -45,11 +45,8 @@ constexpr size_t kNumModes = sizeof kModes / sizeof kModes[0];
 
 int runRoute(const BenchOpts& o) {
   int w = 0, h = 0;
-  if (std::sscanf(o.size.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16)
-    throw core::Error(core::Status::InvalidArg, "--size must be WIDTHxHEIGHT");
-  unsigned n = 0;
-  if (std::sscanf(o.route.c_str(), "auto:%u", &n) != 1 || n == 0)
-    throw core::Error(core::Status::InvalidArg, "--route must be auto:N");
+  parseSize(o.size, w, h);
+  const unsigned n = parseAutoRoute(o.route);
   stream::City city;
   std::string err;
   const core::Status st = city.open(o.package, err);

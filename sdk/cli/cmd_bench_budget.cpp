@@ -105,11 +105,8 @@ std::vector<double> times(const std::vector<Frame>& f, int which /* -1 all, 0 in
 
 int runBudget(const BudgetOpts& o) {
   int w = 0, h = 0;
-  if (std::sscanf(o.size.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16)
-    throw core::Error(core::Status::InvalidArg, "--size must be WIDTHxHEIGHT");
-  unsigned n = 0;
-  if (std::sscanf(o.route.c_str(), "auto:%u", &n) != 1 || n == 0)
-    throw core::Error(core::Status::InvalidArg, "--route must be auto:N");
+  parseSize(o.size, w, h);
+  const unsigned n = parseAutoRoute(o.route);
   std::vector<uint32_t> route;
   std::vector<Pose> poses;
   {
@@ -202,11 +199,7 @@ int runBudget(const BudgetOpts& o) {
                  {"stutter_at_most_1_2", p99_boundary / p99_inside <= 1.2}};
   const std::string text = j.dump(2);
   std::printf("%s\n", text.c_str());
-  if (!o.json_path.empty()) {
-    std::ofstream f(o.json_path);
-    f << text << "\n";
-    if (!f) throw core::Error(core::Status::Io, "cannot write " + o.json_path);
-  }
+  writeText(o.json_path, text);
   if (!o.html_dir.empty()) {
     PlotSpec ft;
     ft.title = "Frame time along the route (last lap)";

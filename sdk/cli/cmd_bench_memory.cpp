@@ -157,9 +157,7 @@ nlohmann::json child(const std::string& exe, const std::string& pkg, const std::
 }
 
 int runMemory(const MemoryOpts& o) {
-  unsigned n = 0;
-  if (std::sscanf(o.route.c_str(), "auto:%u", &n) != 1 || n == 0)
-    throw core::Error(core::Status::InvalidArg, "--route must be auto:N");
+  const unsigned n = parseAutoRoute(o.route);
   stream::City a, b;
   std::string err;
   core::Status st = a.open(o.pkg_1x, err);
@@ -194,11 +192,7 @@ int runMemory(const MemoryOpts& o) {
               r1["malloc_probe"].get<bool>();
   const std::string text = j.dump(2);
   std::printf("%s\n", text.c_str());
-  if (!o.json_path.empty()) {
-    std::ofstream f(o.json_path);
-    f << text << "\n";
-    if (!f) throw core::Error(core::Status::Io, "cannot write " + o.json_path);
-  }
+  writeText(o.json_path, text);
   return 0;
 }
 
