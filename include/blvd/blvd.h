@@ -105,6 +105,16 @@ typedef struct blvd_allocator {
   void* user;
 } blvd_allocator;
 
+/* A host executor for blvd's background work (decoding cells). blvd calls
+ * submit(task, task_arg, user) from the render thread; the host must run
+ * task(task_arg) exactly once, soon, on a thread other than the render thread:
+ * blvd_runtime_destroy waits for every submitted task to have run.
+ * submit == NULL: blvd starts its own loader thread. */
+typedef struct blvd_executor {
+  void (*submit)(void (*task)(void* task_arg), void* task_arg, void* user);
+  void* user;
+} blvd_executor;
+
 typedef struct blvd_runtime_desc {
   uint32_t struct_size;     /* sizeof(blvd_runtime_desc); 0 is treated as the current size */
   const char* package_path; /* required: a .blvd file made by `blvd bake`; copied */
@@ -132,6 +142,8 @@ typedef struct blvd_runtime_desc {
                           * by coverage across the blocks' LOD chains (Marvie). 0: no budget, each
                           * block takes its coarsest level within lod_error_px */
   float lod_error_px;    /* without a target: the screen-space error a level may show; 0 means 1 */
+
+  blvd_executor executor; /* host task executor for cell decoding; submit == NULL: blvd's own thread */
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */

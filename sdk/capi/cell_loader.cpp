@@ -20,8 +20,9 @@ void Allocator::release(void* p) const {
   else std::free(p);
 }
 
-CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes)
-    : city_(city), alloc_(alloc) {
+CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes,
+                       const blvd_executor& executor)
+    : city_(city), alloc_(alloc), executor_(executor) {
   for (Staging& s : slots_) {
     void* arena = alloc_.allocate(arena_bytes);
     void* table = arena ? alloc_.allocate(sizeof(StagedMesh) * meshes) : nullptr;
@@ -39,13 +40,15 @@ CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_
     s.mesh_capacity = meshes;
     carved_ += arena_bytes + sizeof(StagedMesh) * meshes;
   }
-  thread_ = std::thread([this] { run(); });
+  if (!executor_.submit) thread_ = std::thread([this] { run(); });
 }
 
 CellLoader::~CellLoader() {
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    std::unique_lock<std::mutex> lock(mu_);
     stop_ = true;
+    // Tasks handed to the host still point at this loader: wait for them.
+    cv_.wait(lock, [&] { return tasks_out_ == 0; });
   }
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
@@ -69,8 +72,10 @@ bool CellLoader::request(uint32_t cell, uint32_t target) {
     free_slot->state = Staging::Queued;
     free_slot->cell = cell;
     free_slot->target = target;
+    if (executor_.submit) ++tasks_out_;
   }
-  cv_.notify_one();
+  if (executor_.submit) executor_.submit(&CellLoader::runTask, this, executor_.user);
+  else cv_.notify_one();
   return true;
 }
 
@@ -110,6 +115,29 @@ void CellLoader::cancelQueued() {
   std::lock_guard<std::mutex> lock(mu_);
   for (Staging& s : slots_)
     if (s.state == Staging::Queued) s.state = Staging::Free, s.cell = 0xffffffffu;
+}
+
+void CellLoader::runTask(void* self) { static_cast<CellLoader*>(self)->runOne(); }
+
+void CellLoader::runOne() {
+  Staging* job = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    uint64_t best_seq = ~uint64_t(0);
+    for (uint32_t i = 0; i < kStagingSlots; ++i)
+      if (slots_[i].state == Staging::Queued && order_[i] < best_seq) job = &slots_[i], best_seq = order_[i];
+    if (job) job->state = Staging::Decoding;
+  }
+  // A request cancelled after its task was submitted leaves nothing to do.
+  if (job) {
+    decode(*job);
+    ++loads_;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    --tasks_out_;
+  }
+  cv_.notify_all();
 }
 
 void CellLoader::run() {

@@ -16,6 +16,7 @@
 #include <mutex>
 #include <thread>
 
+#include "blvd/blvd.h"
 #include "render/prepared_mesh.h"
 #include "stream/city.h"
 
@@ -57,7 +58,10 @@ class CellLoader {
   // Carves kStagingSlots arenas of `arena_bytes` with tables of `meshes`
   // entries and starts the thread. Throws core::Error(NoMem) when the
   // allocator fails (nothing is leaked).
-  CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes);
+  // With `executor.submit` set, no thread is started: each request becomes a
+  // task handed to the host.
+  CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes,
+             const blvd_executor& executor = blvd_executor{});
   ~CellLoader();
   CellLoader(const CellLoader&) = delete;
   CellLoader& operator=(const CellLoader&) = delete;
@@ -83,6 +87,9 @@ class CellLoader {
  private:
   void run();
   void decode(Staging& s);
+  // Host-executor path: decodes the oldest queued slot, if any.
+  static void runTask(void* self);
+  void runOne();
 
   const stream::City& city_;
   Allocator alloc_;
@@ -94,6 +101,8 @@ class CellLoader {
   std::condition_variable cv_;
   bool stop_ = false;
   std::thread thread_;
+  blvd_executor executor_{};
+  uint32_t tasks_out_ = 0;  // submitted to the host and not yet run
   geo::MeshData scratch_;  // loader thread only
   std::atomic<uint64_t> loads_{0};
   std::atomic<uint64_t> decode_high_water_{0}, staging_high_water_{0};

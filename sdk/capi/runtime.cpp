@@ -28,7 +28,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   alloc.free = desc.allocator.free;
   alloc.user = desc.allocator.user;
   if (!alloc.alloc != !alloc.free) throw Error(Status::InvalidArg, "allocator needs both alloc and free, or neither");
-  loader_ = std::make_unique<CellLoader>(city_, alloc, plan_.staging_arena_bytes, plan_.staging_meshes);
+  loader_ = std::make_unique<CellLoader>(city_, alloc, plan_.staging_arena_bytes, plan_.staging_meshes, desc.executor);
 
   ctx_ = render::createContext(static_cast<render::Backend>(desc.backend), err);
   if (!ctx_) throw Error(Status::Backend, err);
