@@ -13,5 +13,5 @@ test -f "$work/prefix/include/blvd/blvd.h"
 cmake -S "$src/samples/host_context" -B "$work/host_context" -DCMAKE_PREFIX_PATH="$work/prefix" > "$work/configure.log"
 cmake --build "$work/host_context" > "$work/build.log"
 # It must use the installed library, not the build tree's.
-ldd "$work/host_context/host_context" | grep -q "$work/prefix/lib/libblvd.so.0"
+ldd "$work/host_context/host_context" | grep "$work/prefix/lib/libblvd.so.0" > /dev/null
 "$work/host_context/host_context" "$pkg" -o "$work/frame.png"

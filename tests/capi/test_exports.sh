@@ -10,5 +10,8 @@ if [ "$exported" != "$declared" ]; then
 fi
 other=$(nm -D --defined-only "$lib" | awk '$2 != "T" && $2 != "A" {print $3}' | grep -v '^blvd_' || true)
 [ -z "$other" ] || { echo "unexpected exported symbols: $other"; exit 1; }
-objdump -p "$lib" | grep -q 'SONAME *libblvd.so.0' || { echo "soname is not libblvd.so.0"; exit 1; }
+# awk reads all of objdump's output: `grep -q` would exit at the match and,
+# under pipefail, objdump's SIGPIPE would fail the pipeline at random.
+soname=$(objdump -p "$lib" | awk '$1 == "SONAME" {print $2}')
+[ "$soname" = "libblvd.so.0" ] || { echo "soname is '$soname', not libblvd.so.0"; exit 1; }
 echo "exports: $(echo "$exported" | wc -l) blvd_* functions, soname libblvd.so.0"
