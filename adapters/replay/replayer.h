@@ -41,6 +41,7 @@
 #include "vehicle/profile.h"
 #include "gnss/fix.h"
 #include "gnss/nmea.h"
+#include "gnss/to_blvd.h"
 
 namespace blvd::replay {
 
@@ -172,7 +173,7 @@ class Replayer {
 };
 
 // Conversions used by the replayer (also handy for a host's own loop).
-blvd_gnss_fix toBlvd(const gnss::Fix& f);
+using gnss::toBlvd;  // adapters/gnss/to_blvd.h
 blvd_odometry toBlvd(const vehicle::Odometry& o);
 
 }  // namespace blvd::replay

@@ -2,31 +2,11 @@
 
 #include <cstdio>
 
+#include "gnss/to_blvd.h"
+
 
 namespace vcan_drive {
 
-namespace {
-
-// adapters/replay has the same conversion, but that library links libblvd (and
-// so GL), which vcan_drive_track must not.
-blvd_gnss_fix toGnssFix(const blvd::gnss::Fix& f) {
-  blvd_gnss_fix g{};
-  g.struct_size = sizeof g;
-  g.t = f.t_unix;
-  g.lat = f.lat;
-  g.lon = f.lon;
-  g.alt = f.alt;
-  g.speed_mps = f.speed_mps;
-  g.track_deg = f.track_deg;
-  g.hdop = f.hdop;
-  g.h_acc_m = f.h_acc_m;
-  g.mode = f.mode;
-  // The first seven FixFlag bits are the BLVD_GNSS_HAS_* bits (gnss/fix.h keeps them in step).
-  g.flags = f.flags & 0x7Fu;
-  return g;
-}
-
-}  // namespace
 
 struct GnssFeed::Out final : blvd::gnss::NmeaDecoder::Handler {
   GnssFeed* feed = nullptr;
@@ -35,7 +15,7 @@ struct GnssFeed::Out final : blvd::gnss::NmeaDecoder::Handler {
       ++feed->untimed_;
       return;
     }
-    blvd_gnss_fix g = toGnssFix(f);
+    blvd_gnss_fix g = blvd::gnss::toBlvd(f);
     g.t += feed->offset_s_;
     feed->pending_.push_back(g);
   }

@@ -1,12 +1,13 @@
 // Track-only tracking without GL: sdk/track's Tracker, on the package's street
 // graph when a package is given (stream::City opens it without a GL context),
 // else on no graph at all (fusion and dead reckoning only) in a local frame at
-// TrackingDesc's origin. It converts the C API's structs field for field, the
-// way sdk/capi/runtime.cpp does, so its poses are the ones a track-only runtime
+// TrackingDesc's origin. It converts the C API's structs with the runtime's own
+// conversion (sdk/capi/track_convert.h, header-only), so its poses are the ones a track-only runtime
 // would return (see tracking.h for why it exists).
 #include <memory>
 #include <stdexcept>
 
+#include "capi/track_convert.h"
 #include "stream/city.h"
 #include "track/tracker.h"
 #include "tracking.h"
@@ -29,31 +30,12 @@ class DirectTracking final : public Tracking {
   const char* name() const override { return "direct"; }
 
   blvd_status feedOdometry(const blvd_odometry& o) override {
-    track::Odometry d;
-    d.t = o.t;
-    d.speed_mps = o.speed_mps;
-    d.yaw_rate_dps = o.yaw_rate_dps;
-    for (int i = 0; i < 4; ++i) d.wheel_speeds_mps[i] = o.wheel_speeds_mps[i];
-    d.heading_deg = o.heading_deg;
-    d.reverse = o.reverse != 0;
-    d.flags = o.flags;  // BLVD_ODO_* are track::OdometryFlag's bits (static_assert in sdk/capi)
-    tracker_.feedOdometry(d);
+    tracker_.feedOdometry(capi::toTrack(o));
     return BLVD_OK;
   }
 
   blvd_status feedGnss(const blvd_gnss_fix& f) override {
-    track::GnssFix g;
-    g.t = f.t;
-    g.lat = f.lat;
-    g.lon = f.lon;
-    g.alt = f.alt;
-    g.speed_mps = f.speed_mps;
-    g.track_deg = f.track_deg;
-    g.hdop = f.hdop;
-    g.h_acc_m = f.h_acc_m;
-    g.mode = f.mode;
-    g.flags = f.flags;  // BLVD_GNSS_HAS_* are track::GnssFlag's bits
-    tracker_.feedGnss(g);
+    tracker_.feedGnss(capi::toTrack(f));
     return BLVD_OK;
   }
 

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "capi/cell_loader.h"
+#include "core/status.h"
 #include "track/tracker.h"
 
 namespace blvd::capi {
@@ -45,22 +46,27 @@ uint64_t stagingTableBytes(uint32_t meshes) { return uint64_t(meshes) * sizeof(S
 MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   MemoryPlan p;
   p.resident_cells = desc.max_resident_cells;
-  int tw = 0, th = 0;
+  const int tw = city.header().max_impostor_texture_width, th = city.header().max_impostor_texture_height;
+  p.max_local_blocks = city.header().max_cell_local_blocks;
+  uint64_t most = 0;
+  // The header's maxima size scratch arrays and slab textures: a package whose
+  // tables exceed them is corrupt, not a reason to write past an array.
+  auto corrupt = [&](const std::string& what) {
+    throw core::Error(core::Status::Corrupt, city.package().name() + ": header pool sizing is below the tables: " + what);
+  };
   for (const auto& ci : city.cellTables().impostors)
     for (const auto* list : {&ci.layered, &ci.single})
-      for (const graph::ImpostorLayer& l : *list) {
-        tw = std::max<int>(tw, l.texture_width);
-        th = std::max<int>(th, l.texture_height);
-      }
-  uint64_t most = 0;
+      for (const graph::ImpostorLayer& l : *list)
+        if (l.texture_width > tw || l.texture_height > th) corrupt("an impostor texture is larger than the header says");
   for (uint32_t c = 0; c < city.graph().cellCount(); ++c) {
+    if (city.graph().local_blocks.count(c) > p.max_local_blocks)
+      corrupt("cell " + std::to_string(c) + " has more local blocks than the header says");
     const CellNeed n = cellNeed(city, c);
     p.slab.vertex_bytes = std::max(p.slab.vertex_bytes, n.vertex_bytes);
     p.slab.index_bytes = std::max(p.slab.index_bytes, n.index_bytes);
     p.slab.meshes = std::max(p.slab.meshes, n.meshes);
     p.slab.textures = std::max(p.slab.textures, n.textures);
     p.staging_arena_bytes = std::max(p.staging_arena_bytes, n.staging_bytes);
-    p.max_local_blocks = std::max(p.max_local_blocks, uint32_t(city.graph().local_blocks.count(c)));
     const uint64_t total = n.vertex_bytes + n.index_bytes + n.staging_bytes;
     if (total > most) most = total, p.largest_cell = c;
   }

@@ -58,13 +58,8 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   level_.resize(nb);
   visible_level_.resize(nb);
   if (desc.target_frame_ms > 0) {
-    uint64_t most = 1;
-    for (uint32_t c = 0; c < city_.graph().cellCount(); ++c) {
-      uint64_t t = 0;
-      const graph::StreetGraph& g = city_.graph();
-      for (const uint32_t* b = g.local_blocks.begin(c); b != g.local_blocks.end(c); ++b) t += city_.blocks()[*b].triangle_count;
-      most = std::max(most, t);
-    }
+    // The budget never needs to exceed the largest cell's local model at full detail.
+    const uint64_t most = std::max<uint64_t>(1, city_.header().max_cell_local_lod0_triangles);
     budget_ = std::make_unique<stream::PolygonBudget>(desc.target_frame_ms, 0, most);
   }
   residency_ = std::make_unique<stream::Residency>(city_.graph(), plan_.resident_cells, desc.route_capacity);
@@ -247,7 +242,7 @@ void Runtime::uploadStaged(double budget_ms) {
 
 // Residency for this frame (issue 4): ask for what is wanted, most wanted
 // first, into free or releasable slots; never wait for a load.
-void Runtime::stream(uint32_t cell, double arc_m, double speed_mps) {
+void Runtime::stream(uint32_t cell, double arc_m, double speed_mps, double upload_budget_ms) {
   residency_->update({cell, arc_m, speed_mps});
   // A slot whose request was dropped goes back to empty.
   for (size_t i = 0; i < slots_.size(); ++i)
@@ -278,7 +273,7 @@ void Runtime::stream(uint32_t cell, double arc_m, double speed_mps) {
     slot.state = CellSlot::Loading;
     slot.cell = slot_cells_[v] = c;
   }
-  uploadStaged(desc_.upload_budget_ms);
+  uploadStaged(upload_budget_ms);
 }
 
 void Runtime::ensureReferenceBlocks() {
@@ -431,8 +426,7 @@ void Runtime::waitResident(double timeout_ms) {
   const auto t0 = std::chrono::steady_clock::now();
   const uint64_t errors = stats_.load_errors;
   for (;;) {
-    stream(cell, arc_m, speed);
-    uploadStaged(1e9);
+    stream(cell, arc_m, speed, 1e9);  // waiting: no per-frame upload budget
     if (residentSlot(cell)) return;
     if (stats_.load_errors != errors) throw Error(Status::Corrupt, last_error);
     if (std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() > timeout_ms)
@@ -449,7 +443,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   double arc_m, speed;
   const uint32_t cell = currentCell(arc_m, speed);
   if (mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS) ensureReferenceBlocks();
-  else stream(cell, arc_m, speed);
+  else stream(cell, arc_m, speed, desc_.upload_budget_ms);
   buildDrawList(cell);
   render::FrameStats fs;
   if (!views) {

@@ -64,7 +64,8 @@ class Runtime {
   };
   // The camera from the tracker when it drives, then the current cell.
   uint32_t currentCell(double& arc_m, double& speed_mps);
-  void stream(uint32_t cell, double arc_m, double speed_mps);
+  // Residency for this frame: requests, then uploads within upload_budget_ms.
+  void stream(uint32_t cell, double arc_m, double speed_mps, double upload_budget_ms);
   void uploadStaged(double budget_ms);
   void buildDrawList(uint32_t cell);
   void ensureReferenceBlocks();
