@@ -10,15 +10,6 @@
 #include <glm/trigonometric.hpp>
 
 namespace blvd::cli {
-namespace {
-glm::dvec2 direction(const graph::StreetGraph& g, uint32_t h, bool at_end) {
-  const auto& e = g.halfedges[h];
-  const glm::dvec2* p = &g.points[e.pts_begin];
-  const glm::dvec2 d = at_end ? p[e.pts_count - 1] - p[e.pts_count - 2] : p[1] - p[0];
-  const double l = glm::length(d);
-  return l > 0 ? d / l : glm::dvec2(1, 0);
-}
-}  // namespace
 
 std::vector<uint32_t> autoRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed) {
   std::vector<uint32_t> route;
@@ -38,13 +29,13 @@ std::vector<uint32_t> autoRoute(const graph::StreetGraph& g, uint32_t cells, uin
   visits[r[0]] = 1;
   while (r.size() < cells) {
     const uint32_t h = r.back();
-    const glm::dvec2 d = direction(g, h, true);
+    const glm::dvec2 d = graph::cellDirection(g, h, true);
     uint32_t best = graph::kNone;
     double best_score = -1e9;
     for (const uint32_t* s = g.successors.begin(h); s != g.successors.end(h); ++s) {
       if (g.halfedges[*s].flags & graph::kTunnel) continue;
       const bool uturn = *s == g.halfedges[h].twin;
-      const double score = glm::dot(d, direction(g, *s, false)) + 0.6 * std::uniform_real_distribution<>(0, 1)(rng) -
+      const double score = glm::dot(d, graph::cellDirection(g, *s, false)) + 0.6 * std::uniform_real_distribution<>(0, 1)(rng) -
                            3.0 * visits[*s] - (uturn ? 10.0 : 0.0);
       if (score > best_score) best_score = score, best = *s;
     }

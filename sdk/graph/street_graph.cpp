@@ -119,4 +119,13 @@ const char* roadClassName(RoadClass c) {
   return "other";
 }
 
+glm::dvec2 cellDirection(const StreetGraph& g, uint32_t h, bool at_end) {
+  const HalfEdge& e = g.halfedges[h];
+  if (e.pts_count < 2) return {1, 0};
+  const glm::dvec2* p = &g.points[e.pts_begin];
+  const glm::dvec2 d = at_end ? p[e.pts_count - 1] - p[e.pts_count - 2] : p[1] - p[0];
+  const double l = std::sqrt(d.x * d.x + d.y * d.y);
+  return l > 0 ? d / l : glm::dvec2(1, 0);
+}
+
 }  // namespace blvd::graph

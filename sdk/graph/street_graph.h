@@ -109,4 +109,8 @@ void parseCells(const uint8_t* data, size_t size, uint64_t file_offset, StreetGr
 
 const char* roadClassName(RoadClass c);
 
+// Unit direction of cell `h`'s polyline at its start or end ((1, 0) for a
+// degenerate one): where a route leaves or enters a junction.
+glm::dvec2 cellDirection(const StreetGraph& g, uint32_t h, bool at_end);
+
 }  // namespace blvd::graph

@@ -20,16 +20,10 @@ double turnAngle(double from_deg, double to_deg) {
 }  // namespace
 
 double cellStartHeading(const graph::StreetGraph& g, uint32_t c) {
-  const graph::HalfEdge& e = g.halfedges[c];
-  if (e.pts_count < 2) return 0;
-  return headingOf(g.points[e.pts_begin + 1] - g.points[e.pts_begin]);
+  return headingOf(graph::cellDirection(g, c, false));
 }
 
-double cellEndHeading(const graph::StreetGraph& g, uint32_t c) {
-  const graph::HalfEdge& e = g.halfedges[c];
-  if (e.pts_count < 2) return 0;
-  return headingOf(g.points[e.pts_begin + e.pts_count - 1] - g.points[e.pts_begin + e.pts_count - 2]);
-}
+double cellEndHeading(const graph::StreetGraph& g, uint32_t c) { return headingOf(graph::cellDirection(g, c, true)); }
 
 Residency::Residency(const graph::StreetGraph& g, uint32_t max_cells, uint32_t route_capacity)
     : g_(g), max_cells_(std::max(1u, max_cells)) {

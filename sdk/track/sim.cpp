@@ -38,13 +38,6 @@ double bearing(glm::dvec2 d) {
   return a < 0 ? a + 2 * kPi : a;
 }
 
-glm::dvec2 direction(const graph::StreetGraph& g, uint32_t h, bool at_end) {
-  const auto& e = g.halfedges[h];
-  const glm::dvec2* p = &g.points[e.pts_begin];
-  const glm::dvec2 d = at_end ? p[e.pts_count - 1] - p[e.pts_count - 2] : p[1] - p[0];
-  const double l = glm::length(d);
-  return l > 0 ? d / l : glm::dvec2(1, 0);
-}
 
 // The route as one polyline with the cell of each segment (segment i ends at point i).
 struct Path {
@@ -118,13 +111,13 @@ std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint
     use(r[0]);
     while (r.size() < cells) {
       const uint32_t h = r.back();
-      const glm::dvec2 d = direction(g, h, true);
+      const glm::dvec2 d = graph::cellDirection(g, h, true);
       uint32_t best = graph::kNone;
       double best_score = -1e9;
       for (const uint32_t* s = g.successors.begin(h); s != g.successors.end(h); ++s) {
         if (used[*s] || (g.halfedges[*s].flags & graph::kTunnel) || g.halfedges[*s].pts_count < 2) continue;
         // Straight on scores highest; a little seeded noise picks among turns.
-        const double score = glm::dot(d, direction(g, *s, false)) + 0.6 * rng.uniform();
+        const double score = glm::dot(d, graph::cellDirection(g, *s, false)) + 0.6 * rng.uniform();
         if (score > best_score) best_score = score, best = *s;
       }
       if (best == graph::kNone) break;
