@@ -519,14 +519,14 @@ void Runtime::stats(blvd_stats* out) const {
     if (slot.state == CellSlot::Resident) ++s.resident_cells;
     gpu_used += slot.bytes;
   }
-  s.gpu.capacity_bytes = plan_.gpu_bytes;
+  s.gpu.capacity_bytes = renderer_->slabBytes();  // what createSlab made, not what the plan said
   s.gpu.used_bytes = gpu_used;
   s.gpu.high_water_bytes = std::max(gpu_high_water_, gpu_used);
   s.staging.capacity_bytes = loader_->carvedBytes();
   s.staging.used_bytes = loader_->stagingUsed();
   s.staging.high_water_bytes = loader_->stagingHighWater();
   s.decode.high_water_bytes = loader_->decodeHighWater();
-  s.table_bytes = plan_.table_bytes;
+  s.table_bytes = city_.tableBytes();
   s.tracking_bytes = tracker_->bytes();
   s.loads = loader_->loads();
   std::memcpy(out, &s, std::min<size_t>(s.struct_size, sizeof s));
