@@ -1,0 +1,93 @@
+// Create-time failures of the fixed-memory runtime (issue 4, "Tests"): a
+// budget one byte short fails with the numbers, and a host allocator that
+// fails at its Nth call gives BLVD_ERR_NOMEM and leaks nothing. CI runs this
+// file under AddressSanitizer + LeakSanitizer too (label asan), so a leak of
+// blvd's own heap on any of those error paths fails the run, not only a
+// block of the host allocator left live.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+
+#include "blvd/blvd.h"
+#include "runtime_fixture.h"
+
+namespace {
+
+using blvd_test::baseDesc;
+using blvd_test::Runtime;
+
+TEST(RuntimeMemory, TooSmallABudgetFailsWithTheNumbers) {
+  blvd_runtime_desc d = baseDesc();
+  uint64_t cpu = 0, gpu = 0;
+  ASSERT_EQ(blvd_memory_required(&d, nullptr, &cpu, &gpu), BLVD_OK);
+  Runtime r;
+  d.memory_budget_bytes = cpu - 1;
+  EXPECT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_ERR_BUDGET);
+  EXPECT_EQ(r.rt, nullptr);
+  const std::string msg = blvd_last_error(nullptr);
+  EXPECT_NE(msg.find("package needs"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("4 resident cells"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("budget is"), std::string::npos) << msg;
+
+  d.memory_budget_bytes = cpu;
+  d.gpu_budget_bytes = gpu - 1;
+  EXPECT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_ERR_BUDGET);
+  EXPECT_NE(std::string(blvd_last_error(nullptr)).find("GPU budget"), std::string::npos);
+
+  d.gpu_budget_bytes = gpu;  // exactly enough
+  EXPECT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+
+  blvd_runtime_desc bad = baseDesc();
+  bad.max_resident_cells = 1;
+  blvd_runtime* none = nullptr;
+  EXPECT_EQ(blvd_runtime_create(&bad, &none), BLVD_ERR_INVALID_ARG);
+  bad = baseDesc();
+  bad.allocator.alloc = [](size_t, size_t, void*) -> void* { return nullptr; };
+  EXPECT_EQ(blvd_runtime_create(&bad, &none), BLVD_ERR_INVALID_ARG);  // alloc without free
+}
+
+// Fails the Nth allocation; counts what is live.
+struct FaultyHeap {
+  int fail_at = -1;
+  int calls = 0;
+  int live = 0;
+  static void* alloc(size_t size, size_t align, void* user) {
+    auto* h = static_cast<FaultyHeap*>(user);
+    if (h->calls++ == h->fail_at) return nullptr;
+    void* p = std::aligned_alloc(align, (size + align - 1) / align * align);
+    if (p) ++h->live;
+    return p;
+  }
+  static void release(void* p, void* user) {
+    if (!p) return;
+    --static_cast<FaultyHeap*>(user)->live;
+    std::free(p);
+  }
+};
+
+TEST(RuntimeMemory, FailingHostAllocatorGivesNoMemAndLeaksNothing) {
+  FaultyHeap heap;
+  blvd_runtime_desc d = baseDesc();
+  d.allocator = {&FaultyHeap::alloc, &FaultyHeap::release, &heap};
+  {
+    Runtime r;
+    ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+    EXPECT_GT(heap.live, 0);
+  }
+  EXPECT_EQ(heap.live, 0);
+  const int calls = heap.calls;
+  ASSERT_GT(calls, 0);
+  for (int n = 0; n < calls; ++n) {
+    FaultyHeap h;
+    h.fail_at = n;
+    d.allocator.user = &h;
+    Runtime r;
+    EXPECT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_ERR_NOMEM) << "allocation " << n;
+    EXPECT_EQ(r.rt, nullptr);
+    EXPECT_EQ(h.live, 0) << "allocation " << n << " leaked";
+    EXPECT_NE(std::string(blvd_last_error(nullptr)).find("staging"), std::string::npos);
+  }
+}
+
+}  // namespace
