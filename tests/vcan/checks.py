@@ -307,3 +307,27 @@ def memory_stats_sane(stats, runtime):
     if _need(stats, "memory.load_errors"):
         raise CheckError("%s cells failed to load" % m["load_errors"])
     return {"rss_bytes": rss, "resident_cells": cells, "gpu_high_water_bytes": m["gpu"]["high_water_bytes"]}
+
+
+def heading_follows_yaw_rate(poses, odometry, start_heading_deg, tol_deg):
+    """Each valid pose's heading (clockwise from north) equals the start heading
+    minus the integral of the decoded yaw rate (counter-clockwise positive,
+    zero-order hold between samples) up to the pose's time, within tol_deg:
+    the tracker turned as the bus said. Returns the worst difference and the
+    total turn."""
+    yaw = [(o["t"], o["yaw_rate"]) for o in odometry if o["flags"] & 4]
+    valid = [p for p in poses if p["flags"] & 1]
+    if not yaw or not valid:
+        raise CheckError("%d yaw-rate samples, %d valid poses" % (len(yaw), len(valid)))
+    k, turned, worst = 0, 0.0, 0.0
+    for i, p in enumerate(valid):
+        while k + 1 < len(yaw) and yaw[k + 1][0] <= p["t"]:
+            turned += yaw[k][1] * (yaw[k + 1][0] - yaw[k][0])
+            k += 1
+        want = start_heading_deg - turned
+        d = abs((p["heading"] - want + 180.0) % 360.0 - 180.0)
+        if d > tol_deg:
+            raise CheckError("pose %d (t %.3f): heading %.3f, the yaw rate integrates to %.3f (|diff| %.3f > %g deg)" %
+                             (i, p["t"], p["heading"], want % 360.0, d, tol_deg))
+        worst = max(worst, d)
+    return {"poses": len(valid), "max_heading_diff_deg": worst, "turned_deg": -turned}

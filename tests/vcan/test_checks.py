@@ -237,5 +237,32 @@ class DriveStats(unittest.TestCase):
         self.bad(lambda s: s.pop("memory"), "no memory", "memory")
 
 
+class Heading(unittest.TestCase):
+    # 2 deg/s counter-clockwise for 10 s, sampled at 10 Hz: the heading goes from 10 down to -10 (350).
+    odo = sorted([{"t": 0.1 * i, "yaw_rate": 2.0, "flags": 4} for i in range(101)] + [{"t": 5.0, "flags": 16}],
+                 key=lambda o: o["t"])  # a wheel-speed sample between: not a yaw rate
+
+    def poses(self, err=0.0, at=None):
+        return [dict(pose(0.1 * i, -1, 1), heading=(10.0 - 0.2 * i + (err if i == at else 0)) % 360) for i in range(101)]
+
+    def test_follows(self):
+        r = checks.heading_follows_yaw_rate(self.poses(), self.odo, 10.0, 0.01)
+        self.assertLess(r["max_heading_diff_deg"], 1e-6)
+        self.assertAlmostEqual(r["turned_deg"], -20.0)
+
+    def test_off(self):
+        with self.assertRaisesRegex(checks.CheckError, "pose 60 \\(t 6.000\\)"):
+            checks.heading_follows_yaw_rate(self.poses(err=0.5, at=60), self.odo, 10.0, 0.25)
+
+    def test_wrong_sign(self):
+        flipped = [dict(o, yaw_rate=-o["yaw_rate"]) if "yaw_rate" in o else o for o in self.odo]
+        with self.assertRaisesRegex(checks.CheckError, "pose 1 "):
+            checks.heading_follows_yaw_rate(self.poses(), flipped, 10.0, 0.25)
+
+    def test_no_yaw(self):
+        with self.assertRaisesRegex(checks.CheckError, "0 yaw-rate samples"):
+            checks.heading_follows_yaw_rate(self.poses(), [], 10.0, 0.25)
+
+
 if __name__ == "__main__":
     unittest.main()
