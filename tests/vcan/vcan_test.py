@@ -109,7 +109,8 @@ def main():
     ap.add_argument("--distance-tol", type=float, default=0)
     ap.add_argument("--heading-tol", type=float, default=0,
                     help="assert the poses' heading against the integrated yaw rate from --start's heading, degrees")
-    ap.add_argument("--expected-cells", help="assert the matched cell sequence against this file")
+    ap.add_argument("--expected-cells",
+                    help="assert the matched cell sequence against this file (cells, or sim_feed's truth .csv)")
     ap.add_argument("--settle-s", type=float, default=10)
     ap.add_argument("--render-with", help="vcan_drive (full) to render the recorded poses on the host")
     ap.add_argument("--render-every", type=int, default=20)
@@ -184,7 +185,10 @@ def main():
         if a.heading_tol > 0:
             summary["heading"] = checks.heading_follows_yaw_rate(poses, odo, float(start[2]), a.heading_tol)
         if a.expected_cells:
-            summary["cells"] = checks.cells_match(poses, checks.read_cells(a.expected_cells), a.settle_s)
+            # A sim_feed truth CSV, or a list of cells.
+            expected = (checks.truth_cells(a.expected_cells) if a.expected_cells.endswith(".csv")
+                        else checks.read_cells(a.expected_cells))
+            summary["cells"] = checks.cells_match(poses, expected, a.settle_s)
         if a.render_with:
             frames = os.path.join(a.work, "frames")
             os.makedirs(frames)
