@@ -1,5 +1,7 @@
 #include "can_feed.h"
 
+#include "can/to_blvd.h"
+
 namespace vcan_drive {
 
 using namespace blvd::can;
@@ -19,6 +21,13 @@ blvd_status CanFeed::open(const std::string& dbc_path, Vehicle vehicle, std::str
 
 bool CanFeed::feed(const Frame& f, Tracking& tracking, blvd_odometry& odo) {
   ++stats_.frames;
+  if (tracking.feedsCanFrames()) {
+    // The whole bus goes to the C API; frames without the profile's signals are ignored there.
+    if (tracking.feedCanFrame(toBlvd(f)) == BLVD_OK)
+      ++stats_.can_frames_fed;
+    else
+      ++stats_.feed_errors;
+  }
   Odometry o;
   if (!profile_.consume(f, o)) return false;
   ++stats_.mapped;
@@ -32,7 +41,7 @@ bool CanFeed::feed(const Frame& f, Tracking& tracking, blvd_odometry& odo) {
   for (int i = 0; i < 4; ++i) odo.wheel_speeds_mps[i] = o.wheel_speeds_mps[i];
   odo.reverse = o.gear == Gear::Reverse;
   odo.flags = flags;
-  if (tracking.feedOdometry(odo) != BLVD_OK) {
+  if (!tracking.feedsCanFrames() && tracking.feedOdometry(odo) != BLVD_OK) {
     ++stats_.feed_errors;
     return false;
   }

@@ -1,7 +1,10 @@
-// CAN frame -> tracker. Today the frame is decoded here, with adapters/can's
-// DBC and vehicle profile, and fed as blvd_odometry. When the C API gains
-// blvd_feed_can_frame() (issue 5), CanFeed::feed() becomes that one call and
-// the DBC/profile move behind it; nothing else in vcan_drive changes.
+// CAN frame -> tracker. The frame is decoded here with the SDK's DBC and
+// vehicle profile (sdk/vehicle) for the odometry log, the stats and the
+// socket's filters. The tracker is fed either the whole frame, which the C
+// API decodes itself with its own profile (blvd_feed_can_frame: vcan_drive's
+// C API runtime), or the decoded blvd_odometry (blvd_feed_odometry's
+// equivalent: the direct tracker of vcan_drive_track and --no-render). Both
+// profiles see the same frames, so the log holds what the tracker was fed.
 #pragma once
 
 #include <cstdint>
@@ -19,8 +22,9 @@ namespace vcan_drive {
 struct CanFeedStats {
   uint64_t frames = 0;          // frames seen
   uint64_t mapped = 0;          // frames that carried a profile signal
-  uint64_t odometry_fed = 0;    // blvd_odometry samples fed
+  uint64_t odometry_fed = 0;    // decoded blvd_odometry samples (the ones the tracker received)
   uint64_t feed_errors = 0;     // feeds the tracker refused
+  uint64_t can_frames_fed = 0;  // frames passed whole to blvd_feed_can_frame (C API tracker)
 };
 
 class CanFeed {
@@ -29,7 +33,7 @@ class CanFeed {
   blvd_status open(const std::string& dbc_path, blvd::vehicle::Vehicle vehicle, std::string& err);
 
   // Feeds one frame. Returns true when it changed the odometry; `odo` is then
-  // what was fed (also for the caller's odometry log).
+  // the decoded sample (for the caller's odometry log).
   bool feed(const blvd::can::Frame& f, Tracking& tracking, blvd_odometry& odo);
 
   // (id, extended) of the messages the profile reads: the socket's filters.

@@ -24,14 +24,14 @@ bool Frames::open(Tracking& tracking, const std::string& dir, bool display, std:
 }
 
 bool Frames::frame(const blvd_pose* pose) {
-  double ms = 0;
-  uint32_t cell = 0;
-  if (tracking_->render(pose, rgba_.data(), ms, cell) != BLVD_OK) {
+  blvd_frame_stats fs{};
+  if (tracking_->render(pose, rgba_.data(), fs) != BLVD_OK) {
     std::fprintf(stderr, "vcan_drive: render: %s\n", tracking_->lastError().c_str());
     return false;
   }
   const uint32_t w = tracking_->width(), h = tracking_->height();
-  stats_.frame_ms.push_back(ms);
+  stats_.frame_ms.push_back(fs.frame_ms);
+  if (fs.flags & BLVD_FRAME_DEGRADED) ++stats_.degraded;
   if (isBlank(rgba_.data(), w, h)) ++stats_.blank;
   if (!dir_.empty()) {
     char name[32];

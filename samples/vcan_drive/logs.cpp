@@ -61,6 +61,7 @@ double percentile(std::vector<double> v, double pct) {
 void addRenderStats(nlohmann::json& j, const RenderStats& r) {
   j["rendered_frames"] = r.frames;
   j["blank_frames"] = r.blank;
+  j["degraded_frames"] = r.degraded;
   j["png_written"] = r.written;
   j["frame_ms_p50"] = percentile(r.frame_ms, 50);
   j["frame_ms_p95"] = percentile(r.frame_ms, 95);

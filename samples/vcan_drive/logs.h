@@ -36,10 +36,11 @@ double percentile(std::vector<double> v, double pct);
 
 struct RenderStats {
   uint64_t frames = 0, blank = 0, written = 0;  // rendered, one-colour, PNGs written
+  uint64_t degraded = 0;                        // BLVD_FRAME_DEGRADED: the current cell was not resident yet
   std::vector<double> frame_ms;
 };
 
-// rendered_frames, blank_frames, png_written, frame_ms_p50/p95/p99 into `j`.
+// rendered_frames, blank_frames, degraded_frames, png_written, frame_ms_p50/p95/p99 into `j`.
 void addRenderStats(nlohmann::json& j, const RenderStats& r);
 // Writes `j` (indented) to `path`; "" writes nothing. False when the write failed.
 bool writeStats(const std::string& path, const nlohmann::json& j);

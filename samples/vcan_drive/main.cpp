@@ -1,7 +1,8 @@
 // vcan_drive: CAN bus in, tracked poses (and headless frames) out.
 //
-//   vcan0 / candump log -> CanInput -> CanFeed (DBC + vehicle profile -> blvd_odometry)
-//     -> Tracking (C API runtime, or sdk/track without GL) -> poses.jsonl, frames/*.png, stats.json
+//   vcan0 / candump log -> CanInput -> CanFeed -> Tracking: the C API runtime
+//     (blvd_feed_can_frame), or sdk/track without GL (the decoded blvd_odometry)
+//     -> poses.jsonl, frames/*.png, stats.json
 //
 // Built twice from these sources (see CMakeLists.txt): `vcan_drive`, the full
 // sample on the C API, and `vcan_drive_track`, the same program without GL for
@@ -20,6 +21,7 @@
 #include "can_input.h"
 #include "gnss_feed.h"
 #include "logs.h"
+#include "memory.h"
 #include "tracking.h"
 #if VCAN_DRIVE_CAPI
 #include "frames.h"
@@ -145,8 +147,15 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  blvd::vehicle::Vehicle vehicle;
+  if (!blvd::vehicle::parseVehicle(opt.vehicle, vehicle)) {
+    std::fprintf(stderr, "vcan_drive: unknown vehicle %s\n", opt.vehicle.c_str());
+    return 2;
+  }
   TrackingDesc td;
   td.package = opt.package;
+  td.dbc_path = opt.dbc;
+  td.vehicle = static_cast<blvd_vehicle>(vehicle);  // the same enumeration (sdk/capi/capi_vehicle.cpp checks)
   td.width = opt.width;
   td.height = opt.height;
   td.backend = parseBackend(opt.backend);
@@ -196,11 +205,6 @@ int main(int argc, char** argv) {
   if (opt.package.empty() && opt.start.empty() && opt.nmea.empty())
     std::fprintf(stderr, "vcan_drive: no --start and no --nmea: odometry is decoded, but poses stay invalid\n");
 
-  blvd::vehicle::Vehicle vehicle;
-  if (!blvd::vehicle::parseVehicle(opt.vehicle, vehicle)) {
-    std::fprintf(stderr, "vcan_drive: unknown vehicle %s\n", opt.vehicle.c_str());
-    return 2;
-  }
   CanFeed feed;
   if (feed.open(opt.dbc, vehicle, err) != BLVD_OK) {
     std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
@@ -304,6 +308,8 @@ int main(int argc, char** argv) {
   j["package"] = opt.package;
   j["frames"] = fs.frames;
   j["mapped_frames"] = fs.mapped;
+  j["can_feed"] = tracking->feedsCanFrames() ? "blvd_feed_can_frame" : "decoded";
+  j["can_frames_fed"] = fs.can_frames_fed;
   j["odometry_fed"] = fs.odometry_fed;
   j["feed_errors"] = fs.feed_errors;
   j["kernel_dropped"] = input.kernelDropped();
@@ -320,6 +326,8 @@ int main(int argc, char** argv) {
   j["matched_poses"] = matched;
   j["cells_visited"] = cells;
   j["wall_s"] = std::chrono::duration<double>(Clock::now() - wall0).count();
+  blvd_stats rs{};
+  addMemoryStats(j, tracking->runtimeStats(rs) ? &rs : nullptr);
 #if VCAN_DRIVE_CAPI
   addRenderStats(j, frames.stats());
 #else

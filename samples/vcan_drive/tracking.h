@@ -25,6 +25,13 @@ class Tracking {
   virtual ~Tracking() = default;
   virtual const char* name() const = 0;  // "capi" or "direct"
   virtual blvd_status feedOdometry(const blvd_odometry& odo) = 0;
+  // The C API implementation decodes CAN frames itself (blvd_feed_can_frame
+  // with the DBC and vehicle of TrackingDesc); the direct one is fed odometry.
+  virtual bool feedsCanFrames() const { return false; }
+  virtual blvd_status feedCanFrame(const blvd_can_frame& frame) {
+    (void)frame;
+    return BLVD_ERR_UNSUPPORTED;
+  }
   virtual blvd_status feedGnss(const blvd_gnss_fix& fix) = 0;
   virtual blvd_status getPose(double t, blvd_pose& out) = 0;
   // Package origin (degrees); 0, 0 when there is none.
@@ -32,11 +39,16 @@ class Tracking {
 
   // Rendering; only the C API implementation can.
   virtual bool canRender() const { return false; }
-  // Renders at the tracked pose (or at `pose` when use_pose) and copies the
-  // frame into rgba (width*height*4). frame_ms and cell come from blvd_frame_stats.
-  virtual blvd_status render(const blvd_pose* pose, unsigned char* rgba, double& frame_ms, uint32_t& cell) {
-    (void)pose, (void)rgba, (void)frame_ms, (void)cell;
+  // Renders at the tracked pose (or at `pose` when given) and copies the
+  // frame into rgba (width*height*4); `fs` is blvd_render's frame stats.
+  virtual blvd_status render(const blvd_pose* pose, unsigned char* rgba, blvd_frame_stats& fs) {
+    (void)pose, (void)rgba, (void)fs;
     return BLVD_ERR_UNSUPPORTED;
+  }
+  // blvd_runtime_stats (residency, pools, tracking memory); false without a runtime.
+  virtual bool runtimeStats(blvd_stats& out) {
+    (void)out;
+    return false;
   }
   virtual uint32_t width() const { return 0; }
   virtual uint32_t height() const { return 0; }
@@ -49,6 +61,8 @@ struct TrackingDesc {
   uint32_t width = 800, height = 480;
   blvd_backend backend = BLVD_BACKEND_AUTO;
   double origin_lat = 0, origin_lon = 0;  // the local frame without a package
+  std::string dbc_path;                    // CAN decoding of the C API implementation
+  blvd_vehicle vehicle = BLVD_VEHICLE_TOYOTA;
 };
 
 // Null with `err` set on failure.

@@ -1,4 +1,5 @@
-// Tracking through the public C API: a blvd_runtime that tracks and renders.
+// Tracking through the public C API: a blvd_runtime that tracks and renders,
+// fed CAN frames through a blvd_can_profile (blvd_feed_can_frame).
 #include <cstring>
 
 #include "tracking.h"
@@ -8,7 +9,8 @@ namespace {
 
 class CapiTracking final : public Tracking {
  public:
-  explicit CapiTracking(blvd_runtime* rt, const blvd_runtime_desc& d) : rt_(rt), width_(d.width), height_(d.height) {
+  CapiTracking(blvd_runtime* rt, blvd_can_profile* profile, const blvd_runtime_desc& d)
+      : rt_(rt), profile_(profile), width_(d.width), height_(d.height) {
     blvd_runtime_info info{};
     info.struct_size = sizeof info;
     if (blvd_runtime_get_info(rt_, &info) == BLVD_OK) {
@@ -16,10 +18,15 @@ class CapiTracking final : public Tracking {
       lon_ = info.origin_lon;
     }
   }
-  ~CapiTracking() override { blvd_runtime_destroy(rt_); }
+  ~CapiTracking() override {
+    blvd_can_profile_destroy(profile_);
+    blvd_runtime_destroy(rt_);
+  }
 
   const char* name() const override { return "capi"; }
   blvd_status feedOdometry(const blvd_odometry& odo) override { return blvd_feed_odometry(rt_, &odo); }
+  bool feedsCanFrames() const override { return true; }
+  blvd_status feedCanFrame(const blvd_can_frame& frame) override { return blvd_feed_can_frame(rt_, profile_, &frame); }
   blvd_status feedGnss(const blvd_gnss_fix& fix) override { return blvd_feed_gnss(rt_, &fix); }
   blvd_status getPose(double t, blvd_pose& out) override {
     out.struct_size = sizeof out;
@@ -28,17 +35,20 @@ class CapiTracking final : public Tracking {
   void origin(double& lat, double& lon) const override { lat = lat_, lon = lon_; }
 
   bool canRender() const override { return true; }
-  blvd_status render(const blvd_pose* pose, unsigned char* rgba, double& frame_ms, uint32_t& cell) override {
+  blvd_status render(const blvd_pose* pose, unsigned char* rgba, blvd_frame_stats& fs) override {
     blvd_status st = BLVD_OK;
     // A recorded pose places the eye itself; otherwise blvd_render follows the tracker.
     if (pose) st = blvd_set_pose_local(rt_, pose->x, pose->y, static_cast<float>(pose->heading_deg), 0.0f);
     if (st != BLVD_OK) return st;
-    blvd_frame_stats fs{};
+    fs = blvd_frame_stats{};
     fs.struct_size = sizeof fs;
     if ((st = blvd_render(rt_, &fs)) != BLVD_OK) return st;
-    frame_ms = fs.frame_ms;
-    cell = fs.cell;
     return blvd_read_pixels(rt_, rgba, static_cast<size_t>(width_) * height_ * 4);
+  }
+  bool runtimeStats(blvd_stats& out) override {
+    out = blvd_stats{};
+    out.struct_size = sizeof out;
+    return blvd_runtime_stats(rt_, &out) == BLVD_OK;
   }
   uint32_t width() const override { return width_; }
   uint32_t height() const override { return height_; }
@@ -46,6 +56,7 @@ class CapiTracking final : public Tracking {
 
  private:
   blvd_runtime* rt_;
+  blvd_can_profile* profile_;
   uint32_t width_, height_;
   double lat_ = 0, lon_ = 0;
 };
@@ -64,12 +75,22 @@ std::unique_ptr<Tracking> makeCapiTracking(const TrackingDesc& desc, std::string
   d.height = desc.height;
   d.backend = desc.backend;
   d = blvd_runtime_desc_defaults(&d);
-  blvd_runtime* rt = nullptr;
-  if (blvd_runtime_create(&d, &rt) != BLVD_OK) {
+  blvd_can_profile_desc pd{};
+  pd.struct_size = sizeof pd;
+  pd.vehicle = desc.vehicle;
+  pd.dbc_path = desc.dbc_path.c_str();
+  blvd_can_profile* profile = nullptr;
+  if (blvd_can_profile_create(&pd, &profile) != BLVD_OK) {
     err = blvd_last_error(nullptr);
     return nullptr;
   }
-  return std::make_unique<CapiTracking>(rt, d);
+  blvd_runtime* rt = nullptr;
+  if (blvd_runtime_create(&d, &rt) != BLVD_OK) {
+    err = blvd_last_error(nullptr);
+    blvd_can_profile_destroy(profile);
+    return nullptr;
+  }
+  return std::make_unique<CapiTracking>(rt, profile, d);
 }
 
 }  // namespace vcan_drive

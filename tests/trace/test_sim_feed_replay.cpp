@@ -6,91 +6,22 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "blvd/blvd.h"
 #include "common/test_runtime.h"
-#include "can/candump.h"
-#include "replay/replayer.h"
+#include "trace_inputs.h"
 
 namespace {
 
-struct Truth {
-  double t;
-  uint32_t cell;
-};
-
-std::vector<Truth> readTruth(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line.rfind("t,e,n,lat,lon,heading_deg,speed_mps,cell,arc_m,fix", 0), 0u) << path;
-  std::vector<Truth> rows;
-  while (std::getline(in, line)) {
-    std::vector<std::string> f;
-    std::stringstream ls(line);
-    for (std::string x; std::getline(ls, x, ',');) f.push_back(x);
-    if (f.size() != 10) {
-      ADD_FAILURE() << path << ": bad row " << line;
-      continue;
-    }
-    rows.push_back({std::stod(f[0]), static_cast<uint32_t>(std::stoul(f[7]))});
-  }
-  return rows;
-}
-
-// Everything the host feeds, in time order (a fix first on a tie, as the replayer does).
-struct Input {
-  double t;
-  bool gnss;
-  blvd_gnss_fix fix;
-  blvd_can_frame frame;
-};
-
-std::vector<Input> readInputs() {
-  std::vector<Input> in;
-  // NMEA through the gnss adapter (the replayer drives its decoder and clock).
-  blvd::replay::ReplayDesc rd;
-  rd.nmea_path = BLVD_SIM_TRACE ".nmea";
-  rd.strict = true;
-  blvd::replay::Replayer r;
-  std::string err;
-  EXPECT_EQ(r.open(rd, err), BLVD_OK) << err;
-  blvd::replay::Event ev;
-  while (r.next(ev) == blvd::replay::Replayer::Step::Event) in.push_back({ev.t, true, ev.gnss, {}});
-  EXPECT_TRUE(r.error().empty()) << r.error();
-  // candump lines, raw: blvd decodes them with its profile.
-  blvd::can::CandumpReader reader;
-  EXPECT_EQ(reader.open(BLVD_SIM_TRACE ".log"), BLVD_OK) << reader.error();
-  blvd::can::Record rec;
-  for (;;) {
-    const auto res = reader.next(rec);
-    if (res == blvd::can::CandumpReader::Result::End) break;
-    EXPECT_EQ(res, blvd::can::CandumpReader::Result::Frame) << reader.error();
-    if (res != blvd::can::CandumpReader::Result::Frame) break;
-    blvd_can_frame f{};
-    f.struct_size = sizeof f;
-    f.t = rec.frame.t;
-    f.id = rec.frame.id;
-    f.flags = (rec.frame.extended ? BLVD_CAN_EXTENDED : 0u) | (rec.frame.fd ? BLVD_CAN_FD : 0u);
-    f.len = rec.frame.dlc;
-    std::copy(rec.frame.data, rec.frame.data + rec.frame.dlc, f.data);
-    in.push_back({f.t, false, {}, f});
-  }
-  std::stable_sort(in.begin(), in.end(), [](const Input& a, const Input& b) {
-    return a.t < b.t || (a.t == b.t && a.gnss && !b.gnss);
-  });
-  return in;
-}
+using namespace blvd::trace_test;
 
 TEST(TraceReplay, SimFeedMonacoCellsFollowTruth) {
   const std::vector<Truth> truth = readTruth(BLVD_SIM_TRACE ".csv");
   ASSERT_GT(truth.size(), 120u);
-  const std::vector<Input> inputs = readInputs();
+  const std::vector<Input> inputs = readInputs(BLVD_SIM_TRACE ".nmea", BLVD_SIM_TRACE ".log");
   size_t fixes = 0, frames = 0;
   for (const Input& i : inputs) (i.gnss ? fixes : frames)++;
   EXPECT_EQ(fixes, truth.size());  // one per epoch (lost ones as "no fix")
@@ -98,12 +29,8 @@ TEST(TraceReplay, SimFeedMonacoCellsFollowTruth) {
 
   blvd_runtime* rt = blvd::test::createTrackingRuntime();
   ASSERT_NE(rt, nullptr);
-  blvd_can_profile_desc pd{};
-  pd.struct_size = sizeof pd;
-  pd.vehicle = BLVD_VEHICLE_TOYOTA;
-  pd.dbc_path = BLVD_TEST_DATA_DIR "/can/dbc/toyota_new_mc_pt_generated.dbc";
-  blvd_can_profile* prof = nullptr;
-  ASSERT_EQ(blvd_can_profile_create(&pd, &prof), BLVD_OK) << blvd_last_error(nullptr);
+  blvd_can_profile* prof = createToyotaProfile();
+  ASSERT_NE(prof, nullptr);
 
   // The route, in order, from the truth (each cell once).
   std::vector<uint32_t> route;
@@ -118,9 +45,7 @@ TEST(TraceReplay, SimFeedMonacoCellsFollowTruth) {
   std::vector<uint32_t> matched;  // run-length sequence of matched cells after the warm-up
   for (const Truth& tr : truth) {
     for (; k < inputs.size() && inputs[k].t <= tr.t + 1e-6; ++k) {
-      const blvd_status st =
-          inputs[k].gnss ? blvd_feed_gnss(rt, &inputs[k].fix) : blvd_feed_can_frame(rt, prof, &inputs[k].frame);
-      ASSERT_EQ(st, BLVD_OK) << "input " << k;
+      ASSERT_EQ(feed(rt, prof, inputs[k]), BLVD_OK) << "input " << k;
     }
     blvd_pose p{};
     p.struct_size = sizeof p;

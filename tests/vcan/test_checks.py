@@ -123,5 +123,146 @@ class Cells(unittest.TestCase):
             os.remove(path)
 
 
+def route_poses(cells, step=1.0):
+    """A matched pose per second per listed cell; (cell, seconds) pairs stay longer."""
+    out, t = [], 0.0
+    for c in cells:
+        c, n = c if isinstance(c, tuple) else (c, 1)
+        for _ in range(n):
+            out.append(pose(t, c))
+            t += step
+    return out
+
+
+class Route(unittest.TestCase):
+    route = list(range(100, 120))
+
+    def follow(self, cells, **kw):
+        args = dict(settle_s=2, max_detour_s=3, max_backwards=2, min_coverage=0.9)
+        args.update(kw)
+        return checks.cells_follow_route(route_poses(cells), self.route, **args)
+
+    def test_follows(self):
+        # Converging first (before 2 s), a short junction detour, one cell skipped between poses.
+        r = self.follow([7, 8, 100, 101, 102, (555, 2), 103] + list(range(105, 120)))
+        self.assertEqual((r["skipped"], r["detours"], r["longest_detour_s"], r["backwards"]), (0, 1, 2.0, 0))
+
+    def test_long_detour(self):
+        with self.assertRaisesRegex(checks.CheckError, "cell 555 at 4.0 s for 4.0 s"):
+            self.follow([100, 101, 102, 103, (555, 4)] + list(range(104, 120)))
+
+    def test_backwards(self):
+        with self.assertRaisesRegex(checks.CheckError, "3 steps back"):
+            self.follow(list(range(100, 110)) + [105, 110, 106, 111, 107] + list(range(112, 120)))
+
+    def test_gaps(self):
+        with self.assertRaisesRegex(checks.CheckError, "matched 56 % of the route.s cells from cell 104"):
+            self.follow(self.route[::2] + [119])
+
+    def test_stops_early(self):
+        with self.assertRaisesRegex(checks.CheckError, "last cell 119 was never matched"):
+            self.follow(self.route[:19])
+
+    def test_nowhere_near(self):
+        with self.assertRaisesRegex(checks.CheckError, "none of the 3 cells matched"):
+            self.follow([1, 2, 3], settle_s=0)
+
+    def test_visited_equals_poses(self):
+        poses = route_poses([100, (101, 3), 102])
+        poses.insert(2, pose(1.5, 999, flags=1))  # not matched: not a visit
+        self.assertEqual(checks.visited_equals_poses([100, 101, 102], poses), {"cells": 3})
+        with self.assertRaisesRegex(checks.CheckError, "at entry 1"):
+            checks.visited_equals_poses([100, 102], poses)
+
+    def test_truth_cells(self):
+        fd, path = tempfile.mkstemp(suffix=".csv")
+        with os.fdopen(fd, "w") as f:
+            f.write("t,e,n,lat,lon,heading_deg,speed_mps,cell,arc_m,fix\n")
+            for t, c in ((0, 5), (1, 5), (2, 9), (3, 4), (4, 4)):
+                f.write("%d,0,0,0,0,0,0,%d,0,1\n" % (t, c))
+        try:
+            self.assertEqual(checks.truth_cells(path), [5, 9, 4])
+        finally:
+            os.remove(path)
+
+
+def drive_stats():
+    return {"rendered_frames": 4, "blank_frames": 0, "degraded_frames": 1, "png_written": 4,
+            "frame_ms_p50": 10.0, "frame_ms_p95": 20.0, "frame_ms_p99": 30.0,
+            "memory": {"rss_bytes": 100, "rss_peak_bytes": 200, "resident_cells": 3, "max_resident_cells": 8,
+                       "gpu": {"used_bytes": 10, "high_water_bytes": 20, "capacity_bytes": 30},
+                       "staging": {"used_bytes": 0, "high_water_bytes": 5, "capacity_bytes": 5},
+                       "table_bytes": 7, "tracking_bytes": 9, "load_errors": 0}}
+
+
+class DriveStats(unittest.TestCase):
+    pngs = ["a.png", "b.png", "c.png", "d.png"]
+
+    def bad(self, change, pattern, check="render"):
+        s = drive_stats()
+        change(s)
+        with self.assertRaisesRegex(checks.CheckError, pattern):
+            if check == "render":
+                checks.render_stats_sane(s, self.pngs)
+            else:
+                checks.memory_stats_sane(s, True)
+
+    def test_sane(self):
+        self.assertEqual(checks.render_stats_sane(drive_stats(), self.pngs)["degraded"], 1)
+        self.assertEqual(checks.memory_stats_sane(drive_stats(), True)["resident_cells"], 3)
+        s = drive_stats()
+        s["memory"] = {"rss_bytes": 1, "rss_peak_bytes": 1}  # track-only: no runtime figures
+        self.assertEqual(checks.memory_stats_sane(s, False), {"rss_bytes": 1})
+
+    def test_render(self):
+        self.bad(lambda s: s.update(rendered_frames=0), "no frame was rendered")
+        self.bad(lambda s: s.update(blank_frames=1), "1 of 4 frames are blank")
+        self.bad(lambda s: s.update(degraded_frames=5), "degraded_frames 5")
+        self.bad(lambda s: s.pop("degraded_frames"), "no degraded_frames")
+        self.bad(lambda s: s.update(frame_ms_p95=40.0), "percentiles")
+        self.bad(lambda s: s.update(frame_ms_p50=0.0), "percentiles")
+        self.bad(lambda s: s.update(png_written=3), "png_written 3")
+        with self.assertRaisesRegex(checks.CheckError, "3 PNG files"):
+            checks.render_stats_sane(drive_stats(), self.pngs[:3])
+
+    def test_memory(self):
+        self.bad(lambda s: s["memory"].update(rss_bytes=0), "resident memory 0", "memory")
+        self.bad(lambda s: s["memory"].update(rss_peak_bytes=50), "expected 0 < rss <= peak", "memory")
+        self.bad(lambda s: s["memory"].pop("rss_bytes"), "no memory.rss_bytes", "memory")
+        self.bad(lambda s: s["memory"].update(resident_cells=0), "resident_cells 0", "memory")
+        self.bad(lambda s: s["memory"]["gpu"].update(used_bytes=25), "gpu pool", "memory")
+        self.bad(lambda s: s["memory"]["staging"].update(capacity_bytes=0), "staging pool", "memory")
+        self.bad(lambda s: s["memory"].update(tracking_bytes=0), "memory.tracking_bytes is 0", "memory")
+        self.bad(lambda s: s["memory"].update(load_errors=2), "2 cells failed", "memory")
+        self.bad(lambda s: s.pop("memory"), "no memory", "memory")
+
+
+class Heading(unittest.TestCase):
+    # 2 deg/s counter-clockwise for 10 s, sampled at 10 Hz: the heading goes from 10 down to -10 (350).
+    odo = sorted([{"t": 0.1 * i, "yaw_rate": 2.0, "flags": 4} for i in range(101)] + [{"t": 5.0, "flags": 16}],
+                 key=lambda o: o["t"])  # a wheel-speed sample between: not a yaw rate
+
+    def poses(self, err=0.0, at=None):
+        return [dict(pose(0.1 * i, -1, 1), heading=(10.0 - 0.2 * i + (err if i == at else 0)) % 360) for i in range(101)]
+
+    def test_follows(self):
+        r = checks.heading_follows_yaw_rate(self.poses(), self.odo, 10.0, 0.01)
+        self.assertLess(r["max_heading_diff_deg"], 1e-6)
+        self.assertAlmostEqual(r["turned_deg"], -20.0)
+
+    def test_off(self):
+        with self.assertRaisesRegex(checks.CheckError, "pose 60 \\(t 6.000\\)"):
+            checks.heading_follows_yaw_rate(self.poses(err=0.5, at=60), self.odo, 10.0, 0.25)
+
+    def test_wrong_sign(self):
+        flipped = [dict(o, yaw_rate=-o["yaw_rate"]) if "yaw_rate" in o else o for o in self.odo]
+        with self.assertRaisesRegex(checks.CheckError, "pose 1 "):
+            checks.heading_follows_yaw_rate(self.poses(), flipped, 10.0, 0.25)
+
+    def test_no_yaw(self):
+        with self.assertRaisesRegex(checks.CheckError, "0 yaw-rate samples"):
+            checks.heading_follows_yaw_rate(self.poses(), [], 10.0, 0.25)
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -107,7 +107,10 @@ def main():
     ap.add_argument("--time-tol", type=float, default=0.05, help="median replay timing offset, s")
     ap.add_argument("--time-max", type=float, default=2.0, help="worst replay timing offset, s")
     ap.add_argument("--distance-tol", type=float, default=0)
-    ap.add_argument("--expected-cells", help="assert the matched cell sequence against this file")
+    ap.add_argument("--heading-tol", type=float, default=0,
+                    help="assert the poses' heading against the integrated yaw rate from --start's heading, degrees")
+    ap.add_argument("--expected-cells",
+                    help="assert the matched cell sequence against this file (cells, or sim_feed's truth .csv)")
     ap.add_argument("--settle-s", type=float, default=10)
     ap.add_argument("--render-with", help="vcan_drive (full) to render the recorded poses on the host")
     ap.add_argument("--render-every", type=int, default=20)
@@ -119,6 +122,10 @@ def main():
     a = ap.parse_args()
     if a.distance_tol > 0 and not a.reference_csv:
         ap.error("--distance-tol needs --reference-csv")
+    start = a.drive_args.split()
+    start = start[start.index("--start") + 1:start.index("--start") + 4] if "--start" in start else []
+    if a.heading_tol > 0 and len(start) != 3:
+        ap.error("--heading-tol needs --start LAT LON HEADING in --drive-args")
     if a.render_with and not a.package:
         ap.error("--render-with needs --package")
     if "=" not in a.map:
@@ -175,8 +182,13 @@ def main():
         poses = checks.read_jsonl(os.path.join(out, "poses.jsonl"))
         if a.distance_tol > 0:
             summary["distance"] = checks.distance_matches_reference(poses, a.reference_csv, a.distance_tol)
+        if a.heading_tol > 0:
+            summary["heading"] = checks.heading_follows_yaw_rate(poses, odo, float(start[2]), a.heading_tol)
         if a.expected_cells:
-            summary["cells"] = checks.cells_match(poses, checks.read_cells(a.expected_cells), a.settle_s)
+            # A sim_feed truth CSV, or a list of cells.
+            expected = (checks.truth_cells(a.expected_cells) if a.expected_cells.endswith(".csv")
+                        else checks.read_cells(a.expected_cells))
+            summary["cells"] = checks.cells_match(poses, expected, a.settle_s)
         if a.render_with:
             frames = os.path.join(a.work, "frames")
             os.makedirs(frames)
