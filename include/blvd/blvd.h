@@ -144,6 +144,13 @@ typedef struct blvd_runtime_desc {
   float lod_error_px;    /* without a target: the screen-space error a level may show; 0 means 1 */
 
   blvd_executor executor; /* host task executor for cell decoding; submit == NULL: blvd's own thread */
+
+  /* With target_frame_ms: the lowest render scale the budget may use once every visible block is at
+   * its coarsest level and the frame still misses the target (a fill-bound GPU). The view is then
+   * drawn at scale x size pixels and stretched over the viewport; only colour reaches a host's
+   * framebuffer (its depth buffer is left alone). Costs one more width x height RGBA8 + depth24
+   * framebuffer. 0 means 1: never scale. Within [0.25, 1]. */
+  float min_render_scale;
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */
@@ -236,7 +243,9 @@ typedef struct blvd_stats {
   uint64_t triangles;            /* the last frame */
   uint64_t polygon_budget;       /* with target_frame_ms: block triangles allowed next frame; else 0 */
   uint64_t block_triangles;      /* triangles of the block levels chosen for the last frame (visible ones) */
-  uint32_t budget_unreachable;   /* 1 when even the coarsest levels are predicted to miss the target */
+  uint32_t budget_unreachable;   /* 1 when even the coarsest levels (and min_render_scale) are predicted
+                                  * to miss the target */
+  float render_scale;            /* the scale the last frame was drawn at; 1 unless min_render_scale < 1 */
 } blvd_stats;
 
 /* Fills *stats. Render thread. */

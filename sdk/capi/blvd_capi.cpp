@@ -85,6 +85,7 @@ blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* in) {
   if (!d.ring_capacity) d.ring_capacity = 512;
   if (!d.route_capacity) d.route_capacity = 4096;
   if (d.lod_error_px == 0) d.lod_error_px = 1.f;
+  if (d.min_render_scale == 0) d.min_render_scale = 1.f;
   return d;
 }
 
@@ -118,6 +119,10 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
   }
   if (!(d.target_frame_ms >= 0 && d.target_frame_ms < 10000) || !(d.lod_error_px > 0 && d.lod_error_px < 1e4)) {
     t_create_error = "blvd_runtime_create: target_frame_ms or lod_error_px out of range";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  if (!(d.min_render_scale >= 0.25f && d.min_render_scale <= 1.f)) {
+    t_create_error = "blvd_runtime_create: min_render_scale must be within 0.25..1 (0 means 1)";
     return BLVD_ERR_INVALID_ARG;
   }
   if (!d.allocator.alloc != !d.allocator.free) {

@@ -37,6 +37,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   rd.height = static_cast<int>(desc.height);
   // The cell slabs' meshes, plus every block for the reference modes.
   rd.mesh_capacity = plan_.resident_cells * plan_.slab.meshes + static_cast<uint32_t>(city_.blocks().size()) + 1;
+  rd.scaled_target = desc.target_frame_ms > 0 && desc.min_render_scale < 1.f;
   renderer_ = render::Renderer::create(*ctx_, rd, err);
   if (!renderer_) throw Error(Status::Backend, err);
 
@@ -60,8 +61,10 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   if (desc.target_frame_ms > 0) {
     // The budget never needs to exceed the largest cell's local model at full detail.
     const uint64_t most = std::max<uint64_t>(1, city_.header().max_cell_local_lod0_triangles);
-    budget_ = std::make_unique<stream::PolygonBudget>(desc.target_frame_ms, 0, most);
+    budget_ = std::make_unique<stream::FrameBudget>(desc.target_frame_ms, most,
+                                                    rd.scaled_target ? desc.min_render_scale : 1.0);
   }
+  stats_.render_scale = 1.f;
   residency_ = std::make_unique<stream::Residency>(city_.graph(), plan_.resident_cells, desc.route_capacity);
   draw_.reserve(city_.blocks().size() + plan_.slab.meshes + 1);
   setMode(desc.mode, desc.radius_m);
@@ -326,6 +329,7 @@ void Runtime::chooseLevels(const CellSlot& slot) {
   }
   // Marvie et al.: frustum-cull, renormalise the cell's coverage hints over
   // the visible blocks, and share the polygon budget P_i = ACH_i · P.
+  floor_tris_ = 0;
   const render::Frustum frustum = render::Frustum::fromClip(render::viewProjectionRelative(cam_));
   size_t nv = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -337,8 +341,9 @@ void Runtime::chooseLevels(const CellSlot& slot) {
     ach_[nv] = coverage(slot.cell, slot.blocks[i].block);
     chains_[nv] = stream::LodChain{r.triangles, slot.blocks[i].levels};
     ++nv;
+    if (slot.blocks[i].levels) floor_tris_ += r.triangles[slot.blocks[i].levels - 1];
   }
-  block_tris_ = stream::shareBudget(budget_->budget(), ach_.data(), chains_.data(), nv, order_.data(),
+  block_tris_ = stream::shareBudget(budget_->polygonBudget(), ach_.data(), chains_.data(), nv, order_.data(),
                                     visible_level_.data());
   for (size_t j = 0; j < nv; ++j) level_[visible_[j]] = visible_level_[j];
 }
@@ -446,8 +451,12 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   else stream(cell, arc_m, speed, desc_.upload_budget_ms);
   buildDrawList(cell);
   render::FrameStats fs;
+  render::RenderOptions ro;
+  ro.scale = budget_ ? budget_->scale() : 1.0;
+  uint64_t full_pixels = 0;
   if (!views) {
-    if (!renderer_->render(cam_, draw_.data(), draw_.size(), &fs))
+    full_pixels = uint64_t(cam_.width) * uint64_t(cam_.height);
+    if (!renderer_->render(cam_, draw_.data(), draw_.size(), &fs, ro))
       throw Error(Status::Internal, "render failed: " + renderer_->lastError());
   } else {
     // One draw list for every view (Yilmaz et al. §3.4); each view only
@@ -475,8 +484,10 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
       c.eye_enu.y -= std::sin(hr) * v.eye_offset_right_m;
       c.mirror = (v.flags & BLVD_VIEW_MIRROR) != 0;
       render::FrameStats one;
-      if (!renderer_->render(c, draw_.data(), draw_.size(), &one))
+      if (!renderer_->render(c, draw_.data(), draw_.size(), &one, ro))
         throw Error(Status::Internal, "render failed: " + renderer_->lastError());
+      full_pixels += uint64_t(w) * h;
+      fs.pixels += one.pixels;
       fs.frame_ms += one.frame_ms;
       fs.triangles += one.triangles;
       fs.draw_calls += one.draw_calls;
@@ -486,11 +497,12 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   rendered_ = true;
   if (budget_ && !(mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS)) {
     // The whole call counts against the target: streaming and uploads too.
-    budget_->next(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_frame).count(),
-                  block_tris_);
-    stats_.polygon_budget = budget_->budget();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_frame).count();
+    budget_->next(ms, block_tris_, floor_tris_, fs.pixels, full_pixels);
+    stats_.polygon_budget = budget_->polygonBudget();
     stats_.budget_unreachable = budget_->unreachable() ? 1 : 0;
   }
+  stats_.render_scale = float(ro.scale);
   stats_.block_triangles = block_tris_;
   ++stats_.frames;
   stats_.frame_ms = fs.frame_ms;

@@ -100,7 +100,8 @@ class Runtime {
   render::Camera cam_;
   bool rendered_ = false;
   blvd_stats stats_{};
-  std::unique_ptr<stream::PolygonBudget> budget_;  // with target_frame_ms
+  std::unique_ptr<stream::FrameBudget> budget_;  // with target_frame_ms
+  uint64_t floor_tris_ = 0;  // the visible blocks' coarsest levels, last frame
   // chooseLevels scratch, sized for the largest cell at create.
   std::vector<float> ach_;
   std::vector<stream::LodChain> chains_;

@@ -25,6 +25,7 @@ class Context;
   X(PFNGLBINDRENDERBUFFERPROC, BindRenderbuffer)               \
   X(PFNGLBINDTEXTUREPROC, BindTexture)                         \
   X(PFNGLBINDVERTEXARRAYPROC, BindVertexArray)                 \
+  X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer)                 \
   X(PFNGLBLENDFUNCPROC, BlendFunc)                             \
   X(PFNGLBUFFERDATAPROC, BufferData)                           \
   X(PFNGLBUFFERSUBDATAPROC, BufferSubData)                     \

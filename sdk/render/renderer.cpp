@@ -88,6 +88,8 @@ struct Renderer::Impl {
   Uniforms bg, mesh, item, cap_color, cap_depth, tex;
   GLuint empty_vao = 0;  // core profile needs a VAO even for attribute-less draws
   GLuint fbo = 0, color_rb = 0, depth_rb = 0;
+  GLuint scaled_fbo = 0, scaled_color_rb = 0, scaled_depth_rb = 0;  // RendererDesc::scaled_target
+  int scaled_w = 0, scaled_h = 0;
   GLint host_fbo = 0;  // shared: framebuffer bound during the last render()
 
   std::vector<MeshSlot> slots;  // grows up to capacity, reserved once
@@ -266,28 +268,36 @@ bool Renderer::init(const RendererDesc& desc) {
   impl_->tex = locate(gl, impl_->tex_program);
   gl.GenVertexArrays(1, &impl_->empty_vao);
 
+  // An RGBA8 + depth24 framebuffer of w x h.
+  auto makeTarget = [&](int w, int h, GLuint& fbo, GLuint& color, GLuint& depth) {
+    ScopedGlState keep(gl, shared_);
+    gl.GenRenderbuffers(1, &color);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, color);
+    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+    gl.GenRenderbuffers(1, &depth);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, depth);
+    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
+    gl.GenFramebuffers(1, &fbo);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
+    const GLenum status = gl.CheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status == GL_FRAMEBUFFER_COMPLETE) return true;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "framebuffer %dx%d incomplete (0x%04x)", w, h, status);
+    return fail(buf);
+  };
   if (!shared_) {
     fb_w_ = desc.width;
     fb_h_ = desc.height;
-    gl.GenRenderbuffers(1, &impl_->color_rb);
-    gl.BindRenderbuffer(GL_RENDERBUFFER, impl_->color_rb);
-    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, fb_w_, fb_h_);
-    gl.GenRenderbuffers(1, &impl_->depth_rb);
-    gl.BindRenderbuffer(GL_RENDERBUFFER, impl_->depth_rb);
-    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, fb_w_, fb_h_);
-    gl.GenFramebuffers(1, &impl_->fbo);
-    gl.BindFramebuffer(GL_FRAMEBUFFER, impl_->fbo);
-    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
-                               impl_->color_rb);
-    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
-                               impl_->depth_rb);
-    const GLenum status = gl.CheckFramebufferStatus(GL_FRAMEBUFFER);
-    if (status != GL_FRAMEBUFFER_COMPLETE) {
-      char buf[96];
-      std::snprintf(buf, sizeof buf, "framebuffer %dx%d incomplete (0x%04x)", fb_w_, fb_h_,
-                    status);
-      return fail(buf);
-    }
+    if (!makeTarget(fb_w_, fb_h_, impl_->fbo, impl_->color_rb, impl_->depth_rb)) return false;
+  }
+  if (desc.scaled_target) {
+    if (desc.width <= 0 || desc.height <= 0) return fail("scaled target needs the frame's width and height");
+    impl_->scaled_w = desc.width;
+    impl_->scaled_h = desc.height;
+    if (!makeTarget(desc.width, desc.height, impl_->scaled_fbo, impl_->scaled_color_rb, impl_->scaled_depth_rb))
+      return false;
   }
 
   impl_->capacity = desc.mesh_capacity;
@@ -332,6 +342,9 @@ Renderer::~Renderer() {
   if (impl_->fbo) gl.DeleteFramebuffers(1, &impl_->fbo);
   if (impl_->color_rb) gl.DeleteRenderbuffers(1, &impl_->color_rb);
   if (impl_->depth_rb) gl.DeleteRenderbuffers(1, &impl_->depth_rb);
+  if (impl_->scaled_fbo) gl.DeleteFramebuffers(1, &impl_->scaled_fbo);
+  if (impl_->scaled_color_rb) gl.DeleteRenderbuffers(1, &impl_->scaled_color_rb);
+  if (impl_->scaled_depth_rb) gl.DeleteRenderbuffers(1, &impl_->scaled_depth_rb);
 }
 
 void Renderer::setLook(const Look& look) {
@@ -625,11 +638,25 @@ void Renderer::release(MeshHandle h) {
   impl_->free_slots.push_back(index);
 }
 
-bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, FrameStats* stats,
+bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, FrameStats* stats,
                       const RenderOptions& opt) {
-  if (const char* bad = validateCamera(cam)) return fail(bad);
-  if (cam.viewport_x < 0 || cam.viewport_y < 0) return fail("camera viewport starts outside the framebuffer");
-  if (!shared_ && (cam.viewport_x + cam.width > fb_w_ || cam.viewport_y + cam.height > fb_h_)) {
+  if (const char* bad = validateCamera(out)) return fail(bad);
+  if (!(opt.scale > 0.0 && opt.scale <= 1.0)) return fail("render scale outside (0, 1]");
+  // Scaled: the same camera over fewer pixels of the scaled target, stretched
+  // over the view afterwards (the aspect ratio is kept to within a pixel).
+  const bool scaled = opt.pass == Pass::Shaded && opt.scale < 1.0;
+  if (scaled && !impl_->scaled_fbo) return fail("render scale < 1 needs RendererDesc::scaled_target");
+  if (scaled && (out.width > impl_->scaled_w || out.height > impl_->scaled_h))
+    return fail("view is larger than the scaled target");
+  Camera scaled_cam = out;
+  if (scaled) {
+    scaled_cam.width = std::max(1, static_cast<int>(std::lround(out.width * opt.scale)));
+    scaled_cam.height = std::max(1, static_cast<int>(std::lround(out.height * opt.scale)));
+    scaled_cam.viewport_x = scaled_cam.viewport_y = 0;
+  }
+  const Camera& cam = scaled ? scaled_cam : out;
+  if (out.viewport_x < 0 || out.viewport_y < 0) return fail("camera viewport starts outside the framebuffer");
+  if (!shared_ && (out.viewport_x + out.width > fb_w_ || out.viewport_y + out.height > fb_h_)) {
     return fail("camera viewport is larger than the renderer's framebuffer");
   }
   if (n > 0 && !list) return fail("draw list is null");
@@ -656,6 +683,7 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
     } else {
       gl.BindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     }
+    if (scaled) gl.BindFramebuffer(GL_FRAMEBUFFER, m.scaled_fbo);
     gl.Viewport(cam.viewport_x, cam.viewport_y, cam.width, cam.height);
     // The clear below must stay inside this view (a frame may hold several).
     gl.Enable(GL_SCISSOR_TEST);
@@ -796,6 +824,17 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
       }
     }
     if (opt.pass == Pass::Shaded) drawBackground();
+    if (scaled) {
+      // Stretch the scaled view over the real one; the scissor box must let
+      // the whole destination through.
+      gl.BindFramebuffer(GL_READ_FRAMEBUFFER, m.scaled_fbo);
+      gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, shared_ ? static_cast<GLuint>(m.host_fbo) : m.fbo);
+      gl.Scissor(out.viewport_x, out.viewport_y, out.width, out.height);
+      gl.BlitFramebuffer(0, 0, cam.width, cam.height, out.viewport_x, out.viewport_y,
+                         out.viewport_x + out.width, out.viewport_y + out.height, GL_COLOR_BUFFER_BIT,
+                         GL_LINEAR);
+      ++fs.draw_calls;
+    }
     gl.BindVertexArray(0);
     gl.BindTexture(GL_TEXTURE_2D, 0);
   }
@@ -803,8 +842,9 @@ bool Renderer::render(const Camera& cam, const MeshHandle* list, size_t n, Frame
   gl.Finish();
   fs.frame_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  last_w_ = cam.viewport_x + cam.width;
-  last_h_ = cam.viewport_y + cam.height;
+  fs.pixels = static_cast<uint64_t>(cam.width) * static_cast<uint64_t>(cam.height);
+  last_w_ = out.viewport_x + out.width;
+  last_h_ = out.viewport_y + out.height;
   if (stats) *stats = fs;
   // Only on a context blvd owns: on a host context this would swallow the
   // host's own pending errors.

@@ -26,6 +26,11 @@ struct RendererDesc {
   int width = 0;                // own framebuffer size; 0 means 800. Unused when shared
   int height = 0;               // 0 means 480
   uint32_t mesh_capacity = 0;   // live meshes at once; 0 means 16384, at most 2^20 - 1
+  // Also create a reduced-resolution target (RGBA8 + depth24 of width x
+  // height, required then even when shared) so that RenderOptions::scale < 1
+  // can draw fewer pixels and stretch them over the view: the frame-time
+  // budget's second knob on a fill-bound GPU (docs/decisions/0008).
+  bool scaled_target = false;
 };
 
 // `desc` with every zero field replaced by its default.
@@ -78,6 +83,7 @@ struct FrameStats {
   uint32_t meshes_drawn = 0;
   uint32_t meshes_culled = 0;   // outside the view frustum
   uint32_t meshes_invalid = 0;  // stale or null handles in the list, skipped
+  uint64_t pixels = 0;          // pixels shaded: the view's, or the scaled view's
 };
 
 // What a render() call draws. Shaded is the street view. The capture passes
@@ -94,6 +100,11 @@ struct RenderOptions {
   Pass pass = Pass::Shaded;
   const uint32_t* item_ids = nullptr;  // ItemBuffer: one id per list entry (ids < 2^24, 0 = nothing)
   double max_depth_m = 8192.0;         // CaptureDepth scale
+  // Shaded pass only, with RendererDesc::scaled_target: draw the view at
+  // round(scale x size) pixels into the scaled target, then blit it over the
+  // view with linear filtering. Only colour reaches the destination (a host's
+  // depth buffer is left as it was). 1 draws at full size; (0, 1].
+  double scale = 1.0;
 };
 
 // Unpacks a CaptureDepth pixel to metres (0 where nothing was drawn).

@@ -7,14 +7,10 @@ namespace blvd::stream {
 namespace {
 constexpr double kForget = 0.9;   // history weight kept per frame (~10 frames)
 constexpr double kMaxStep = 2.0;  // the budget changes by at most ×2 or ÷2 a frame
+constexpr double kMaxScaleStep = 0.0625;  // the render scale moves by at most 1/16 a frame
 }  // namespace
 
-PolygonBudget::PolygonBudget(double target_ms, uint64_t min_triangles, uint64_t max_triangles)
-    : target_ms_(target_ms), min_(min_triangles), max_(std::max(min_triangles, max_triangles)), p_(max_) {}
-
-uint64_t PolygonBudget::next(double frame_ms, uint64_t triangles) {
-  if (!(frame_ms > 0) || !std::isfinite(frame_ms)) return p_;
-  const double x = double(triangles), y = frame_ms;
+void CostLine::add(double x, double y) {
   sw_ = sw_ * kForget + 1;
   sx_ = sx_ * kForget + x;
   sy_ = sy_ * kForget + y;
@@ -23,14 +19,31 @@ uint64_t PolygonBudget::next(double frame_ms, uint64_t triangles) {
   const double mx = sx_ / sw_, my = sy_ / sw_;
   const double var = sxx_ / sw_ - mx * mx, cov = sxy_ / sw_ - mx * my;
   // The slope needs spread in the history; until then (or if the fit says
-  // triangles are free) assume time is proportional to triangles.
+  // x is free) assume y is proportional to x.
   if (var > 1e-6 * (mx * mx + 1) && cov > 0) {
-    per_tri_ms_ = cov / var;
-    fixed_ms_ = std::max(0.0, my - per_tri_ms_ * mx);
+    b_ = cov / var;
+    a_ = std::max(0.0, my - b_ * mx);
   } else {
-    per_tri_ms_ = mx > 0 ? my / mx : 0;
-    fixed_ms_ = 0;
+    b_ = mx > 0 ? my / mx : 0;
+    a_ = 0;
   }
+}
+
+PolygonBudget::PolygonBudget(double target_ms, uint64_t min_triangles, uint64_t max_triangles)
+    : target_ms_(target_ms), min_(min_triangles), max_(std::max(min_triangles, max_triangles)), p_(max_) {}
+
+void PolygonBudget::restart(uint64_t p) {
+  fit_.clear();
+  fixed_ms_ = per_tri_ms_ = 0;
+  unreachable_ = false;
+  p_ = std::clamp(p, min_, max_);
+}
+
+uint64_t PolygonBudget::next(double frame_ms, uint64_t triangles) {
+  if (!(frame_ms > 0) || !std::isfinite(frame_ms)) return p_;
+  fit_.add(double(triangles), frame_ms);
+  per_tri_ms_ = fit_.slope();
+  fixed_ms_ = fit_.intercept();
   double want = double(p_);
   if (per_tri_ms_ > 0) want = (target_ms_ - fixed_ms_) / per_tri_ms_;
   else if (frame_ms < target_ms_) want = double(p_) * 2;
@@ -41,6 +54,45 @@ uint64_t PolygonBudget::next(double frame_ms, uint64_t triangles) {
   want = std::clamp(want, lo, hi);
   p_ = static_cast<uint64_t>(std::clamp(want, double(min_), double(max_)));
   return p_;
+}
+
+RenderScale::RenderScale(double target_ms, double min_scale)
+    : target_ms_(target_ms), min_(std::clamp(min_scale, 1.0 / 64, 1.0)) {}
+
+double RenderScale::next(double frame_ms, uint64_t pixels, uint64_t full_pixels) {
+  if (!(frame_ms > 0) || !std::isfinite(frame_ms) || pixels == 0 || full_pixels == 0) return scale_;
+  fit_.add(double(pixels), frame_ms);
+  const double fixed = fit_.intercept(), per_px = fit_.slope();
+  const double full = double(full_pixels);
+  double want = scale_;
+  if (per_px > 0) want = std::sqrt(std::max(0.0, (target_ms_ - fixed) / per_px) / full);
+  else if (frame_ms < target_ms_) want = scale_ + kMaxScaleStep;
+  unreachable_ = fixed + per_px * full * min_ * min_ > target_ms_;
+  want = std::clamp(want, scale_ - kMaxScaleStep, scale_ + kMaxScaleStep);
+  want = std::round(want * 64.0) / 64.0;
+  scale_ = std::clamp(want, min_, 1.0);
+  return scale_;
+}
+
+FrameBudget::FrameBudget(double target_ms, uint64_t max_triangles, double min_scale)
+    : poly_(target_ms, 0, max_triangles), scale_(target_ms, min_scale) {}
+
+void FrameBudget::next(double frame_ms, uint64_t triangles, uint64_t floor_triangles, uint64_t pixels,
+                       uint64_t full_pixels) {
+  if (!(frame_ms > 0) || !std::isfinite(frame_ms)) return;
+  const double target = poly_.target();
+  if (scalable() && !fill_ && poly_.budget() <= floor_triangles && frame_ms > target) fill_ = true;
+  if (!fill_) {
+    poly_.next(frame_ms, triangles);
+    return;
+  }
+  if (pixels >= full_pixels && frame_ms <= target) {
+    // A whole-resolution frame fits: polygons again, from the floor up.
+    fill_ = false;
+    poly_.restart(floor_triangles);
+    return;
+  }
+  scale_.next(frame_ms, pixels, full_pixels);
 }
 
 uint64_t shareBudget(uint64_t budget, const float* ach, const LodChain* chains, size_t n, uint32_t* order,

@@ -19,6 +19,22 @@ namespace blvd::stream {
 // The history model: frame time ≈ fixed + per_triangle × triangles, fitted
 // by exponentially weighted least squares over recent frames (a frame's fill
 // and sky cost is the `fixed` part, which no polygon budget can remove).
+// Exponentially weighted least-squares line y ≈ a + b·x over recent samples.
+// Until the history has spread in x (or when it finds y falling with x) it
+// assumes y proportional to x, the safe guess for a cost.
+class CostLine {
+ public:
+  void add(double x, double y);
+  double intercept() const { return a_; }
+  double slope() const { return b_; }
+  void clear() { *this = CostLine(); }
+
+ private:
+  // Weighted sums (weight decays by kForget per sample).
+  double sw_ = 0, sx_ = 0, sy_ = 0, sxx_ = 0, sxy_ = 0;
+  double a_ = 0, b_ = 0;
+};
+
 class PolygonBudget {
  public:
   // target_ms > 0; the budget stays within [min_triangles, max_triangles].
@@ -34,14 +50,72 @@ class PolygonBudget {
   double msPerTriangle() const { return per_tri_ms_; }  // the model's slope
   // True when even the smallest budget is predicted to miss the target.
   bool unreachable() const { return unreachable_; }
+  // Forgets the history and starts again from budget p (after frames drawn
+  // under another regime, e.g. at a reduced resolution, whose times would
+  // mislead the fit).
+  void restart(uint64_t p);
 
  private:
   double target_ms_;
   uint64_t min_, max_, p_;
-  // Weighted sums for the fit (weight decays by kForget per frame).
-  double sw_ = 0, sx_ = 0, sy_ = 0, sxx_ = 0, sxy_ = 0;
+  CostLine fit_;
   double fixed_ms_ = 0, per_tri_ms_ = 0;
   bool unreachable_ = false;
+};
+
+// The budget's second knob, for a fill-bound GPU (docs/decisions/0008; not in
+// Marvie et al., whose frames were bound by polygons): once the polygon budget
+// is spent (every visible block at its coarsest level) and the frame still
+// misses the target, draw the view at fewer pixels and stretch it. Same
+// history model as PolygonBudget, in pixels: frame ≈ fixed + per_pixel ×
+// pixels. The scale moves by at most 1/16 a frame and in steps of
+// 1/64, so the picture does not shimmer.
+class RenderScale {
+ public:
+  // target_ms > 0; the scale stays within [min_scale, 1], min_scale in (0, 1].
+  RenderScale(double target_ms, double min_scale);
+
+  // Feeds the last frame (its time and the pixels it shaded, of
+  // full_pixels at scale 1) and returns the scale for the next frame.
+  double next(double frame_ms, uint64_t pixels, uint64_t full_pixels);
+
+  double scale() const { return scale_; }
+  double minScale() const { return min_; }
+  // True when even min_scale is predicted to miss the target.
+  bool unreachable() const { return unreachable_; }
+
+ private:
+  double target_ms_, min_, scale_ = 1.0;
+  CostLine fit_;
+  bool unreachable_ = false;
+};
+
+// Both knobs in their order: the polygon budget first (Marvie et al.), the
+// render scale only once the polygons are spent (every visible block at its
+// coarsest level) and the frame still misses the target; back to polygons,
+// with a fresh history, when a frame at scale 1 fits again. With min_scale 1
+// it is PolygonBudget alone.
+class FrameBudget {
+ public:
+  FrameBudget(double target_ms, uint64_t max_triangles, double min_scale);
+
+  // Feeds the last frame: its time, the block triangles it drew, the fewest
+  // its visible blocks could draw (all at their coarsest levels), and the
+  // pixels it shaded of full_pixels at scale 1.
+  void next(double frame_ms, uint64_t triangles, uint64_t floor_triangles, uint64_t pixels, uint64_t full_pixels);
+
+  uint64_t polygonBudget() const { return poly_.budget(); }
+  double scale() const { return fill_ ? scale_.scale() : 1.0; }
+  bool fillMode() const { return fill_; }
+  bool scalable() const { return scale_.minScale() < 1.0; }
+  // True when the coarsest levels at the smallest scale are predicted to miss.
+  bool unreachable() const { return fill_ ? scale_.unreachable() : poly_.unreachable() && !scalable(); }
+  const PolygonBudget& polygons() const { return poly_; }
+
+ private:
+  PolygonBudget poly_;
+  RenderScale scale_;
+  bool fill_ = false;
 };
 
 // One object's LOD chain: triangles per level, finest first.

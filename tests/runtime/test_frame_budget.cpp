@@ -1,5 +1,6 @@
-// The budget controller against a simulated cost model, and the ACH share
-// with leftovers passed on (issue 4, Marvie seed 004).
+// The budget controller against simulated cost models (geometry-bound and
+// fill-bound, where the render scale takes over), and the ACH share with
+// leftovers passed on (issue 4, Marvie seed 004).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -77,6 +78,93 @@ TEST(PolygonBudget, IgnoresBadMeasurements) {
   PolygonBudget b(4.0, 10, 100);
   EXPECT_EQ(b.next(std::nan(""), 100), 100u);
   EXPECT_EQ(b.next(-1, 100), 100u);
+}
+
+// A machine whose frame also pays per pixel: fixed + per_tri × triangles +
+// per_px × pixels, ±5 % noise. The scene offers `offer` triangles at most and
+// `floor` at its coarsest levels.
+struct FillMachine {
+  double fixed_ms, per_tri_ms, per_px_ms;
+  uint64_t offer, floor;
+  std::mt19937 rng{11};
+  double frame(uint64_t tris, uint64_t px) {
+    std::uniform_real_distribution<double> noise(0.95, 1.05);
+    return (fixed_ms + per_tri_ms * double(tris) + per_px_ms * double(px)) * noise(rng);
+  }
+};
+
+constexpr uint64_t kFull = 800 * 480;
+
+// Runs `frames` frames; returns the settled times (after `settle`).
+std::vector<double> run(FrameBudget& b, FillMachine& m, int frames, int settle) {
+  std::vector<double> settled;
+  for (int f = 0; f < frames; ++f) {
+    const uint64_t tris = std::clamp<uint64_t>(b.polygonBudget(), m.floor, m.offer);
+    const double s = b.scale();
+    const uint64_t px = uint64_t(std::lround(800 * s)) * uint64_t(std::lround(480 * s));
+    const double ms = m.frame(tris, px);
+    if (f >= settle) settled.push_back(ms);
+    b.next(ms, tris, m.floor, px, kFull);
+  }
+  return settled;
+}
+
+TEST(FrameBudget, PolygonsAloneWhenTheyCanMeetTheTarget) {
+  // Geometry-bound: 2 ms + 10k triangles per ms + 1 ms of pixels.
+  FillMachine m{2.0, 1e-4, 1.0 / double(kFull), 100000, 2000};
+  FrameBudget b(6.0, 100000, 0.5);
+  const std::vector<double> t = run(b, m, 300, 100);
+  EXPECT_NEAR(percentile(t, 50), 6.0, 0.6);
+  EXPECT_LE(percentile(t, 95), 1.25 * 6.0);
+  EXPECT_FALSE(b.fillMode());
+  EXPECT_EQ(b.scale(), 1.0);
+  EXPECT_NEAR(double(b.polygonBudget()), 30000.0, 6000.0);
+}
+
+TEST(FrameBudget, ScalesOnlyOnceThePolygonsAreSpent) {
+  // Fill-bound, as llvmpipe: 1 ms + 8 ms of pixels at full size; triangles
+  // nearly free. Target 5 ms: the coarsest levels alone give 9 ms.
+  FillMachine m{1.0, 1e-7, 8.0 / double(kFull), 20000, 2000};
+  FrameBudget b(5.0, 20000, 0.5);
+  const std::vector<double> t = run(b, m, 400, 150);
+  EXPECT_TRUE(b.fillMode());
+  EXPECT_NEAR(percentile(t, 50), 5.0, 0.5);
+  EXPECT_LE(percentile(t, 95), 1.25 * 5.0);
+  // (5 - 1) / 8 of the pixels: scale ≈ 0.71.
+  EXPECT_NEAR(b.scale(), std::sqrt(0.5), 0.05);
+  EXPECT_LE(b.polygonBudget(), m.floor);  // the polygons went first
+  EXPECT_FALSE(b.unreachable());
+}
+
+TEST(FrameBudget, GoesBackToPolygonsWhenTheMachineFreesUp) {
+  FillMachine m{1.0, 1e-7, 8.0 / double(kFull), 20000, 2000};
+  FrameBudget b(5.0, 20000, 0.5);
+  run(b, m, 200, 200);
+  ASSERT_TRUE(b.fillMode());
+  m.per_px_ms = 2.0 / double(kFull);  // e.g. the other process ended
+  const std::vector<double> t = run(b, m, 200, 100);
+  EXPECT_FALSE(b.fillMode());
+  EXPECT_EQ(b.scale(), 1.0);
+  EXPECT_EQ(b.polygonBudget(), 20000u);  // every block at full detail again
+  EXPECT_LT(percentile(t, 50), 5.0);
+}
+
+TEST(FrameBudget, SaysWhenEvenTheSmallestScaleMisses) {
+  FillMachine m{4.0, 1e-7, 8.0 / double(kFull), 20000, 2000};  // 6 ms at scale 0.5
+  FrameBudget b(5.0, 20000, 0.5);
+  run(b, m, 200, 200);
+  EXPECT_TRUE(b.fillMode());
+  EXPECT_EQ(b.scale(), 0.5);
+  EXPECT_TRUE(b.unreachable());
+}
+
+TEST(FrameBudget, WithoutAScaleItIsThePolygonBudget) {
+  FillMachine m{1.0, 1e-7, 8.0 / double(kFull), 20000, 2000};
+  FrameBudget b(5.0, 20000, 1.0);
+  run(b, m, 100, 100);
+  EXPECT_FALSE(b.fillMode());
+  EXPECT_EQ(b.scale(), 1.0);
+  EXPECT_TRUE(b.unreachable());
 }
 
 TEST(ShareBudget, CoverageSharesAndLeftoversPassOn) {
