@@ -163,7 +163,12 @@ int main(int argc, char** argv) {
     const blvd::replay::Replayer::Step step = replayer.next(ev);
     printWarnings();
     if (step == blvd::replay::Replayer::Step::Error) {
-      std::fprintf(stderr, "gnss_replay: %s\n", replayer.error().c_str());
+      // --strict: the malformed line was just listed; a read error was not.
+      const std::vector<std::string>& w = replayer.warnings();
+      if (o.strict && !w.empty() && w.back() == replayer.error())
+        std::fprintf(stderr, "gnss_replay: stopped at that line (--strict)\n");
+      else
+        std::fprintf(stderr, "gnss_replay: %s\n", replayer.error().c_str());
       rc = 1;
       break;
     }

@@ -7,6 +7,7 @@ after the first seconds (tests/vcan/checks.py), and that bad input fails with
 a message naming the file and line."""
 import argparse
 import csv
+import hashlib
 import json
 import os
 import shutil
@@ -107,8 +108,8 @@ def main():
     nmea = a.trace + ".nmea"
     frames, poses, stats_path = (os.path.join(a.work, n) for n in ("frames", "poses.jsonl", "stats.json"))
 
-    # The drive: frames at 2 fps of log time, poses every 0.1 s.
-    run(a.exe, [nmea, "--package", a.package, "--fps", "2", "--width", "320", "--height", "192", "--frames", frames,
+    # The drive: frames at 2 fps of log time (small: this script decodes every one), poses every 0.1 s.
+    run(a.exe, [nmea, "--package", a.package, "--fps", "2", "--width", "160", "--height", "96", "--frames", frames,
                 "--poses", poses, "--stats", stats_path], 0, "replay")
     with open(stats_path) as f:
         stats = json.load(f)
@@ -123,14 +124,17 @@ def main():
     flat = [n for n, v in zip(pngs, variances) if v < 20.0]
     if flat:
         fail("%d of %d frames nearly blank (luminance variance < 20): %s" % (len(flat), len(pngs), flat[:5]))
+    distinct = len({hashlib.sha1(open(os.path.join(frames, n), "rb").read()).digest() for n in pngs})
+    if distinct < len(pngs) // 2:
+        fail("only %d distinct frames of %d: the view does not follow the drive" % (distinct, len(pngs)))
     pose_lines = checks.read_jsonl(poses)
     if len(pose_lines) != stats["poses"]:
         fail("%d pose lines, stats say %d" % (len(pose_lines), stats["poses"]))
     expected = truth_cells(a.trace + ".csv")
     got = checks.cells_match(pose_lines, expected, a.settle)
-    print("replay: %d frames (luminance variance %.0f..%.0f), %d poses, %d cells after %g s match the truth; "
+    print("replay: %d frames (%d distinct, luminance variance %.0f..%.0f), %d poses, %d cells after %g s match the truth; "
           "frame ms p50 %.2f p95 %.2f; %d degraded" %
-          (len(pngs), min(variances), max(variances), len(pose_lines), got["cells"], a.settle,
+          (len(pngs), distinct, min(variances), max(variances), len(pose_lines), got["cells"], a.settle,
            stats["frame_ms_p50"], stats["frame_ms_p95"], stats["degraded_frames"]))
 
     with open(nmea) as f:
