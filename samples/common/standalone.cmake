@@ -10,3 +10,5 @@ find_package(nlohmann_json REQUIRED)
 find_package(CLI11 REQUIRED)
 find_path(STB_INCLUDE_DIRS stb_image_write.h PATH_SUFFIXES stb REQUIRED)
 set(BLVD_BUILD_TESTS OFF)  # the samples' tests need the source tree's fixtures
+# samples/common, which the in-tree build adds from samples/CMakeLists.txt.
+add_subdirectory(${CMAKE_CURRENT_LIST_DIR} ${CMAKE_BINARY_DIR}/samples-common)
