@@ -40,7 +40,7 @@ bool FrameWriter::frame(std::string& err) {
     return false;
   }
   stats_.frame_ms.push_back(fs.frame_ms);
-  if (fs.flags & BLVD_FRAME_DEGRADED) ++degraded_;
+  if (fs.flags & BLVD_FRAME_DEGRADED) ++stats_.degraded;
   if (samples::isBlank(rgba_.data(), width_, height_)) ++stats_.blank;
   if (!dir_.empty()) {
     char name[32];

@@ -1,6 +1,6 @@
 // gnss_replay's frames: one blvd_render + blvd_read_pixels per tick of the
 // log's clock, written as a PNG sequence, with the per-frame numbers the stats
-// JSON reports (frame time, degraded and blank frames).
+// JSON reports (frame time, degraded and blank frames: samples::RenderStats).
 #pragma once
 
 #include <cstdint>
@@ -26,7 +26,6 @@ class FrameWriter {
   bool frame(std::string& err);
 
   const samples::RenderStats& stats() const { return stats_; }
-  uint64_t degraded() const { return degraded_; }
   uint64_t waitTimeouts() const { return wait_timeouts_; }
 
  private:
@@ -36,7 +35,7 @@ class FrameWriter {
   double wait_ms_ = 0;
   std::vector<unsigned char> rgba_;
   samples::RenderStats stats_;
-  uint64_t degraded_ = 0, wait_timeouts_ = 0;
+  uint64_t wait_timeouts_ = 0;
 };
 
 }  // namespace gnss_replay

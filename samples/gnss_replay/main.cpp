@@ -23,6 +23,7 @@
 #include "blvd/blvd.h"
 #include "common/backend.h"
 #include "common/logs.h"
+#include "common/memory.h"
 #include "frame_writer.h"
 #include "replay/replayer.h"
 
@@ -209,7 +210,7 @@ int main(int argc, char** argv) {
 
   blvd_stats st{};
   st.struct_size = sizeof st;
-  blvd_runtime_stats(rt, &st);
+  const bool have_st = blvd_runtime_stats(rt, &st) == BLVD_OK;
   nlohmann::json j;
   j["nmea"] = o.nmea;
   j["package"] = o.package;
@@ -228,20 +229,13 @@ int main(int argc, char** argv) {
   j["matched_poses"] = matched;
   j["cells_visited"] = cells;
   samples::addRenderStats(j, frames.stats());
-  j["degraded_frames"] = frames.degraded();
   j["frame_wait_ms"] = o.frame_wait_ms;
   j["frame_wait_timeouts"] = frames.waitTimeouts();
-  j["runtime"] = {{"frames", st.frames},
-                  {"misses", st.misses},
-                  {"loads", st.loads},
-                  {"evictions", st.evictions},
-                  {"load_errors", st.load_errors},
-                  {"max_resident_cells", st.max_resident_cells},
-                  {"gpu_high_water_bytes", st.gpu.high_water_bytes},
-                  {"staging_high_water_bytes", st.staging.high_water_bytes},
-                  {"table_bytes", st.table_bytes},
-                  {"tracking_bytes", st.tracking_bytes},
-                  {"upload_ms_max", st.upload_ms_max}};
+  samples::addMemoryStats(j, have_st ? &st : nullptr);
+  if (have_st) {
+    j["runtime_frames"] = st.frames;
+    j["upload_ms_max"] = st.upload_ms_max;
+  }
   j["wall_s"] = std::chrono::duration<double>(Clock::now() - wall0).count();
   if (!samples::writeStats(o.stats_path, j)) {
     std::fprintf(stderr, "gnss_replay: cannot write %s\n", o.stats_path.c_str());
@@ -253,7 +247,7 @@ int main(int argc, char** argv) {
                static_cast<unsigned long long>(fixes), static_cast<unsigned long long>(position_fixes),
                static_cast<unsigned long long>(rs.bad_lines), last_t - t0, static_cast<unsigned long long>(pose_count),
                static_cast<unsigned long long>(matched), cells.size(),
-               static_cast<unsigned long long>(frames.stats().frames), static_cast<unsigned long long>(frames.degraded()),
+               static_cast<unsigned long long>(frames.stats().frames), static_cast<unsigned long long>(frames.stats().degraded),
                static_cast<unsigned long long>(frames.stats().blank));
   return rc;
 }

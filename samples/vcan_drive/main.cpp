@@ -22,7 +22,7 @@
 #include "gnss_feed.h"
 #include "common/backend.h"
 #include "common/logs.h"
-#include "memory.h"
+#include "common/memory.h"
 #include "tracking.h"
 #if VCAN_DRIVE_CAPI
 #include "frames.h"
@@ -31,7 +31,7 @@
 namespace {
 
 using namespace vcan_drive;
-using namespace samples;  // common/: backend.h, logs.h
+using namespace samples;  // common/: backend.h, logs.h, memory.h
 using Clock = std::chrono::steady_clock;
 
 volatile std::sig_atomic_t g_stop = 0;  // SIGINT/SIGTERM
