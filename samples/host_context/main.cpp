@@ -26,10 +26,8 @@
 #include <utility>
 #include <vector>
 
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#include <stb_image_write.h>
-
 #include "blvd/blvd.h"
+#include "common/png.h"
 
 namespace {
 
@@ -195,7 +193,7 @@ int main(int argc, char** argv) {
   const bool line_ok = line[2] > line[0] + 60;
   std::vector<uint8_t> flipped(px.size());
   for (int y = 0; y < kH; ++y) std::memcpy(&flipped[size_t(y) * kW * 4], at(0, y), size_t(kW) * 4);
-  if (!stbi_write_png(out.c_str(), kW, kH, 4, flipped.data(), kW * 4)) return fail(("cannot write " + out).c_str());
+  if (!samples::writePng(out, flipped.data(), kW, kH)) return fail(("cannot write " + out).c_str());
   std::printf("wrote %s: blvd drew %llu triangles (cell %u) between the host's passes; GL state restored "
               "(%zu values checked); HUD %s, route line %s, host clear colour left in %zu pixels\n",
               out.c_str(), static_cast<unsigned long long>(fs.triangles), fs.cell, after.size(), hud_ok ? "ok" : "MISSING",

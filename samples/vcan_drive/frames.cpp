@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "png.h"
+#include "common/png.h"
 
 namespace vcan_drive {
 
@@ -32,11 +32,11 @@ bool Frames::frame(const blvd_pose* pose) {
   const uint32_t w = tracking_->width(), h = tracking_->height();
   stats_.frame_ms.push_back(fs.frame_ms);
   if (fs.flags & BLVD_FRAME_DEGRADED) ++stats_.degraded;
-  if (isBlank(rgba_.data(), w, h)) ++stats_.blank;
+  if (samples::isBlank(rgba_.data(), w, h)) ++stats_.blank;
   if (!dir_.empty()) {
     char name[32];
     std::snprintf(name, sizeof name, "/frame_%06llu.png", static_cast<unsigned long long>(stats_.frames));
-    if (!writePng(dir_ + name, rgba_.data(), w, h)) {
+    if (!samples::writePng(dir_ + name, rgba_.data(), w, h)) {
       std::fprintf(stderr, "vcan_drive: cannot write %s%s\n", dir_.c_str(), name);
       return false;
     }
@@ -78,9 +78,9 @@ int renderRecorded(const std::string& poses_path, unsigned render_every, const s
   j["mode"] = "render-poses";
   j["poses"] = n;
   j["valid_poses"] = valid;
-  addRenderStats(j, frames.stats());
+  samples::addRenderStats(j, frames.stats());
   std::printf("%s\n", j.dump().c_str());
-  return writeStats(stats_path, j) ? 0 : 1;
+  return samples::writeStats(stats_path, j) ? 0 : 1;
 }
 
 }  // namespace vcan_drive

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "display.h"
-#include "logs.h"
+#include "common/logs.h"
 #include "tracking.h"
 
 namespace vcan_drive {
@@ -25,14 +25,14 @@ class Frames {
   bool frame(const blvd_pose* pose);
   // The window was closed: the run should stop.
   bool closed() const { return closed_; }
-  const RenderStats& stats() const { return stats_; }
+  const samples::RenderStats& stats() const { return stats_; }
 
  private:
   Tracking* tracking_ = nullptr;
   std::string dir_;
   std::unique_ptr<Display> display_;
   std::vector<unsigned char> rgba_;
-  RenderStats stats_;
+  samples::RenderStats stats_;
   bool closed_ = false;
 };
 

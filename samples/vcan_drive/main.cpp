@@ -20,8 +20,9 @@
 #include "can_feed.h"
 #include "can_input.h"
 #include "gnss_feed.h"
-#include "logs.h"
-#include "memory.h"
+#include "common/backend.h"
+#include "common/logs.h"
+#include "common/memory.h"
 #include "tracking.h"
 #if VCAN_DRIVE_CAPI
 #include "frames.h"
@@ -30,6 +31,7 @@
 namespace {
 
 using namespace vcan_drive;
+using namespace samples;  // common/: backend.h, logs.h, memory.h
 using Clock = std::chrono::steady_clock;
 
 volatile std::sig_atomic_t g_stop = 0;  // SIGINT/SIGTERM
@@ -58,19 +60,6 @@ struct Options {
   std::string ready_file;
   int rcvbuf = 4 << 20;
 };
-
-blvd_backend parseBackend(const std::string& s) {
-  if (s == "surfaceless") return BLVD_BACKEND_EGL_SURFACELESS;
-  if (s == "device") return BLVD_BACKEND_EGL_DEVICE;
-  if (s == "osmesa") return BLVD_BACKEND_OSMESA;
-  return BLVD_BACKEND_AUTO;
-}
-
-// Cells in the order they were first entered, consecutive repeats collapsed.
-void noteCell(std::vector<uint32_t>& cells, const blvd_pose& p) {
-  if (!(p.flags & BLVD_POSE_MATCHED) || p.cell == UINT32_MAX) return;
-  if (cells.empty() || cells.back() != p.cell) cells.push_back(p.cell);
-}
 
 // Feeds the --start hint: one GNSS fix at t (5 m accuracy) and, with a
 // heading, one absolute-heading odometry sample. Without GNSS on the bus this

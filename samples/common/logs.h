@@ -1,6 +1,6 @@
-// vcan_drive's outputs: poses and decoded odometry as JSON lines, and the
-// closing stats JSON. Lines are written with fixed formats (no JSON library on
-// the per-frame path) and read back by tests/vcan/vcan_test.py.
+// The samples' outputs (vcan_drive, gnss_replay): poses and decoded odometry as
+// JSON lines, and the closing stats JSON. Lines are written with fixed formats
+// (no JSON library on the per-frame path) and read back by tests/vcan/checks.py.
 #pragma once
 
 #include <cstdint>
@@ -12,7 +12,7 @@
 
 #include "blvd/blvd.h"
 
-namespace vcan_drive {
+namespace samples {
 
 // One JSON object per line to a file; a no-op when no path was given.
 class JsonLines {
@@ -31,6 +31,10 @@ class JsonLines {
   std::string path_;
 };
 
+// Appends the pose's matched cell unless it is the last one: the cells in the
+// order they were entered, repeats collapsed (the stats' "cells_visited").
+void noteCell(std::vector<uint32_t>& cells, const blvd_pose& p);
+
 // Percentile (0..100) by nearest rank of an unsorted sample; 0 when empty.
 double percentile(std::vector<double> v, double pct);
 
@@ -45,4 +49,4 @@ void addRenderStats(nlohmann::json& j, const RenderStats& r);
 // Writes `j` (indented) to `path`; "" writes nothing. False when the write failed.
 bool writeStats(const std::string& path, const nlohmann::json& j);
 
-}  // namespace vcan_drive
+}  // namespace samples

@@ -1,4 +1,4 @@
-#include "logs.h"
+#include "common/logs.h"
 
 #include <nlohmann/json.hpp>
 
@@ -8,7 +8,7 @@
 #include <cstring>
 #include <fstream>
 
-namespace vcan_drive {
+namespace samples {
 
 JsonLines::~JsonLines() {
   if (f_) std::fclose(f_);
@@ -51,6 +51,11 @@ bool JsonLines::close(std::string& err) {
   return true;
 }
 
+void noteCell(std::vector<uint32_t>& cells, const blvd_pose& p) {
+  if (!(p.flags & BLVD_POSE_MATCHED) || p.cell == UINT32_MAX) return;
+  if (cells.empty() || cells.back() != p.cell) cells.push_back(p.cell);
+}
+
 double percentile(std::vector<double> v, double pct) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
@@ -75,4 +80,4 @@ bool writeStats(const std::string& path, const nlohmann::json& j) {
   return static_cast<bool>(out.flush());
 }
 
-}  // namespace vcan_drive
+}  // namespace samples

@@ -1,4 +1,4 @@
-#include "memory.h"
+#include "common/memory.h"
 
 #include <nlohmann/json.hpp>
 
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <string>
 
-namespace vcan_drive {
+namespace samples {
 namespace {
 
 // A "Key:   N kB" line of /proc/self/status in bytes; -1 when absent.
@@ -45,4 +45,4 @@ void addMemoryStats(nlohmann::json& j, const blvd_stats* rt) {
   j["memory"] = m;
 }
 
-}  // namespace vcan_drive
+}  // namespace samples

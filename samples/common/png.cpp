@@ -1,13 +1,13 @@
-#include "png.h"
+#include "common/png.h"
 
 #include <cstring>
 
-// libblvd keeps its own stb copy hidden, so this program has its own. The stb
+// libblvd keeps its own stb copy hidden, so the samples have their own. The stb
 // folder is a SYSTEM include (CMakeLists.txt): its warnings are not ours.
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb_image_write.h>
 
-namespace vcan_drive {
+namespace samples {
 
 bool writePng(const std::string& path, const unsigned char* rgba, uint32_t width, uint32_t height) {
   return stbi_write_png(path.c_str(), static_cast<int>(width), static_cast<int>(height), 4, rgba,
@@ -21,4 +21,4 @@ bool isBlank(const unsigned char* rgba, uint32_t width, uint32_t height) {
   return true;
 }
 
-}  // namespace vcan_drive
+}  // namespace samples
