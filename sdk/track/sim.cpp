@@ -6,6 +6,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "track/lane.h"
+
 namespace blvd::track {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
@@ -156,9 +158,12 @@ SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame
     const double u = f - static_cast<double>(k);
     return vmax[k] * (1 - u) + vmax[k + 1] * u;
   };
+  // The lane of the cell at s (lane.h: right of the centre on two-way streets,
+  // the centre on one-way streets); pure pursuit smooths the step between cells.
   auto offsetAt = [&](double s) {
     const glm::dvec2 dir = path.dirAt(s);
-    return path.at(s) + glm::dvec2(dir.y, -dir.x) * d.lateral_m;
+    const uint32_t cell = path.cell_of[path.segmentAt(std::clamp(s, 0.0, L))];
+    return path.at(s) + glm::dvec2(dir.y, -dir.x) * laneOffset(g.halfedges[cell], d.lateral_m);
   };
 
   // Integrate the vehicle: pure pursuit (Coulter 1992) toward a point a speed-

@@ -26,7 +26,8 @@ struct SimDesc {
   uint64_t seed = 1;
   uint32_t route_cells = 40;     // cells in the route
   double dt = 0.01;              // integration step, seconds
-  double lateral_m = 1.8;        // driving this far right of the centre line
+  double lateral_m = 1.8;        // two-way streets: driving this far right of the centre line
+                                 // (one-way streets: the centre; lane.h)
   double cruise_mps = 12;        // top speed
   double min_speed_mps = 3;      // slowest (tight hairpins)
   double lat_accel = 2.0;        // m/s^2, sets the speed through curves

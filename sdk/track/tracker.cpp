@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "track/lane.h"
+
 namespace blvd::track {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
@@ -164,8 +166,7 @@ bool Tracker::ambiguous() const {
 }
 
 double Tracker::expectedOffset(uint32_t cell) const {
-  if (graph_->halfedges[cell].flags & graph::kOneway) return 0.0;
-  return d_.left_hand_traffic ? -d_.lane_offset_m : d_.lane_offset_m;
+  return laneOffset(graph_->halfedges[cell], d_.left_hand_traffic ? -d_.lane_offset_m : d_.lane_offset_m);
 }
 
 void Tracker::checkStreetAgreement(double e, double n, double sigma) {
