@@ -409,7 +409,10 @@ CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double h
   // Near the junction at the cell's end, within a lane and a half of it: on the
   // inside of a turn the vehicle cuts the corner and its projection on this cell
   // never reaches the end, so the street it is on is the one it is nearer to (the
-  // bisector of the corner), as long as it lies along that street.
+  // bisector of the corner), as long as it lies along that street. The heading
+  // picks which successor (cost); the switch itself is by distance alone, the
+  // nearest-point rule that defines "on a cell" (a heading term moved the switch
+  // off the bisector: the heading turns gradually through the corner).
   const double near_end_m = std::max(3.0, 1.5 * d_.road_sigma_m);
   for (int hop = 0; hop < 2; ++hop) {
     const double len = g_.halfedges[cur.cell].length;
@@ -430,7 +433,7 @@ CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double h
       // there is nearest to the junction vertex) is a tie; the vehicle has left the
       // cell, so the tie goes to the successor it is heading into.
       if (!(best.arc_m > 0.01 || best.dist_m <= cur.dist_m + 1e-9)) break;
-    } else if (!(best.arc_m > 0.01 && best_cost < cost(cur))) {
+    } else if (!(best.arc_m > 0.01 && best.dist_m < cur.dist_m)) {
       break;
     }
     cur = best;

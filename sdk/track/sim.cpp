@@ -6,6 +6,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "track/lane.h"
+
 namespace blvd::track {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
@@ -156,9 +158,23 @@ SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame
     const double u = f - static_cast<double>(k);
     return vmax[k] * (1 - u) + vmax[k + 1] * u;
   };
+  // Lane wander on the same 1 m grid: w[k+1] = a w[k] + sqrt(1 - a^2) sigma n,
+  // a = exp(-1 m / length) (its own random stream, so the other noises do not change).
+  std::vector<double> wander(ns, 0.0);
+  if (d.lane_wander_m > 0 && d.lane_wander_length_m > 0) {
+    Rng rng_lane(d.seed * 0x9E3779B97F4A7C15ull + 4);
+    const double a = std::exp(-1.0 / d.lane_wander_length_m);
+    wander[0] = d.lane_wander_m * rng_lane.gauss();
+    for (size_t k = 1; k < ns; ++k) wander[k] = a * wander[k - 1] + std::sqrt(1 - a * a) * d.lane_wander_m * rng_lane.gauss();
+  }
+  // The lane of the cell at s (lane.h: right of the centre on two-way streets,
+  // the centre on one-way streets) plus the wander; pure pursuit smooths the
+  // step between cells.
   auto offsetAt = [&](double s) {
     const glm::dvec2 dir = path.dirAt(s);
-    return path.at(s) + glm::dvec2(dir.y, -dir.x) * d.lateral_m;
+    const uint32_t cell = path.cell_of[path.segmentAt(std::clamp(s, 0.0, L))];
+    const double lateral = laneOffset(g.halfedges[cell], d.lateral_m) + wander[std::min(static_cast<size_t>(std::clamp(s, 0.0, L)), ns - 1)];
+    return path.at(s) + glm::dvec2(dir.y, -dir.x) * lateral;
   };
 
   // Integrate the vehicle: pure pursuit (Coulter 1992) toward a point a speed-

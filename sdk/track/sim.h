@@ -26,7 +26,14 @@ struct SimDesc {
   uint64_t seed = 1;
   uint32_t route_cells = 40;     // cells in the route
   double dt = 0.01;              // integration step, seconds
-  double lateral_m = 1.8;        // driving this far right of the centre line
+  double lateral_m = 1.8;        // two-way streets: driving this far right of the centre line
+                                 // (one-way streets: the centre; lane.h)
+  // Lane keeping: the car wanders about its lane's centre line, a first-order
+  // Gauss-Markov process in the distance driven with this standard deviation
+  // (SDLP, "standard deviation of lateral position", 0.2-0.3 m for attentive
+  // drivers in driving studies) and correlation length. 0: on the line.
+  double lane_wander_m = 0.25;
+  double lane_wander_length_m = 40;
   double cruise_mps = 12;        // top speed
   double min_speed_mps = 3;      // slowest (tight hairpins)
   double lat_accel = 2.0;        // m/s^2, sets the speed through curves

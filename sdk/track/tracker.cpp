@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "track/lane.h"
+
 namespace blvd::track {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
@@ -23,7 +25,7 @@ TrackerDesc trackerDefaults(const TrackerDesc& in) {
   d.eye_height_m = orDefault(d.eye_height_m, 1.5);
   if (!finite(d.camera_pitch_deg)) d.camera_pitch_deg = 0;
   d.map_aid_min_confidence = orDefault(d.map_aid_min_confidence, 0.9);
-  if (!(d.map_aid_sigma_m < 0)) d.map_aid_sigma_m = orDefault(d.map_aid_sigma_m, 2.0);
+  if (!(d.map_aid_sigma_m < 0)) d.map_aid_sigma_m = orDefault(d.map_aid_sigma_m, 0.5);
   d.lane_offset_m = orDefault(d.lane_offset_m, 1.75);
   d.ambiguity_sigmas = orDefault(d.ambiguity_sigmas, 2.5);
   d.ekf = ekfDefaults(d.ekf);
@@ -164,8 +166,7 @@ bool Tracker::ambiguous() const {
 }
 
 double Tracker::expectedOffset(uint32_t cell) const {
-  if (graph_->halfedges[cell].flags & graph::kOneway) return 0.0;
-  return d_.left_hand_traffic ? -d_.lane_offset_m : d_.lane_offset_m;
+  return laneOffset(graph_->halfedges[cell], d_.left_hand_traffic ? -d_.lane_offset_m : d_.lane_offset_m);
 }
 
 void Tracker::checkStreetAgreement(double e, double n, double sigma) {

@@ -65,7 +65,13 @@ struct TrackerDesc {
   // sigma map_aid_sigma_m about the lane), provided the last fixes agree with
   // that street (their mean lateral offset) and no parallel street is within
   // ambiguity_sigmas fix sigmas; a lock onto the wrong street would otherwise
-  // feed itself. Default 0.9 and 2 m; map_aid_sigma_m < 0 turns it off.
+  // feed itself. Default 0.9 and 0.5 m; map_aid_sigma_m < 0 turns it off.
+  // The sigma: vehicles keep within their lane with a lateral standard deviation
+  // (SDLP) of 0.2-0.3 m, correlated over a few seconds of driving; applied once
+  // per HMM step (1 Hz) as if independent, the constraint is counted about
+  // tau x 1 Hz times within one correlation time tau ~ 4 s, so its sigma is
+  // SDLP x sqrt(tau x 1 Hz) = 0.25 m x 2 = 0.5 m (the simulator, sim.h, drives
+  // with this wander: SimDesc::lane_wander_m, lane_wander_length_m).
   double map_aid_min_confidence = 0;
   double map_aid_sigma_m = 0;
   // Where vehicles drive on a two-way street: this far right of the centre line

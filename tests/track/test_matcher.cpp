@@ -173,6 +173,11 @@ TEST(MapMatcher, FollowTakesTheNearerStreetAtATurn) {
   // Going straight on past the end with no street ahead stays on the last one
   // (no successor lies along the way and none is nearer).
   EXPECT_EQ(m.follow(p, 0.3, -0.5, 0, 0.1).cell, north);
+  // Past the bisector with the heading still almost north (the turn has barely
+  // begun): the cell is decided by distance, the nearest-point rule that defines
+  // the truth's cell too; the heading only picks which successor.
+  EXPECT_EQ(m.follow(p, 3.0, -1.8, 0.1, 0.1).cell, to_east);
+  EXPECT_EQ(m.follow(p, 1.0, -2.5, 0.1, 0.1).cell, north);
 }
 
 TEST(MapMatcher, GridFindsEverySegmentInReach) {

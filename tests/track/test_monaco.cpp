@@ -3,17 +3,22 @@
 // (The full benchmark, with its thresholds, is bench_track / track.bench.)
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fault/alloc_counter.h"
 #include "stream/city.h"
+#include "track/lane.h"
+#include "track/map_matcher.h"
 #include "track/sim.h"
 #include "track/tracker.h"
 
 namespace blvd::track {
 namespace {
+constexpr double kPi = 3.14159265358979323846;
 
 class TrackMonaco : public ::testing::Test {
  protected:
@@ -56,6 +61,40 @@ TEST_F(TrackMonaco, SimulatedDrivesStayOnTheirCells) {
   }
   EXPECT_GT(static_cast<double>(on) / static_cast<double>(epochs), 0.93) << on << " of " << epochs;
   EXPECT_EQ(allocs, 0);
+}
+
+// The simulated car keeps to the lane of lane.h, the lane the map aid expects:
+// right of the centre line on two-way streets, the centre of one-way streets.
+// Without lane wander, on straight stretches away from junctions (pure pursuit
+// cuts corners), its offset from the centre line is the model's.
+TEST_F(TrackMonaco, SimulatedCarKeepsToItsLane) {
+  const graph::StreetGraph& g = city_->graph();
+  const MapMatcher m(g);
+  std::vector<double> one_way, two_way;
+  for (uint64_t seed = 1; seed <= 8; ++seed) {
+    SimDesc sd;
+    sd.seed = seed;
+    sd.route_cells = 40;
+    sd.lane_wander_m = 0;
+    const SimTrace trace = simulateDrive(g, city_->frame(), sd);
+    for (const SimSample& s : trace.epochs) {
+      const auto& he = g.halfedges[s.cell];
+      if (s.arc_m < 15 || he.length - s.arc_m < 15) continue;
+      const CellPoint q = m.project(s.cell, s.e, s.n);
+      const double dh = std::remainder(s.heading_deg * kPi / 180 - q.heading_rad, 2 * kPi);
+      if (std::fabs(dh) > 1 * kPi / 180) continue;  // in a curve
+      (he.flags & graph::kOneway ? one_way : two_way).push_back(q.lateral_m - laneOffset(he, sd.lateral_m));
+    }
+  }
+  auto medianAbs = [](std::vector<double> v) {
+    for (double& x : v) x = std::fabs(x);
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  ASSERT_GT(one_way.size(), 20u);
+  ASSERT_GT(two_way.size(), 20u);
+  EXPECT_LT(medianAbs(one_way), 0.2);
+  EXPECT_LT(medianAbs(two_way), 0.2);
 }
 
 }  // namespace
