@@ -705,6 +705,12 @@ bool FixAssembler::onePerCycle(SentenceType t) {
          t == SentenceType::VTG || t == SentenceType::ZDA;
 }
 
+bool FixAssembler::reached(const Key& k) const {
+  for (size_t i = 0; i < seen_n_; ++i)
+    if (std::strcmp(seen_[i].address, k.address) == 0) return seen_[i].count >= k.count;
+  return false;
+}
+
 bool FixAssembler::seenInEpoch(std::string_view address) const {
   char a[9];
   copyAddress(a, address);
@@ -977,9 +983,16 @@ void FixAssembler::apply(const NmeaRecord& r) {
 
 void FixAssembler::closeEpoch(Handler& h, bool learn) {
   if (!cur_.open) return;
-  // Learn the cycle ender: the same last sentence at two consecutive closes.
+  // Learn the cycle ender: the same last decoded sentence at two consecutive
+  // closes. Once learned it only moves later in the cycle: to a sentence that
+  // came after it in this epoch. An epoch that ends earlier because it lacks the
+  // ender (no GST without a fix, a GSA every few cycles) keeps it: such an epoch
+  // closes when the next one begins, once, and the next complete epoch is not
+  // emitted at a premature ender and again when its last sentences arrive.
   if (learn && last_key_.count > 0) {
-    if (last_key_ == candidate_) {
+    if (ender_reliable_) {
+      if (!(last_key_ == ender_) && reached(ender_)) ender_ = last_key_;
+    } else if (last_key_ == candidate_) {
       ender_ = candidate_;
       ender_reliable_ = true;
     } else {
@@ -1027,21 +1040,19 @@ void FixAssembler::add(const Sentence& s, const NmeaRecord* rec, Handler& h) {
   // next cycle; otherwise those cycles would pile up into one epoch and taint
   // the first real fix (bt451: GLL,...,152504.50,A right after such cycles).
   if (rec && cur_.open && !cur_.has_tod && onePerCycle(rec->type) && seenInEpoch(s.address)) closeEpoch(h, false);
-  if (emitted_ && cur_.open && rec) {
-    // Data after the learned ender that belongs to the same epoch (same time,
-    // or no time): the ender was wrong. Keep merging; closeEpoch() emits the
-    // corrected fix as an update. (Sentences we do not decode, like an
-    // occasional GSV burst, change nothing and do not count.)
-    ender_reliable_ = false;
-    candidate_ = Key{};
-  }
+  // Data decoded after the learned ender that belongs to the same epoch (same
+  // time, or no time) means the cycle goes on after it: keep merging;
+  // closeEpoch() emits the completed fix as an update and moves the ender to
+  // the epoch's last decoded sentence.
   if (!cur_.open) startEpoch();
   if (rec) apply(*rec);
   // Track the cycle: address and how often it occurred in this epoch.
   Key k;
   copyAddress(k.address, s.address);
   k.count = countOf(s.address);
-  last_key_ = k;
+  // Only decoded sentences can end a cycle: what follows the last of them (an
+  // occasional GSV burst, a proprietary sentence) changes nothing in the fix.
+  if (rec) last_key_ = k;
   if (opt_.early_emit && ender_reliable_ && !emitted_ && k == ender_ && cur_.has_tod) {
     if (cur_.any_position_sentence) {
       emitted_fix_ = build(cur_);

@@ -212,13 +212,18 @@ bool decodeSentence(const Sentence& s, NmeaRecord* rec, NmeaDiagnostic* diag);
 // belong to the epoch in progress (until a time arrives, a second RMC, GGA,
 // GNS, GLL, VTG or ZDA of the same talker starts a new one). The epoch
 // closes, and its Fix is emitted, when a sentence with another time
-// arrives, on finish(), or - once the
-// assembler has learned the receiver's cycle - right after the sentence that
-// always ends it (gpsd's "cycle ender"): an address and occurrence count seen
-// last before the time changed on two consecutive epochs. That removes one
-// cycle of latency. If the guess proves wrong (more sentences of the emitted
-// time arrive), the assembler forgets it and emits the corrected epoch again
-// with kFixUpdate set.
+// arrives, on finish(), or - once the assembler has learned the receiver's
+// cycle - right after the sentence that ends it (gpsd's "cycle ender"): the
+// last decoded sentence (address and occurrence count) before the time changed,
+// the same on two consecutive epochs. That removes one cycle of latency.
+// Each epoch is emitted once whatever subset of its cycle a receiver sends
+// (no GST without a fix, GSA every few cycles): the ender only moves later in
+// the cycle, never back to an earlier sentence because some epochs lack the
+// last ones; an epoch without the ender closes when the next one begins. Only
+// when a decoded sentence follows the ender in the same epoch (the cycle is
+// longer than learned: a sentence type not seen there before) is the epoch
+// emitted again, completed, with kFixUpdate set, and the ender moves to that
+// sentence.
 //
 // Field rules (chosen to agree with gpsd, which tests/adapters/gnss checks on
 // every shared log):
@@ -308,6 +313,7 @@ class FixAssembler {
   void emit(Handler& h, const Fix& f);
   uint16_t countOf(std::string_view address);
   bool seenInEpoch(std::string_view address) const;
+  bool reached(const Key& k) const;  // k's address occurred at least k.count times in this epoch
   static bool onePerCycle(SentenceType t);
   void startEpoch();
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ostream>
 
 namespace blvd::replay {
@@ -32,6 +33,19 @@ std::string angle(double deg, bool is_lat) {
   char buf[48];
   std::snprintf(buf, sizeof buf, is_lat ? "%02lld%02lld.%07lld,%c" : "%03lld%02lld.%07lld,%c", whole,
                 rem / 10000000LL, rem % 10000000LL, hemi);
+  return buf;
+}
+
+// GST latitude/longitude error e = h_acc / sqrt 2 (an even split: blvd_gnss_fix
+// has h_acc alone), with the fewest decimals (3 to 12) from which a reader's
+// hypot(e, e), as a float, is h_acc again (adapters/gnss reads h_acc so).
+std::string axisError(float h_acc) {
+  char buf[48] = "";
+  for (int d = 3; d <= 12; ++d) {
+    std::snprintf(buf, sizeof buf, "%.*f", d, static_cast<double>(h_acc) / std::sqrt(2.0));
+    const double e = std::strtod(buf, nullptr);
+    if (static_cast<float>(std::sqrt(e * e + e * e)) == h_acc) break;
+  }
   return buf;
 }
 
@@ -97,16 +111,18 @@ std::string formatFix(const blvd_gnss_fix& fix, std::string_view talker) {
   // GGA: time, lat, lon, quality, satellites (not in blvd_gnss_fix), HDOP, altitude, geoid separation, age, station.
   out += nmeaSentence(tk + "GGA," + time + "," + lat + "," + lon + "," + (valid ? "1" : "0") + ",," + hdop + "," +
                       alt + ",M,,M,,");
-  if (fix.mode >= 1 && fix.mode <= 3) {
-    // GSA: auto, fix type, 12 satellite slots, PDOP, HDOP, VDOP.
-    out += nmeaSentence(tk + "GSA,A," + std::to_string(fix.mode) + ",,,,,,,,,,,,,," + hdop + ",");
-  }
-  if ((fix.flags & BLVD_GNSS_HAS_HACC) && std::isfinite(fix.h_acc_m) && !time.empty()) {
-    // GST: time, rms, semi-major, semi-minor, orientation, lat error, lon error, alt error;
-    // h_acc = hypot(lat error, lon error) split evenly.
-    const std::string e = num(true, fix.h_acc_m / std::sqrt(2.0), 3);
-    out += nmeaSentence(tk + "GST," + time + ",,,,," + e + "," + e + ",");
-  }
+  // GSA and GST in every epoch, as a receiver keeps its cycle: with no fix it
+  // still sends GSA (fix type 1) and GST (empty fields). A cycle that varied
+  // with the fix would move the epoch's last sentence, which a reader may use
+  // to tell when an epoch is complete.
+  // GSA: auto, fix type (1 without a fix; empty when a fix's mode is unknown),
+  // 12 satellite slots, PDOP, HDOP, VDOP.
+  const std::string fix_type = !valid ? "1" : fix.mode == 2 || fix.mode == 3 ? std::to_string(fix.mode) : "";
+  out += nmeaSentence(tk + "GSA,A," + fix_type + ",,,,,,,,,,,,," + hdop + ",");
+  // GST: time, rms, semi-major, semi-minor, orientation, lat error, lon error, alt error.
+  const bool hacc = valid && (fix.flags & BLVD_GNSS_HAS_HACC) && std::isfinite(fix.h_acc_m);
+  const std::string e = hacc ? axisError(fix.h_acc_m) : std::string();
+  out += nmeaSentence(tk + "GST," + time + ",,,,," + e + "," + e + ",");
   return out;
 }
 

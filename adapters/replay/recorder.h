@@ -1,12 +1,22 @@
 // Records a live session to the formats the Replayer reads: GNSS fixes as NMEA
 // 0183 and CAN frames as candump -l lines (adapters/can's CandumpWriter).
 //
-// Per fix, one epoch of sentences sharing its time: RMC and GGA always, GSA when
-// the fix has a mode (it carries the 2D/3D type, which RMC/GGA cannot), GST when it
-// has a horizontal accuracy. Only what blvd_gnss_fix holds is written; fields
-// without their BLVD_GNSS_HAS_* bit are left empty. Latitude/longitude are written
-// with 7 decimals of minutes (~0.2 mm), so a replay gives them back to 1e-8 degrees.
-// fix.t is taken as UTC Unix seconds (the replay clock), rounded to milliseconds.
+// Per fix, one epoch of sentences sharing its time, the same four every time as
+// a receiver keeps its cycle: RMC, GGA, GSA (the 2D/3D fix type, which RMC/GGA
+// cannot carry; 1 without a fix) and GST (empty fields without a fix or an
+// accuracy). A cycle that changed with the fix would move the epoch's last
+// sentence, which NMEA readers use to tell an epoch is complete. Only what
+// blvd_gnss_fix holds is written; fields without their BLVD_GNSS_HAS_* bit are
+// left empty. Latitude/longitude are written with 7 decimals of minutes
+// (~0.2 mm), so a replay gives them back to 1e-8 degrees; h_acc_m (as GST
+// latitude and longitude errors of h_acc / sqrt 2) with as many decimals (3..12)
+// as a reader needs to get the same float back. fix.t is taken as UTC Unix
+// seconds (the replay clock), rounded to milliseconds; time and date come from
+// the rounded value, so they roll over together at midnight. A fix without a
+// position (or with mode 1) is written as a receiver reports no fix: RMC status
+// V, GGA quality 0. Fixes decoded from NMEA (as the Replayer gives them) are
+// written so that decoding the recording gives them back bit for bit
+// (tests/trace/test_trace_determinism.cpp).
 //
 // Contract: one thread per instance; nothing throws; write calls return false once
 // their stream has failed. Files are created (truncated) by open*().

@@ -637,6 +637,90 @@ TEST(NmeaEpoch, EarlyEmissionAfterLearningTheCycle) {
   for (const Fix& f : l.fixes) EXPECT_EQ(f.flags & kFixUpdate, 0u);
 }
 
+// Receivers do not send every sentence of their cycle every time: no GST (or
+// an empty one) without a fix, GSA every few cycles. Once the cycle is learned,
+// an epoch that lacks its last sentences must not teach the assembler a
+// shorter cycle: the next complete epoch would be emitted at that earlier
+// sentence and again, as an update, when its GST (or GSA) arrives - one epoch,
+// two fixes for a consumer such as the replayer, which feeds both.
+TEST(NmeaEpoch, EachEpochOnceWhateverSubsetOfTheCycleArrives) {
+  auto time = [](int sec) {
+    char t[24];
+    std::snprintf(t, sizeof t, "12%02d%02d.00", sec / 60 % 60, sec % 60);
+    return std::string(t);
+  };
+  auto rmc = [&](int sec, bool fix) {
+    return withSum("$GPRMC," + time(sec) + (fix ? ",A,4807.038,N,01131.000,E,1.0,10.0,010120,,,A" : ",V,,,,,,,010120,,,N"));
+  };
+  auto gga = [&](int sec, bool fix) {
+    return withSum("$GPGGA," + time(sec) + (fix ? ",4807.038,N,01131.000,E,1,05,0.9,545.4,M,46.9,M,," : ",,,,,0,00,,,M,,M,,"));
+  };
+  auto gsa = [](bool fix) { return withSum(fix ? "$GPGSA,A,3,01,02,03,04,,,,,,,,,2.0,1.0,1.7" : "$GPGSA,A,1,,,,,,,,,,,,,,,"); };
+  auto gst = [&](int sec) { return withSum("$GPGST," + time(sec) + ",1.0,1.0,1.0,0.0,3.0,4.0,5.5"); };
+  // Each cycle as a list of sentences; after every cycle, the fixes so far.
+  auto run = [](const std::vector<std::vector<std::string>>& cycles, std::vector<size_t>* after) {
+    NmeaDecoder dec;
+    Decoded out;
+    for (const auto& c : cycles) {
+      for (const std::string& s : c) dec.feed(s.data(), s.size(), out);
+      after->push_back(out.fixes.size());
+    }
+    dec.finish(out);
+    return out;
+  };
+  // One fix per epoch, in time order; updates only at the fix indices in `updates`.
+  auto expectOncePerEpoch = [](const Decoded& d, size_t epochs, const std::set<size_t>& updates, const char* what) {
+    ASSERT_EQ(d.fixes.size(), epochs + updates.size()) << what;
+    size_t epoch = 0;
+    for (size_t i = 0; i < d.fixes.size(); ++i) {
+      const Fix& f = d.fixes[i];
+      const bool update = (f.flags & kFixUpdate) != 0;
+      EXPECT_EQ(update, updates.count(i) == 1) << what << ": fix " << i << ", t " << std::fixed << f.t_unix;
+      if (i > 0 && !update) {
+        EXPECT_GT(f.t_unix, d.fixes[i - 1].t_unix) << what << ": fix " << i;
+      }
+      epoch += update ? 0 : 1;
+    }
+    EXPECT_EQ(epoch, epochs) << what;
+  };
+
+  // 1. An outage: 5 cycles of RMC V, GGA 0, GSA 1 without GST between full ones.
+  std::vector<std::vector<std::string>> outage;
+  for (int s = 0; s < 15; ++s) {
+    const bool fix = s < 5 || s >= 10;
+    if (fix)
+      outage.push_back({rmc(s, true), gga(s, true), gsa(true), gst(s)});
+    else
+      outage.push_back({rmc(s, false), gga(s, false), gsa(false)});
+  }
+  std::vector<size_t> after;
+  const Decoded a = run(outage, &after);
+  expectOncePerEpoch(a, 15, {}, "outage without GST");
+  if (a.fixes.size() == 15) {
+    EXPECT_EQ(a.fixes[10].mode, kMode3D);
+    EXPECT_TRUE(a.fixes[10].flags & kFixHasHAcc);  // the first fix after the outage has its GST
+    EXPECT_EQ(a.fixes[7].mode, kModeNoFix);
+  }
+  // Early emission still works: once learned, a full cycle is out at its GST.
+  EXPECT_EQ(after[3], 4u);
+  EXPECT_EQ(after[12], 13u);
+  // The outage epochs (no GST: the learned ender is missing) close when the next begins.
+  EXPECT_EQ(after[6], 6u);
+
+  // 2. GSA every 5th cycle only, after GGA. Its first one follows the ender
+  // learned from RMC + GGA cycles: a sentence never seen in the cycle before,
+  // so that epoch (fix 4) is completed by an update, inherently (the assembler
+  // cannot know of a sentence before it has seen it). The later ones do not
+  // shorten the cycle again: no update at cycles 9, 14, 19.
+  std::vector<std::vector<std::string>> sparse_gsa;
+  for (int s = 0; s < 20; ++s) {
+    sparse_gsa.push_back({rmc(s, true), gga(s, true)});
+    if (s % 5 == 4) sparse_gsa.back().push_back(gsa(true));
+  }
+  after.clear();
+  expectOncePerEpoch(run(sparse_gsa, &after), 20, {5}, "GSA every 5th cycle");
+}
+
 // Steady state: no heap allocation per sentence (the handler here does not
 // allocate either).
 TEST(NmeaEpoch, NoAllocationPerSentence) {

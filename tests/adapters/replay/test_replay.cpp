@@ -290,6 +290,62 @@ TEST(Replay, RecordThenReplayRoundTrip) {
   }
 }
 
+// A live session as a host feeds it: fixes with accuracy, then an outage (no
+// fix: mode 1, time only), fixes without an accuracy value, and midnight
+// (the recording's date changes; the no-fix epochs carry no trusted date).
+// Replayed, every fix comes back once, at its time, with its mode, flags and
+// accuracy. Before the Recorder kept its sentence cycle (GSA and GST in every
+// epoch), the outage epochs ended at GSA, the decoder took GSA for the cycle's
+// end and gave the first fix after the outage twice (early, without its GST,
+// then completed).
+TEST(Replay, RecordedOutageAndMidnightReplayEachFixOnce) {
+  const double midnight = 1717286400.0;  // 2024-06-02T00:00:00Z
+  std::vector<blvd_gnss_fix> live;
+  for (int k = 0; k < 24; ++k) {
+    const double t = midnight - 12 + k;
+    blvd_gnss_fix f = makeFix(t, 43.7353 + 1e-5 * k, 7.4172 + 1e-5 * k);
+    if (k >= 6 && k < 14) {  // outage across midnight
+      f = blvd_gnss_fix{};
+      f.struct_size = sizeof f;
+      f.t = t;
+      f.mode = 1;
+      f.flags = BLVD_GNSS_HAS_TIME;
+    } else if (k < 18) {  // with an accuracy (not a multiple of a millimetre times sqrt 2)
+      f.h_acc_m = 1.7f + 0.01f * static_cast<float>(k);
+      f.flags |= BLVD_GNSS_HAS_HACC;
+    }
+    live.push_back(f);
+  }
+  std::ostringstream out;
+  Recorder rec;
+  rec.attachNmea(out);
+  for (const blvd_gnss_fix& f : live) ASSERT_TRUE(rec.record(f));
+  std::istringstream in(out.str());
+  ReplayDesc d;
+  d.nmea_stream = &in;
+  d.strict = true;
+  const std::vector<Event> ev = replayAll(d);
+  ASSERT_EQ(ev.size(), live.size()) << out.str();
+  for (size_t k = 0; k < live.size(); ++k) {
+    const blvd_gnss_fix &a = live[k], &b = ev[k].gnss;
+    EXPECT_EQ(b.t, a.t) << k;
+    EXPECT_EQ(b.mode, a.mode) << k;
+    EXPECT_EQ(b.flags, a.flags) << k;
+    if (!(a.flags & BLVD_GNSS_HAS_LATLON)) continue;
+    EXPECT_NEAR(b.lat, a.lat, 1e-8) << k;
+    EXPECT_NEAR(b.lon, a.lon, 1e-8) << k;
+    if (a.flags & BLVD_GNSS_HAS_HACC) {
+      EXPECT_EQ(b.h_acc_m, a.h_acc_m) << k;
+    }
+  }
+  // The recording keeps one cycle: RMC, GGA, GSA, GST for every fix.
+  std::istringstream lines(out.str());
+  size_t n = 0;
+  const char* const cycle[] = {"$GPRMC,", "$GPGGA,", "$GPGSA,", "$GPGST,"};
+  for (std::string l; std::getline(lines, l); ++n) EXPECT_EQ(l.rfind(cycle[n % 4], 0), 0u) << "line " << n + 1 << ": " << l;
+  EXPECT_EQ(n, 4 * live.size());
+}
+
 TEST(Replay, RealTimeWithSpeedFactor) {
   // 5 s of fixes and wheel speeds at 50x: about 0.1 s of wall time.
   std::istringstream nmea(nmeaTrace(kT0, 6));
