@@ -5,9 +5,17 @@
 #include <cstring>
 #include <new>
 
+#include <pthread.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include "core/status.h"
 
 namespace blvd::capi {
+namespace {
+constexpr int kBackgroundNice = 19;
+}  // namespace
 
 void* Allocator::allocate(size_t size) const {
   if (alloc) return alloc(size, 16, user);
@@ -40,7 +48,10 @@ CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_
     s.mesh_capacity = meshes;
     carved_ += arena_bytes + sizeof(StagedMesh) * meshes;
   }
-  if (!executor_.submit) thread_ = std::thread([this] { run(); });
+  if (!executor_.submit) {
+    thread_ = std::thread([this] { run(false); });
+    background_ = std::thread([this] { run(true); });
+  }
 }
 
 CellLoader::~CellLoader() {
@@ -52,13 +63,14 @@ CellLoader::~CellLoader() {
   }
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
+  if (background_.joinable()) background_.join();
   for (Staging& s : slots_) {
     alloc_.release(s.arena.base);
     alloc_.release(s.meshes);  // StagedMesh is trivially destructible
   }
 }
 
-bool CellLoader::request(uint32_t cell, uint32_t target) {
+bool CellLoader::request(uint32_t cell, uint32_t target, bool urgent) {
   {
     std::lock_guard<std::mutex> lock(mu_);
     Staging* free_slot = nullptr;
@@ -72,10 +84,11 @@ bool CellLoader::request(uint32_t cell, uint32_t target) {
     free_slot->state = Staging::Queued;
     free_slot->cell = cell;
     free_slot->target = target;
+    free_slot->urgent = urgent;
     if (executor_.submit) ++tasks_out_;
   }
   if (executor_.submit) executor_.submit(&CellLoader::runTask, this, executor_.user);
-  else cv_.notify_one();
+  else cv_.notify_all();  // the thread of its kind
   return true;
 }
 
@@ -111,6 +124,15 @@ uint64_t CellLoader::stagingUsed() const {
   return n;
 }
 
+void CellLoader::promote(uint32_t cell) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    for (Staging& s : slots_)
+      if (s.state == Staging::Queued && s.cell == cell) s.urgent = true;
+  }
+  cv_.notify_all();
+}
+
 void CellLoader::cancelQueued() {
   std::lock_guard<std::mutex> lock(mu_);
   for (Staging& s : slots_)
@@ -140,21 +162,31 @@ void CellLoader::runOne() {
   cv_.notify_all();
 }
 
-void CellLoader::run() {
+void CellLoader::run(bool background) {
+  if (background) {
+    // Linux nice values are per thread; raising one needs no privilege (and
+    // cannot be undone without it, hence a thread of its own). Failure, in a
+    // sandbox that forbids it, changes nothing else.
+    (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kBackgroundNice);
+    pthread_setname_np(pthread_self(), "blvd-prefetch");
+  } else {
+    pthread_setname_np(pthread_self(), "blvd-loader");
+  }
   for (;;) {
     Staging* job = nullptr;
     {
       std::unique_lock<std::mutex> lock(mu_);
+      auto mine = [&](const Staging& s) { return s.state == Staging::Queued && s.urgent != background; };
       cv_.wait(lock, [&] {
         if (stop_) return true;
         for (Staging& s : slots_)
-          if (s.state == Staging::Queued) return true;
+          if (mine(s)) return true;
         return false;
       });
       if (stop_) return;
       uint64_t best_seq = ~uint64_t(0);
       for (uint32_t i = 0; i < kStagingSlots; ++i)
-        if (slots_[i].state == Staging::Queued && order_[i] < best_seq) job = &slots_[i], best_seq = order_[i];
+        if (mine(slots_[i]) && order_[i] < best_seq) job = &slots_[i], best_seq = order_[i];
       job->state = Staging::Decoding;
     }
     decode(*job);
@@ -174,13 +206,13 @@ void CellLoader::decode(Staging& s) {
     s.state = Staging::Failed;
   };
   auto stage = [&](MeshKind kind, uint32_t item, uint32_t level) {
-    if (scratch_.empty()) return true;  // an empty block draws nothing
+    if (s.scratch.empty()) return true;  // an empty block draws nothing
     if (s.mesh_count >= s.mesh_capacity) {
       fail("more meshes than the plan's largest cell");
       return false;
     }
     StagedMesh& m = s.meshes[s.mesh_count];
-    if (!render::prepareMesh(scratch_, s.arena, m.mesh, err)) {
+    if (!render::prepareMesh(s.scratch, s.arena, m.mesh, err)) {
       fail(err);
       return false;
     }
@@ -188,16 +220,19 @@ void CellLoader::decode(Staging& s) {
     m.item = item;
     m.level = level;
     ++s.mesh_count;
-    const uint64_t scratch_bytes = scratch_.positions.capacity() * 4 + scratch_.normals.capacity() * 4 +
-                                   scratch_.colors.capacity() + scratch_.texcoords.capacity() * 4 +
-                                   scratch_.indices.capacity() * 4 + scratch_.image.capacity();
-    if (scratch_bytes > decode_high_water_) decode_high_water_ = scratch_bytes;
+    const uint64_t scratch_bytes = s.scratch.positions.capacity() * 4 + s.scratch.normals.capacity() * 4 +
+                                   s.scratch.colors.capacity() + s.scratch.texcoords.capacity() * 4 +
+                                   s.scratch.indices.capacity() * 4 + s.scratch.image.capacity();
+    // Jobs may run at once (two threads, or the host's executor).
+    uint64_t seen = decode_high_water_.load();
+    while (scratch_bytes > seen && !decode_high_water_.compare_exchange_weak(seen, scratch_bytes)) {
+    }
     return true;
   };
   const graph::StreetGraph& g = city_.graph();
   for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b)
     for (uint32_t k = 0; k < city_.blocks()[*b].lod_count; ++k) {
-      const core::Status st = city_.decodeBlock(*b, k, scratch_, err);
+      const core::Status st = city_.decodeBlock(*b, k, s.scratch, err);
       if (st != core::Status::Ok) return fail(err);
       if (!stage(MeshKind::Block, *b, k)) return;
     }
@@ -206,7 +241,7 @@ void CellLoader::decode(Staging& s) {
     for (int single = 0; single < 2; ++single) {
       const auto& list = single ? ci.single : ci.layered;
       for (uint32_t i = 0; i < list.size(); ++i) {
-        const core::Status st = city_.decodeImpostor(list[i], scratch_, err);
+        const core::Status st = city_.decodeImpostor(list[i], s.scratch, err);
         if (st != core::Status::Ok) return fail(err);
         if (!stage(single ? MeshKind::Single : MeshKind::Layered, i, 0)) return;
       }

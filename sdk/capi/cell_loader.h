@@ -50,7 +50,9 @@ struct Staging {
   StagedMesh* meshes = nullptr;
   uint32_t mesh_count = 0, mesh_capacity = 0;
   uint32_t uploaded = 0;  // render thread: meshes already copied to the slab
+  bool urgent = false;    // the current cell: decoded at normal priority
   char error[256] = {0};
+  geo::MeshData scratch;  // the decoder's reusable buffers (one per slot: jobs may run at once)
 };
 
 class CellLoader {
@@ -68,13 +70,20 @@ class CellLoader {
 
   // Queues `cell` into a free staging slot, tagged `target`. False when every
   // slot is busy.
-  bool request(uint32_t cell, uint32_t target);
+  // `urgent` (the cell the vehicle is in) is decoded by the normal-priority
+  // thread; predictions by the background one (nice 19), so that on a busy
+  // CPU they delay themselves, not the frames (a CPU renderer such as
+  // llvmpipe shares the cores with them).
+  bool request(uint32_t cell, uint32_t target, bool urgent = false);
   // A slot in state Ready or Failed, oldest request first, or nullptr.
   Staging* finished();
   // Gives a Ready/Failed slot back.
   void release(Staging* s);
   // True when `cell` is queued, decoding or waiting for upload.
   bool pending(uint32_t cell) const;
+  // Hands a queued (not yet started) request for `cell` to the
+  // normal-priority thread: a prediction that became the current cell.
+  void promote(uint32_t cell);
   // Drops queued (not yet started) requests.
   void cancelQueued();
 
@@ -85,7 +94,7 @@ class CellLoader {
   uint64_t carvedBytes() const { return carved_; }
 
  private:
-  void run();
+  void run(bool background);
   void decode(Staging& s);
   // Host-executor path: decodes the oldest queued slot, if any.
   static void runTask(void* self);
@@ -100,10 +109,9 @@ class CellLoader {
   mutable std::mutex mu_;
   std::condition_variable cv_;
   bool stop_ = false;
-  std::thread thread_;
+  std::thread thread_, background_;  // urgent jobs; predictions
   blvd_executor executor_{};
   uint32_t tasks_out_ = 0;  // submitted to the host and not yet run
-  geo::MeshData scratch_;  // loader thread only
   std::atomic<uint64_t> loads_{0};
   std::atomic<uint64_t> decode_high_water_{0}, staging_high_water_{0};
 };

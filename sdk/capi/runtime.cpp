@@ -184,14 +184,19 @@ const Runtime::CellSlot* Runtime::residentSlot(uint32_t cell) const {
   return nullptr;
 }
 
-// Copies finished staging into its slab, mesh by mesh, until the frame's
-// upload budget is spent (at least one mesh a frame, so a load always ends).
+// Copies finished staging into its slab, a chunk of at most kUploadChunk
+// bytes at a time (a buffer range, or texture rows), until the frame's upload
+// budget is spent: a large block or impostor texture spreads over several
+// frames instead of stalling one. At least one chunk a frame, so a load
+// always ends.
 void Runtime::uploadStaged(double budget_ms) {
+  constexpr uint64_t kUploadChunk = 128 << 10;
   const auto t0 = std::chrono::steady_clock::now();
   double spent = 0;
   while (Staging* st = loader_->finished()) {
     CellSlot& slot = slots_[st->target];
     if (slot.state != CellSlot::Loading || slot.cell != st->cell) {  // evicted while loading
+      pending_upload_ = render::SlabUpload{};
       loader_->release(st);
       continue;
     }
@@ -205,8 +210,18 @@ void Runtime::uploadStaged(double budget_ms) {
       continue;
     }
     while (st->uploaded < st->mesh_count) {
-      const StagedMesh& m = st->meshes[st->uploaded++];
-      const render::MeshHandle h = renderer_->uploadToSlab(slot.slab, m.mesh);
+      const StagedMesh& m = st->meshes[st->uploaded];
+      bool finished = true;
+      render::MeshHandle h;
+      if (pending_upload_.slab || renderer_->beginSlabUpload(slot.slab, m.mesh, pending_upload_))
+        h = renderer_->continueSlabUpload(pending_upload_, kUploadChunk, finished);
+      spent = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      if (!finished) {
+        if (spent >= budget_ms) break;
+        continue;
+      }
+      pending_upload_ = render::SlabUpload{};
+      ++st->uploaded;
       if (h.id == 0) {
         // The plan sized the slab for the largest cell: this is a bug.
         last_error = "cell " + std::to_string(st->cell) + ": " + renderer_->lastError();
@@ -224,7 +239,6 @@ void Runtime::uploadStaged(double budget_ms) {
       } else {
         (m.kind == MeshKind::Layered ? slot.layered : slot.single).push_back(h);
       }
-      spent = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       if (spent >= budget_ms) break;
     }
     if (st->uploaded >= st->mesh_count) {
@@ -253,8 +267,12 @@ void Runtime::stream(uint32_t cell, double arc_m, double speed_mps, double uploa
       slots_[i].state = CellSlot::Empty;
       slots_[i].cell = slot_cells_[i] = graph::kNone;
     }
-  // The current cell jumps the queue: queued predictions make way for it.
-  if (cell != graph::kNone && !residentSlot(cell) && !loader_->pending(cell)) loader_->cancelQueued();
+  // The current cell jumps the queue: queued predictions make way for it, or
+  // its own queued prediction moves to the normal-priority thread.
+  if (cell != graph::kNone && !residentSlot(cell)) {
+    if (loader_->pending(cell)) loader_->promote(cell);
+    else loader_->cancelQueued();
+  }
   for (uint32_t r = 0; r < residency_->wantedCount(); ++r) {
     const uint32_t c = residency_->wanted()[r];
     bool have = false;
@@ -265,7 +283,7 @@ void Runtime::stream(uint32_t cell, double arc_m, double speed_mps, double uploa
     if (failed) continue;
     const uint32_t v = residency_->victim(slot_cells_.data(), slot_cells_.size(), r);
     if (v == graph::kNone) break;
-    if (!loader_->request(c, v)) break;  // both staging arenas busy
+    if (!loader_->request(c, v, c == cell)) break;  // both staging arenas busy
     CellSlot& slot = slots_[v];
     if (slot.cell != graph::kNone) ++stats_.evictions;
     renderer_->resetSlab(slot.slab);

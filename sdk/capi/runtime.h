@@ -100,6 +100,7 @@ class Runtime {
   render::Camera cam_;
   bool rendered_ = false;
   blvd_stats stats_{};
+  render::SlabUpload pending_upload_;  // the mesh being copied into its slab, chunk by chunk
   std::unique_ptr<stream::FrameBudget> budget_;  // with target_frame_ms
   uint64_t floor_tris_ = 0;  // the visible blocks' coarsest levels, last frame
   // chooseLevels scratch, sized for the largest cell at create.

@@ -34,7 +34,7 @@ namespace blvd::cli {
 namespace {
 
 struct BudgetOpts {
-  std::string package, route = "auto:60", size = "800x480", json_path, html_dir, target = "auto";
+  std::string package, route = "auto:60", size = "800x480", json_path, html_dir, csv_path, target = "auto";
   uint64_t seed = 1;
   double step = 2;
   int laps = 2;
@@ -66,6 +66,7 @@ struct Frame {
   uint64_t tris;
   uint32_t cell;
   float scale;     // render scale the frame was drawn at
+  double upload_ms;  // GL uploads inside the frame (prefetched cells)
 };
 
 // Drives `laps` laps (the first warms up and is not kept). A frame whose cell
@@ -96,7 +97,7 @@ std::vector<Frame> drive(blvd_runtime* rt, const std::vector<Pose>& poses, const
       blvd_stats st{};
       st.struct_size = sizeof st;
       check(blvd_runtime_stats(rt, &st), rt, "stats");
-      out.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale});
+      out.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale, st.upload_ms});
       if (images && i % image_every == 0) {
         images->emplace_back(size_t(w) * h * 4);
         check(blvd_read_pixels(rt, images->back().data(), images->back().size()), rt, "pixels");
@@ -220,6 +221,20 @@ int runBudget(const BudgetOpts& o) {
   const std::string text = j.dump(2);
   std::printf("%s\n", text.c_str());
   writeText(o.json_path, text);
+  if (!o.csv_path.empty()) {
+    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell\n";
+    const std::pair<const char*, const std::vector<Frame>*> runs[] = {
+        {"local_lod0", &local}, {"floor", &coarsest}, {"unbudgeted", &unbudgeted}, {"budgeted", &budgeted}};
+    for (const auto& [name, frames] : runs)
+      for (size_t i = 0; i < frames->size(); ++i) {
+        const Frame& f = (*frames)[i];
+        char row[160];
+        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u\n", name, i, f.ms, f.upload_ms,
+                      static_cast<unsigned long long>(f.tris), double(f.scale), int(f.boundary), f.cell);
+        csv += row;
+      }
+    writeText(o.csv_path, csv);
+  }
   if (!o.html_dir.empty()) {
     PlotSpec ft;
     ft.title = "Frame time along the route (last lap)";
@@ -259,6 +274,7 @@ void addBenchBudget(CLI::App& bench, Runner& run) {
   b->add_option("--size", o->size)->capture_default_str();
   b->add_option("--json", o->json_path, "write the JSON here too");
   b->add_option("--html", o->html_dir, "write an HTML page with the frame-time plot");
+  b->add_option("--csv", o->csv_path, "write every kept frame of every run (time, uploads, triangles, scale)");
   b->callback([o, &run] { run = [o] { return runBudget(*o); }; });
 }
 

@@ -1,5 +1,7 @@
 #include "render/prepared_mesh.h"
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstring>
 
@@ -34,11 +36,54 @@ void* StagingArena::take(size_t bytes) {
   return base + at;
 }
 
+uint64_t mipChainBytes(int w, int h, int* levels) {
+  uint64_t bytes = 0;
+  int n = 0;
+  if (w > 0 && h > 0)
+    for (;; w = std::max(1, w / 2), h = std::max(1, h / 2)) {
+      bytes += uint64_t(w) * uint64_t(h) * 4;
+      ++n;
+      if (w == 1 && h == 1) break;
+    }
+  if (levels) *levels = n;
+  return bytes;
+}
+
+const uint8_t* mipLevel(const PreparedMesh& mesh, int level, int& w, int& h) {
+  w = mesh.texture_width;
+  h = mesh.texture_height;
+  if (!mesh.rgba || level < 0 || level >= mesh.mip_levels) return nullptr;
+  const uint8_t* p = mesh.rgba;
+  for (int l = 0; l < level; ++l) {
+    p += uint64_t(w) * uint64_t(h) * 4;
+    w = std::max(1, w / 2);
+    h = std::max(1, h / 2);
+  }
+  return p;
+}
+
 size_t preparedBytes(uint64_t vertices, uint64_t indices, int w, int h) {
   const uint64_t index_size = vertices < 0xFFFF ? 2 : 4;
-  return alignUp(vertices * kVertexBytes) + alignUp(indices * index_size) +
-         alignUp(uint64_t(w > 0 ? w : 0) * uint64_t(h > 0 ? h : 0) * 4) + kAlign;
+  return alignUp(vertices * kVertexBytes) + alignUp(indices * index_size) + alignUp(mipChainBytes(w, h)) + kAlign;
 }
+
+namespace {
+// One mip level from the one above: each texel the rounded mean of its 2 × 2
+// parents (edge texels repeat where the parent has an odd size), as
+// glGenerateMipmap's box filter does, on the encoded values.
+void downsample(const uint8_t* src, int sw, int sh, uint8_t* dst, int dw, int dh) {
+  for (int y = 0; y < dh; ++y)
+    for (int x = 0; x < dw; ++x) {
+      const int x0 = std::min(2 * x, sw - 1), x1 = std::min(2 * x + 1, sw - 1);
+      const int y0 = std::min(2 * y, sh - 1), y1 = std::min(2 * y + 1, sh - 1);
+      for (int c = 0; c < 4; ++c) {
+        const unsigned sum = src[(size_t(y0) * sw + x0) * 4 + c] + src[(size_t(y0) * sw + x1) * 4 + c] +
+                             src[(size_t(y1) * sw + x0) * 4 + c] + src[(size_t(y1) * sw + x1) * 4 + c];
+        dst[(size_t(y) * dw + x) * 4 + c] = static_cast<uint8_t>((sum + 2) / 4);
+      }
+    }
+}
+}  // namespace
 
 bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err) {
   out = PreparedMesh{};
@@ -122,13 +167,22 @@ bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& o
     if (mesh.image.size() > 0x7fffffff ||
         !(texels = stbi_load_from_memory(mesh.image.data(), static_cast<int>(mesh.image.size()), &tw, &th, &tc, 4)))
       return failWith(err, "mesh image cannot be decoded");
-    void* rgba = arena.take(size_t(tw) * size_t(th) * 4);
+    int levels = 0;
+    void* rgba = arena.take(mipChainBytes(tw, th, &levels));
     if (rgba) std::memcpy(rgba, texels, size_t(tw) * size_t(th) * 4);
     stbi_image_free(texels);
     if (!rgba) return failWith(err, "staging arena too small for the mesh's texture");
+    auto* level = static_cast<uint8_t*>(rgba);
+    for (int l = 1, w = tw, h = th; l < levels; ++l) {
+      const int dw = std::max(1, w / 2), dh = std::max(1, h / 2);
+      uint8_t* next = level + size_t(w) * size_t(h) * 4;
+      downsample(level, w, h, next, dw, dh);
+      level = next, w = dw, h = dh;
+    }
     out.rgba = static_cast<const uint8_t*>(rgba);
     out.texture_width = tw;
     out.texture_height = th;
+    out.mip_levels = levels;
   }
 
   out.vertices = reinterpret_cast<const uint8_t*>(vertices);

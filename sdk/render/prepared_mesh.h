@@ -33,8 +33,13 @@ struct PreparedMesh {
   const void* indices = nullptr;      // uint16 when index16, else uint32
   uint32_t index_count = 0;
   bool index16 = true;
-  const uint8_t* rgba = nullptr;      // texture_width × texture_height × 4, top row first; or null
+  // texture_width × texture_height × 4, top row first; or null. Its mip chain
+  // follows it in memory, mip_levels levels in all (level 0 included), each
+  // max(1, w >> l) × max(1, h >> l), 2×2 box-filtered on the preparing
+  // thread so that the render thread only copies bytes (mipLevel()).
+  const uint8_t* rgba = nullptr;
   int texture_width = 0, texture_height = 0;
+  int mip_levels = 0;
   double center[3] = {0, 0, 0};       // box centre and half extents, glTF axes
   double half[3] = {0, 0, 0};
 
@@ -42,6 +47,13 @@ struct PreparedMesh {
   uint64_t indexBytes() const { return uint64_t(index_count) * (index16 ? 2 : 4); }
   uint64_t textureBytes() const { return uint64_t(texture_width) * uint64_t(texture_height) * 4; }
 };
+
+// Bytes of a w × h RGBA8 image and its whole mip chain down to 1 × 1, and the
+// number of levels in it.
+uint64_t mipChainBytes(int w, int h, int* levels = nullptr);
+
+// Level `level` of a prepared mesh's texture: its texels and size.
+const uint8_t* mipLevel(const PreparedMesh& mesh, int level, int& w, int& h);
 
 // Arena bytes prepareMesh() needs at most for a mesh of `vertices` vertices,
 // `indices` indices and a texture of w × h (0 × 0 without one).

@@ -80,6 +80,7 @@ struct Renderer::Slab {
   std::vector<uint32_t> meshes;        // slot indices placed here, reserved for desc.meshes
   uint64_t vertex_used = 0, index_used = 0;
   uint32_t vaos_used = 0, textures_used = 0;
+  uint32_t resets = 0;  // abandons the SlabUploads begun before
 };
 
 struct Renderer::Impl {
@@ -389,14 +390,115 @@ MeshHandle Renderer::upload(const geo::MeshData& mesh) {
 }
 
 MeshHandle Renderer::uploadToSlab(SlabHandle slab, const PreparedMesh& mesh) {
-  if (slab.id == 0 || slab.id > impl_->slabs.size()) {
-    fail("invalid slab handle");
-    return {};
-  }
-  return place(mesh, slab.id);
+  SlabUpload up;
+  if (!beginSlabUpload(slab, mesh, up)) return {};
+  bool finished = false;
+  return continueSlabUpload(up, UINT64_MAX, finished);
 }
 
-MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id) {
+bool Renderer::beginSlabUpload(SlabHandle h, const PreparedMesh& p, SlabUpload& up) {
+  up = SlabUpload{};
+  if (h.id == 0 || h.id > impl_->slabs.size()) return fail("invalid slab handle");
+  Slab& slab = impl_->slabs[h.id - 1];
+  if (p.vertex_count == 0 || p.index_count == 0 || !p.vertices || !p.indices) return fail("mesh has no triangles");
+  if (p.rgba && p.mip_levels < 1) return fail("prepared texture has no levels");
+  const uint64_t vbytes = p.vertexBytes(), ibytes = p.indexBytes();
+  // Bump placement into the buffers made at createSlab: no GL allocation.
+  const uint64_t ioff = (slab.index_used + 3) & ~uint64_t(3), voff = slab.vertex_used;
+  if (voff + vbytes > slab.desc.vertex_bytes || ioff + ibytes > slab.desc.index_bytes)
+    return fail("slab full: vertex or index bytes exceed its size");
+  if (slab.vaos_used >= slab.vaos.size()) return fail("slab full: mesh count exceeds its size");
+  if (p.rgba && (slab.textures_used >= slab.textures.size() || p.texture_width > slab.desc.texture_width ||
+                 p.texture_height > slab.desc.texture_height))
+    return fail("slab full: no texture slot of the image's size left");
+  up.slab = h.id;
+  up.mesh = &p;
+  up.voff = voff;
+  up.ioff = ioff;
+  up.texture = p.rgba ? slab.textures[slab.textures_used++] : 0;
+  up.total = vbytes + ibytes + (p.rgba ? mipChainBytes(p.texture_width, p.texture_height) : 0);
+  up.resets = slab.resets;
+  slab.vertex_used = voff + vbytes;
+  slab.index_used = ioff + ibytes;
+  return true;
+}
+
+MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool& finished) {
+  finished = true;
+  if (up.slab == 0 || up.slab > impl_->slabs.size() || !up.mesh) {
+    fail("no slab upload in progress");
+    return {};
+  }
+  Slab& slab = impl_->slabs[up.slab - 1];
+  if (slab.resets != up.resets) {
+    up.slab = 0;
+    fail("slab upload abandoned: the slab was reset");
+    return {};
+  }
+  if (!ctx_.makeCurrent()) {
+    fail("GL context is not current on this thread");
+    return {};
+  }
+  const PreparedMesh& p = *up.mesh;
+  const uint64_t vbytes = p.vertexBytes(), ibytes = p.indexBytes();
+  const uint64_t chunk_min = 4096;
+  uint64_t allowance = std::max(max_bytes, chunk_min);
+  const GlApi& gl = *gl_;
+  {
+    ScopedGlState guard(gl, shared_);
+    // Both buffers are filled through GL_ARRAY_BUFFER: binding the index
+    // buffer as GL_ELEMENT_ARRAY_BUFFER would need a vertex array bound.
+    auto copyBuffer = [&](GLuint buffer, uint64_t base, const void* data, uint64_t begin, uint64_t size) {
+      while (allowance > 0 && up.copied >= begin && up.copied < begin + size) {
+        const uint64_t at = up.copied - begin, n = std::min(allowance, size - at);
+        gl.BindBuffer(GL_ARRAY_BUFFER, buffer);
+        gl.BufferSubData(GL_ARRAY_BUFFER, static_cast<GLintptr>(base + at), static_cast<GLsizeiptr>(n),
+                         static_cast<const uint8_t*>(data) + at);
+        up.copied += n;
+        allowance -= n;
+      }
+    };
+    copyBuffer(slab.vbo, up.voff, p.vertices, 0, vbytes);
+    copyBuffer(slab.ibo, up.ioff, p.indices, vbytes, ibytes);
+    if (p.rgba && allowance > 0 && up.copied < up.total) {
+      // Mip levels in order, whole rows at a time, each level into the
+      // image's corner of the slab texture's level (uv_scale maps it).
+      gl.ActiveTexture(GL_TEXTURE0);
+      gl.BindTexture(GL_TEXTURE_2D, up.texture);
+      if (shared_) {
+        // A host's bound unpack buffer or row length would redirect the copy.
+        gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+        gl.PixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+      }
+      gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+      uint64_t level_begin = vbytes + ibytes;
+      for (int l = 0; l < p.mip_levels && allowance > 0; ++l) {
+        int w = 0, h = 0;
+        const uint8_t* texels = mipLevel(p, l, w, h);
+        const uint64_t row = uint64_t(w) * 4, size = row * uint64_t(h);
+        if (up.copied < level_begin + size) {
+          const int y = static_cast<int>((up.copied - level_begin) / row);
+          const int rows = static_cast<int>(std::clamp<uint64_t>(allowance / row, 1, uint64_t(h - y)));
+          gl.TexSubImage2D(GL_TEXTURE_2D, l, 0, y, w, rows, GL_RGBA, GL_UNSIGNED_BYTE, texels + row * uint64_t(y));
+          const uint64_t n = row * uint64_t(rows);
+          up.copied += n;
+          allowance -= std::min(allowance, n);
+          if (y + rows < h) break;  // the level is not done: the allowance is
+        }
+        level_begin += size;
+      }
+    }
+  }
+  if (up.copied < up.total) {
+    finished = false;
+    return {};
+  }
+  const MeshHandle handle = place(p, up.slab, &up);
+  up.slab = 0;
+  return handle;
+}
+
+MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUpload* copied) {
   Impl& m = *impl_;
   Slab* slab = slab_id ? &m.slabs[slab_id - 1] : nullptr;
   if (p.vertex_count == 0 || p.index_count == 0 || !p.vertices || !p.indices) {
@@ -412,25 +514,12 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id) {
     return {};
   }
   const uint64_t vbytes = p.vertexBytes(), ibytes = p.indexBytes();
-  uint64_t voff = 0, ioff = 0;
-  if (slab) {
-    // Bump placement into the buffers made at createSlab: no GL allocation.
-    ioff = (slab->index_used + 3) & ~uint64_t(3);
-    voff = slab->vertex_used;
-    if (voff + vbytes > slab->desc.vertex_bytes || ioff + ibytes > slab->desc.index_bytes) {
-      fail("slab full: vertex or index bytes exceed its size");
-      return {};
-    }
-    if (slab->vaos_used >= slab->vaos.size()) {
-      fail("slab full: mesh count exceeds its size");
-      return {};
-    }
-    if (p.rgba && (slab->textures_used >= slab->textures.size() || p.texture_width > slab->desc.texture_width ||
-                   p.texture_height > slab->desc.texture_height)) {
-      fail("slab full: no texture slot of the image's size left");
-      return {};
-    }
+  // Slab meshes arrive here copied (beginSlabUpload placed them).
+  if (slab && !copied) {
+    fail("slab meshes are placed by beginSlabUpload");
+    return {};
   }
+  const uint64_t voff = copied ? copied->voff : 0, ioff = copied ? copied->ioff : 0;
 
   uint32_t index;
   if (!m.free_slots.empty()) {
@@ -458,15 +547,9 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id) {
     // land in whatever VAO the host had bound.
     gl.BindVertexArray(s.vao);
     gl.BindBuffer(GL_ARRAY_BUFFER, s.vbo);
-    if (slab)
-      gl.BufferSubData(GL_ARRAY_BUFFER, static_cast<GLintptr>(voff), static_cast<GLsizeiptr>(vbytes), p.vertices);
-    else
-      gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vbytes), p.vertices, GL_STATIC_DRAW);
+    if (!slab) gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vbytes), p.vertices, GL_STATIC_DRAW);
     gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.ibo);
-    if (slab)
-      gl.BufferSubData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLintptr>(ioff), static_cast<GLsizeiptr>(ibytes), p.indices);
-    else
-      gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(ibytes), p.indices, GL_STATIC_DRAW);
+    if (!slab) gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(ibytes), p.indices, GL_STATIC_DRAW);
     gl.EnableVertexAttribArray(0);
     gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, kVertexBytes, byteOffset(voff + 0));
     gl.EnableVertexAttribArray(1);
@@ -476,7 +559,12 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id) {
     gl.EnableVertexAttribArray(3);
     gl.VertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, kVertexBytes, byteOffset(voff + 28));
     gl.BindVertexArray(0);
-    if (p.rgba) {
+    if (p.rgba && slab) {
+      // Texels and mip levels are in already (continueSlabUpload).
+      s.texture = copied->texture;
+      s.uv_scale[0] = float(p.texture_width) / float(slab->desc.texture_width);
+      s.uv_scale[1] = float(p.texture_height) / float(slab->desc.texture_height);
+    } else if (p.rgba) {
       // Impostor texture, with mipmaps so a far impostor does not shimmer.
       // A host's bound unpack buffer or row length would redirect the copy.
       gl.ActiveTexture(GL_TEXTURE0);
@@ -485,14 +573,7 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id) {
         gl.PixelStorei(GL_UNPACK_ROW_LENGTH, 0);
       }
       gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
-      if (slab) {
-        s.texture = slab->textures[slab->textures_used++];
-        gl.BindTexture(GL_TEXTURE_2D, s.texture);
-        gl.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, p.texture_width, p.texture_height, GL_RGBA, GL_UNSIGNED_BYTE,
-                         p.rgba);
-        s.uv_scale[0] = float(p.texture_width) / float(slab->desc.texture_width);
-        s.uv_scale[1] = float(p.texture_height) / float(slab->desc.texture_height);
-      } else {
+      {
         gl.GenTextures(1, &s.texture);
         gl.BindTexture(GL_TEXTURE_2D, s.texture);
         gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, p.texture_width, p.texture_height, 0, GL_RGBA,
@@ -513,8 +594,6 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id) {
   s.bytes = vbytes + ibytes + (p.rgba ? p.textureBytes() * 4 / 3 : 0);
   s.live = true;
   if (slab) {
-    slab->vertex_used = voff + vbytes;
-    slab->index_used = ioff + ibytes;
     slab->meshes.push_back(index);  // reserved for desc.meshes at createSlab
   }
   ++live_meshes_;
@@ -595,6 +674,7 @@ void Renderer::resetSlab(SlabHandle h) {
   }
   s.vertex_used = s.index_used = 0;
   s.vaos_used = s.textures_used = 0;
+  ++s.resets;
 }
 
 SlabUsage Renderer::slabUsage(SlabHandle h) const {

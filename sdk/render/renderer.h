@@ -69,6 +69,21 @@ struct SlabDesc {
 struct SlabHandle {
   uint32_t id = 0;  // index + 1; 0 is invalid
 };
+
+// A mesh copied into a slab over several calls, so that a frame's uploads
+// stay within its time budget (issue 4): beginSlabUpload reserves the mesh's
+// bytes and texture in the slab, continueSlabUpload copies the vertices, the
+// indices and the texture's mip levels (whole rows) a chunk at a time. The
+// PreparedMesh must stay valid until the upload finishes; resetSlab abandons
+// an unfinished one.
+struct SlabUpload {
+  uint32_t slab = 0;                  // SlabHandle id; 0 when idle
+  const PreparedMesh* mesh = nullptr;
+  uint64_t voff = 0, ioff = 0;        // placement in the slab's buffers
+  uint32_t texture = 0;               // the slab texture taken (GL name), 0 without one
+  uint64_t copied = 0, total = 0;     // bytes, in the order vertices, indices, texture levels
+  uint32_t resets = 0;                // the slab's reset count at begin
+};
 struct SlabUsage {
   uint64_t vertex_bytes = 0, index_bytes = 0;
   uint32_t meshes = 0, textures = 0;
@@ -142,6 +157,14 @@ class Renderer {
   // Places a prepared mesh after the slab's last one. Invalid handle when the
   // slab or the mesh pool is full. The only GL calls are sub-data copies.
   MeshHandle uploadToSlab(SlabHandle slab, const PreparedMesh& mesh);
+  // The same in steps (see SlabUpload). begin: false with lastError() set
+  // when the slab or the mesh pool has no room. continueSlabUpload copies at
+  // least one chunk (a texture row, or all that is left of a buffer up to
+  // max_bytes) and returns the mesh's handle after the last byte; until then
+  // an invalid handle with `finished` false. On failure (abandoned by
+  // resetSlab, pool full) an invalid handle, `finished` true, lastError() set.
+  bool beginSlabUpload(SlabHandle slab, const PreparedMesh& mesh, SlabUpload& up);
+  MeshHandle continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool& finished);
   // Releases every mesh placed in the slab and rewinds it.
   void resetSlab(SlabHandle slab);
   SlabUsage slabUsage(SlabHandle slab) const;
@@ -177,7 +200,9 @@ class Renderer {
   struct Impl;
   struct Slab;
   explicit Renderer(Context& ctx);
-  MeshHandle place(const PreparedMesh& mesh, uint32_t slab_id);
+  // A mesh's slot and vertex array; copies its bytes unless `copied` (a
+  // finished SlabUpload) says where they already are.
+  MeshHandle place(const PreparedMesh& mesh, uint32_t slab_id, const SlabUpload* copied = nullptr);
   bool init(const RendererDesc& desc);
   bool fail(const char* what);
 
