@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -135,6 +136,19 @@ SlabDesc slabFor(const Prepared& p) {
   return d;
 }
 
+// A context and a renderer of kW × kH.
+struct Rig {
+  std::string why;
+  std::unique_ptr<Context> ctx = createContext(Backend::Auto, why);
+  std::unique_ptr<Renderer> renderer;
+  Rig() {
+    RendererDesc desc;
+    desc.width = kW;
+    desc.height = kH;
+    if (ctx) renderer = Renderer::create(*ctx, desc, why);
+  }
+};
+
 std::vector<uint8_t> draw(Renderer& r, const std::vector<MeshHandle>& list) {
   Camera cam;
   cam.eye_enu = {0.0, 0.0, 2.0};
@@ -147,14 +161,9 @@ std::vector<uint8_t> draw(Renderer& r, const std::vector<MeshHandle>& list) {
 }
 
 TEST(SlabUpload, ManySmallStepsDrawWhatOneCopyDraws) {
-  std::string why;
-  auto ctx = createContext(Backend::Auto, why);
-  ASSERT_NE(ctx, nullptr) << why;
-  RendererDesc desc;
-  desc.width = kW;
-  desc.height = kH;
-  auto r = Renderer::create(*ctx, desc, why);
-  ASSERT_NE(r, nullptr) << why;
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
   const Scene scene;
   const Prepared prep(scene);
   ASSERT_GT(prep.meshes[0].vertexBytes(), 40000u);
@@ -197,14 +206,9 @@ TEST(SlabUpload, ManySmallStepsDrawWhatOneCopyDraws) {
 }
 
 TEST(SlabUpload, AResetAbandonsAnUnfinishedUpload) {
-  std::string why;
-  auto ctx = createContext(Backend::Auto, why);
-  ASSERT_NE(ctx, nullptr) << why;
-  RendererDesc desc;
-  desc.width = kW;
-  desc.height = kH;
-  auto r = Renderer::create(*ctx, desc, why);
-  ASSERT_NE(r, nullptr) << why;
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
   const Scene scene;
   const Prepared prep(scene);
   const SlabHandle slab = r->createSlab(slabFor(prep));
