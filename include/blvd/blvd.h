@@ -366,6 +366,11 @@ typedef struct blvd_pose {
   double lateral_m;          /* offset from the cell's centre line, right positive */
   double confidence;         /* posterior probability of the matched cell, 0..1 */
   uint32_t flags;            /* BLVD_POSE_* */
+  /* The camera blvd_render places for this pose: the eye on the matched street at the driver's
+   * height (at the fused position when unmatched), local east / north / up metres. A host that
+   * renders a recorded drive later puts the camera here (blvd_set_pose_local). */
+  double camera_x, camera_y, camera_z;
+  double camera_heading_deg, camera_pitch_deg;
 } blvd_pose;
 
 /* Queues a GNSS fix. Any thread; no allocation. Errors: BLVD_ERR_INVALID_ARG

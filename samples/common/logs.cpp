@@ -25,9 +25,12 @@ bool JsonLines::open(const std::string& path, std::string& err) {
 void JsonLines::pose(const blvd_pose& p) {
   if (!f_) return;
   const long long cell = p.cell == UINT32_MAX ? -1 : static_cast<long long>(p.cell);
-  std::fprintf(f_, "{\"t\":%.6f,\"x\":%.3f,\"y\":%.3f,\"heading\":%.3f,\"speed\":%.6f,\"cell\":%lld,\"flags\":%u}\n", p.t,
-               std::isfinite(p.x) ? p.x : 0.0, std::isfinite(p.y) ? p.y : 0.0, p.heading_deg, p.speed_mps, cell,
-               p.flags);
+  auto finite = [](double v) { return std::isfinite(v) ? v : 0.0; };
+  std::fprintf(f_,
+               "{\"t\":%.6f,\"x\":%.3f,\"y\":%.3f,\"heading\":%.3f,\"speed\":%.6f,\"cell\":%lld,\"flags\":%u,"
+               "\"camera\":[%.3f,%.3f,%.3f,%.3f,%.3f]}\n",
+               p.t, finite(p.x), finite(p.y), p.heading_deg, p.speed_mps, cell, p.flags, finite(p.camera_x),
+               finite(p.camera_y), finite(p.camera_z), finite(p.camera_heading_deg), finite(p.camera_pitch_deg));
 }
 
 void JsonLines::odometry(const blvd_odometry& o, uint32_t frame_id) {

@@ -70,6 +70,14 @@ int renderRecorded(const std::string& poses_path, unsigned render_every, const s
     p.y = j["y"].get<double>();
     p.heading_deg = j["heading"].get<double>();
     p.flags = j["flags"].get<uint32_t>();
+    // The camera the live run would have drawn from: on the matched street.
+    // Lines from before blvd_pose had it fall back to the fused position.
+    const nlohmann::json cam = j.value("camera", nlohmann::json::array());
+    const bool has_camera = cam.is_array() && cam.size() == 5;
+    p.camera_x = has_camera ? cam[0].get<double>() : p.x;
+    p.camera_y = has_camera ? cam[1].get<double>() : p.y;
+    p.camera_heading_deg = has_camera ? cam[3].get<double>() : p.heading_deg;
+    p.camera_pitch_deg = has_camera ? cam[4].get<double>() : 0.0;
     ++n;
     if (!(p.flags & BLVD_POSE_VALID)) continue;
     if (valid++ % render_every == 0 && !frames.frame(&p)) return 1;

@@ -37,8 +37,11 @@ class CapiTracking final : public Tracking {
   bool canRender() const override { return true; }
   blvd_status render(const blvd_pose* pose, unsigned char* rgba, blvd_frame_stats& fs) override {
     blvd_status st = BLVD_OK;
-    // A recorded pose places the eye itself; otherwise blvd_render follows the tracker.
-    if (pose) st = blvd_set_pose_local(rt_, pose->x, pose->y, static_cast<float>(pose->heading_deg), 0.0f);
+    // A recorded pose places the eye where its camera was (on the matched
+    // street); otherwise blvd_render follows the tracker.
+    if (pose)
+      st = blvd_set_pose_local(rt_, pose->camera_x, pose->camera_y, static_cast<float>(pose->camera_heading_deg),
+                               static_cast<float>(pose->camera_pitch_deg));
     if (st != BLVD_OK) return st;
     fs = blvd_frame_stats{};
     fs.struct_size = sizeof fs;

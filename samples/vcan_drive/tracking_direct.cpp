@@ -40,21 +40,8 @@ class DirectTracking final : public Tracking {
   }
 
   blvd_status getPose(double t, blvd_pose& r) override {
-    const track::Pose& p = tracker_.update(t);
     r = blvd_pose{};
-    r.struct_size = sizeof r;
-    r.t = p.t;
-    r.x = p.e;
-    r.y = p.n;
-    double h = 0;
-    frame_.reverse({p.e, p.n, 0}, r.lat, r.lon, h);
-    r.heading_deg = p.heading_deg;
-    r.speed_mps = p.speed_mps;
-    r.cell = p.cell;
-    r.arc_m = p.arc_m;
-    r.lateral_m = p.lateral_m;
-    r.confidence = p.confidence;
-    r.flags = p.flags;  // BLVD_POSE_* are track::PoseFlag's bits
+    capi::toBlvd(tracker_.update(t), frame_, &r);
     return BLVD_OK;
   }
 

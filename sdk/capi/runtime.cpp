@@ -134,22 +134,7 @@ blvd_status Runtime::feedOdometry(const blvd_odometry& in) {
 
 void Runtime::getPose(double t, blvd_pose* out) {
   if (!std::isfinite(t)) throw Error(Status::InvalidArg, "blvd_get_pose: t is not finite");
-  const track::Pose& p = tracker_->update(t);
-  blvd_pose r{};
-  r.struct_size = out->struct_size ? out->struct_size : sizeof r;
-  r.t = p.t;
-  r.x = p.e;
-  r.y = p.n;
-  double h = 0;
-  city_.frame().reverse({p.e, p.n, 0}, r.lat, r.lon, h);
-  r.heading_deg = p.heading_deg;
-  r.speed_mps = p.speed_mps;
-  r.cell = p.cell;
-  r.arc_m = p.arc_m;
-  r.lateral_m = p.lateral_m;
-  r.confidence = p.confidence;
-  r.flags = p.flags;  // BLVD_POSE_* == track::PoseFlag bits
-  std::memcpy(out, &r, std::min<size_t>(r.struct_size, sizeof r));
+  toBlvd(tracker_->update(t), city_.frame(), out);
 }
 
 void Runtime::setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg) {

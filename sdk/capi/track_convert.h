@@ -1,11 +1,16 @@
-// The C API's tracking inputs as sdk/track's structs. Used by the runtime's
+// The C API's tracking inputs as sdk/track's structs, and a tracked pose as
+// the C API's (toBlvd). Used by the runtime's
 // feeds and by `blvd bench track`, which tracks what the adapters produce for a
 // host (blvd_gnss_fix / blvd_odometry) without a runtime. The flag bits are the
 // same values (runtime.cpp checks them at compile time).
 #pragma once
 
+#include <algorithm>
+#include <cstring>
+
 #include "blvd/blvd.h"
 #include "capi/sized.h"
+#include "geo/local_frame.h"
 #include "track/types.h"
 
 namespace blvd::capi {
@@ -37,6 +42,31 @@ inline track::Odometry toTrack(const blvd_odometry& in) {
   d.reverse = o.reverse != 0;
   d.flags = o.flags;  // BLVD_ODO_* == track::OdometryFlag bits
   return d;
+}
+
+// A tracked pose as the C API's blvd_pose, written up to out->struct_size
+// bytes (0: the whole struct); lat/lon through the package's frame.
+inline void toBlvd(const track::Pose& p, const geo::LocalFrame& frame, blvd_pose* out) {
+  blvd_pose r{};
+  r.struct_size = out->struct_size ? out->struct_size : sizeof r;
+  r.t = p.t;
+  r.x = p.e;
+  r.y = p.n;
+  double h = 0;
+  frame.reverse({p.e, p.n, 0}, r.lat, r.lon, h);
+  r.heading_deg = p.heading_deg;
+  r.speed_mps = p.speed_mps;
+  r.cell = p.cell;
+  r.arc_m = p.arc_m;
+  r.lateral_m = p.lateral_m;
+  r.confidence = p.confidence;
+  r.flags = p.flags;  // BLVD_POSE_* == track::PoseFlag bits
+  r.camera_x = p.camera.eye_e;
+  r.camera_y = p.camera.eye_n;
+  r.camera_z = p.camera.eye_u;
+  r.camera_heading_deg = p.camera.heading_deg;
+  r.camera_pitch_deg = p.camera.pitch_deg;
+  std::memcpy(out, &r, std::min<size_t>(r.struct_size, sizeof r));
 }
 
 }  // namespace blvd::capi

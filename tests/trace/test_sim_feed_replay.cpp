@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
@@ -52,6 +53,11 @@ TEST(TraceReplay, SimFeedMonacoCellsFollowTruth) {
     ASSERT_EQ(blvd_get_pose(rt, tr.t, &p), BLVD_OK) << blvd_last_error(rt);
     if (tr.t - t0 < warmup_s) continue;
     ASSERT_TRUE(p.flags & BLVD_POSE_MATCHED) << "t=" << tr.t - t0;
+    // The camera for rendering sits on the matched street, near the fused
+    // position, at eye height, looking along the street.
+    EXPECT_LT(std::hypot(p.camera_x - p.x, p.camera_y - p.y), 10.0) << "t=" << tr.t - t0;
+    EXPECT_NEAR(p.camera_z, 1.5, 0.5);
+    EXPECT_LT(std::fabs(std::remainder(p.camera_heading_deg - p.heading_deg, 360.0)), 60.0) << "t=" << tr.t - t0;
     ++epochs;
     on_cell += p.cell == tr.cell;
     if (!matched.empty() && matched.back() == p.cell) continue;
