@@ -69,6 +69,7 @@ double percentile(std::vector<double> v, double pct) {
 void addRenderStats(nlohmann::json& j, const RenderStats& r) {
   j["rendered_frames"] = r.frames;
   j["blank_frames"] = r.blank;
+  j["uniform_frames"] = r.uniform;
   j["degraded_frames"] = r.degraded;
   j["png_written"] = r.written;
   j["frame_ms_p50"] = percentile(r.frame_ms, 50);

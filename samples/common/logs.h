@@ -39,7 +39,10 @@ void noteCell(std::vector<uint32_t>& cells, const blvd_pose& p);
 double percentile(std::vector<double> v, double pct);
 
 struct RenderStats {
-  uint64_t frames = 0, blank = 0, written = 0;  // rendered, one-colour, PNGs written
+  // Rendered; blank (one colour and nothing drawn, or black: a failed
+  // render); one colour with geometry drawn (a wall filling the view at a
+  // tight corner: flat-shaded walls have no texture); PNGs written.
+  uint64_t frames = 0, blank = 0, uniform = 0, written = 0;
   uint64_t degraded = 0;                        // BLVD_FRAME_DEGRADED: the current cell was not resident yet
   std::vector<double> frame_ms;
 };

@@ -41,7 +41,8 @@ bool FrameWriter::frame(std::string& err) {
   }
   stats_.frame_ms.push_back(fs.frame_ms);
   if (fs.flags & BLVD_FRAME_DEGRADED) ++stats_.degraded;
-  if (samples::isBlank(rgba_.data(), width_, height_)) ++stats_.blank;
+  if (samples::isBlank(rgba_.data(), width_, height_, fs.triangles)) ++stats_.blank;
+  else if (samples::isUniform(rgba_.data(), width_, height_)) ++stats_.uniform;
   if (!dir_.empty()) {
     char name[32];
     std::snprintf(name, sizeof name, "/frame_%06llu.png", static_cast<unsigned long long>(stats_.frames));

@@ -32,7 +32,8 @@ bool Frames::frame(const blvd_pose* pose) {
   const uint32_t w = tracking_->width(), h = tracking_->height();
   stats_.frame_ms.push_back(fs.frame_ms);
   if (fs.flags & BLVD_FRAME_DEGRADED) ++stats_.degraded;
-  if (samples::isBlank(rgba_.data(), w, h)) ++stats_.blank;
+  if (samples::isBlank(rgba_.data(), w, h, fs.triangles)) ++stats_.blank;
+  else if (samples::isUniform(rgba_.data(), w, h)) ++stats_.uniform;
   if (!dir_.empty()) {
     char name[32];
     std::snprintf(name, sizeof name, "/frame_%06llu.png", static_cast<unsigned long long>(stats_.frames));

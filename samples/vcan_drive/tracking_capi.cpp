@@ -39,9 +39,14 @@ class CapiTracking final : public Tracking {
     blvd_status st = BLVD_OK;
     // A recorded pose places the eye where its camera was (on the matched
     // street); otherwise blvd_render follows the tracker.
-    if (pose)
+    // Recorded poses are drawn offline: wait for the pose's cell, so a frame
+    // never shows the previous cell's blocks around a camera that has moved
+    // on (it may stand inside one of them).
+    if (pose) {
       st = blvd_set_pose_local(rt_, pose->camera_x, pose->camera_y, static_cast<float>(pose->camera_heading_deg),
                                static_cast<float>(pose->camera_pitch_deg));
+      if (st == BLVD_OK) st = blvd_wait_resident(rt_, 30000);
+    }
     if (st != BLVD_OK) return st;
     fs = blvd_frame_stats{};
     fs.struct_size = sizeof fs;

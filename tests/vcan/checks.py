@@ -262,7 +262,9 @@ def _need(stats, key):
 
 
 def render_stats_sane(stats, png_files=None):
-    """A rendering run's stats: frames rendered, none blank, degraded frames
+    """A rendering run's stats: frames rendered, none blank (nothing drawn, or
+    black; a view filled by one flat-shaded wall is counted apart as
+    uniform_frames, and may be at most one frame in ten), degraded frames
     counted (0..rendered), frame-time percentiles positive and ordered, and
     (png_files: the PNGs found) one PNG per rendered frame."""
     n = _need(stats, "rendered_frames")
@@ -272,6 +274,9 @@ def render_stats_sane(stats, png_files=None):
         raise CheckError("no frame was rendered")
     if blank:
         raise CheckError("%d of %d frames are blank" % (blank, n))
+    uniform = stats.get("uniform_frames", 0)
+    if uniform * 10 > n:
+        raise CheckError("%d of %d frames are one colour" % (uniform, n))
     if not 0 <= degraded <= n:
         raise CheckError("degraded_frames %s is not within 0..%d" % (degraded, n))
     if not 0 < p[0] <= p[1] <= p[2] < 60000:

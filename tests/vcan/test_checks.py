@@ -209,6 +209,9 @@ class DriveStats(unittest.TestCase):
 
     def test_sane(self):
         self.assertEqual(checks.render_stats_sane(drive_stats(), self.pngs)["degraded"], 1)
+        many = drive_stats()
+        many.update(rendered_frames=20, png_written=20, uniform_frames=2)  # a wall at 2 corners of 20
+        self.assertEqual(checks.render_stats_sane(many, ["p%d.png" % i for i in range(20)])["rendered"], 20)
         self.assertEqual(checks.memory_stats_sane(drive_stats(), True)["resident_cells"], 3)
         s = drive_stats()
         s["memory"] = {"rss_bytes": 1, "rss_peak_bytes": 1}  # track-only: no runtime figures
@@ -217,6 +220,7 @@ class DriveStats(unittest.TestCase):
     def test_render(self):
         self.bad(lambda s: s.update(rendered_frames=0), "no frame was rendered")
         self.bad(lambda s: s.update(blank_frames=1), "1 of 4 frames are blank")
+        self.bad(lambda s: s.update(uniform_frames=1), "1 of 4 frames are one colour")  # more than 1 in 10
         self.bad(lambda s: s.update(degraded_frames=5), "degraded_frames 5")
         self.bad(lambda s: s.pop("degraded_frames"), "no degraded_frames")
         self.bad(lambda s: s.update(frame_ms_p95=40.0), "percentiles")
