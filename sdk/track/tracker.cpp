@@ -312,8 +312,13 @@ const Pose& Tracker::update(double t) {
     p.lateral_m = cur_.lateral_m;
     p.confidence = confidence_;
     p.flags |= kPoseMatched;
-    // The eye on the matched street, keeping the lateral offset within the carriageway.
-    const double half = std::max(2.0, 0.5 * static_cast<double>(graph_->halfedges[cur_.cell].width));
+    // The eye on the matched street, keeping the lateral offset within the
+    // carriageway: at least kEyeInset inside its edge, where a driver sits
+    // (an eye at the kerb faces the corner's wall mid-turn). Streets narrower
+    // than twice that keep the eye on the centre line.
+    constexpr double kEyeInset = 1.0;
+    const double width = graph_->halfedges[cur_.cell].width > 0 ? graph_->halfedges[cur_.cell].width : 4.0;
+    const double half = std::max(0.0, 0.5 * width - kEyeInset);
     const double lat = std::clamp(cur_.lateral_m, -half, half);
     const double hr = cur_.heading_rad;
     p.camera.eye_e = cur_.e + lat * std::cos(hr);  // right of a bearing h is (cos h, -sin h)
