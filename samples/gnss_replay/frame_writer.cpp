@@ -1,9 +1,8 @@
 #include "frame_writer.h"
 
-#include <cstdio>
 #include <filesystem>
 
-#include "common/png.h"
+#include "common/frame_record.h"
 
 namespace gnss_replay {
 
@@ -39,21 +38,7 @@ bool FrameWriter::frame(std::string& err) {
     err = std::string("render: ") + blvd_last_error(rt_);
     return false;
   }
-  stats_.frame_ms.push_back(fs.frame_ms);
-  if (fs.flags & BLVD_FRAME_DEGRADED) ++stats_.degraded;
-  if (samples::isBlank(rgba_.data(), width_, height_, fs.triangles)) ++stats_.blank;
-  else if (samples::isUniform(rgba_.data(), width_, height_)) ++stats_.uniform;
-  if (!dir_.empty()) {
-    char name[32];
-    std::snprintf(name, sizeof name, "/frame_%06llu.png", static_cast<unsigned long long>(stats_.frames));
-    if (!samples::writePng(dir_ + name, rgba_.data(), width_, height_)) {
-      err = "cannot write " + dir_ + name;
-      return false;
-    }
-    ++stats_.written;
-  }
-  ++stats_.frames;
-  return true;
+  return samples::recordFrame(stats_, fs, rgba_.data(), width_, height_, dir_, err);
 }
 
 }  // namespace gnss_replay

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "common/png.h"
+#include "common/frame_record.h"
 
 namespace vcan_drive {
 
@@ -29,21 +29,11 @@ bool Frames::frame(const blvd_pose* pose) {
     std::fprintf(stderr, "vcan_drive: render: %s\n", tracking_->lastError().c_str());
     return false;
   }
-  const uint32_t w = tracking_->width(), h = tracking_->height();
-  stats_.frame_ms.push_back(fs.frame_ms);
-  if (fs.flags & BLVD_FRAME_DEGRADED) ++stats_.degraded;
-  if (samples::isBlank(rgba_.data(), w, h, fs.triangles)) ++stats_.blank;
-  else if (samples::isUniform(rgba_.data(), w, h)) ++stats_.uniform;
-  if (!dir_.empty()) {
-    char name[32];
-    std::snprintf(name, sizeof name, "/frame_%06llu.png", static_cast<unsigned long long>(stats_.frames));
-    if (!samples::writePng(dir_ + name, rgba_.data(), w, h)) {
-      std::fprintf(stderr, "vcan_drive: cannot write %s%s\n", dir_.c_str(), name);
-      return false;
-    }
-    ++stats_.written;
+  std::string err;
+  if (!samples::recordFrame(stats_, fs, rgba_.data(), tracking_->width(), tracking_->height(), dir_, err)) {
+    std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
+    return false;
   }
-  ++stats_.frames;
   if (display_ && !display_->show(rgba_.data())) closed_ = true;
   return true;
 }

@@ -270,8 +270,8 @@ bool Renderer::init(const RendererDesc& desc) {
   gl.GenVertexArrays(1, &impl_->empty_vao);
 
   // An RGBA8 + depth24 framebuffer of w x h.
+  // (init's guard restores a host's bindings.)
   auto makeTarget = [&](int w, int h, GLuint& fbo, GLuint& color, GLuint& depth) {
-    ScopedGlState keep(gl, shared_);
     gl.GenRenderbuffers(1, &color);
     gl.BindRenderbuffer(GL_RENDERBUFFER, color);
     gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
@@ -758,12 +758,10 @@ bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, Frame
 
   {
     ScopedGlState guard(gl, shared_);
-    if (shared_) {
-      m.host_fbo = guard.saved().draw_framebuffer;
-    } else {
-      gl.BindFramebuffer(GL_FRAMEBUFFER, m.fbo);
-    }
+    if (shared_) m.host_fbo = guard.saved().draw_framebuffer;
+    // Scaled views draw into the scaled target and are blitted at the end.
     if (scaled) gl.BindFramebuffer(GL_FRAMEBUFFER, m.scaled_fbo);
+    else if (!shared_) gl.BindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     gl.Viewport(cam.viewport_x, cam.viewport_y, cam.width, cam.height);
     // The clear below must stay inside this view (a frame may hold several).
     gl.Enable(GL_SCISSOR_TEST);
