@@ -6,6 +6,7 @@
 #include <new>
 
 #include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -85,6 +86,7 @@ bool CellLoader::request(uint32_t cell, uint32_t target, bool urgent) {
     free_slot->cell = cell;
     free_slot->target = target;
     free_slot->urgent = urgent;
+    free_slot->abandon = false;
     if (executor_.submit) ++tasks_out_;
   }
   if (executor_.submit) executor_.submit(&CellLoader::runTask, this, executor_.user);
@@ -116,6 +118,13 @@ bool CellLoader::pending(uint32_t cell) const {
   return false;
 }
 
+bool CellLoader::decodingInBackground(uint32_t cell) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  for (const Staging& s : slots_)
+    if (s.state == Staging::Decoding && s.cell == cell && !s.urgent) return true;
+  return false;
+}
+
 uint64_t CellLoader::stagingUsed() const {
   std::lock_guard<std::mutex> lock(mu_);
   uint64_t n = 0;
@@ -127,8 +136,28 @@ uint64_t CellLoader::stagingUsed() const {
 void CellLoader::promote(uint32_t cell) {
   {
     std::lock_guard<std::mutex> lock(mu_);
-    for (Staging& s : slots_)
-      if (s.state == Staging::Queued && s.cell == cell) s.urgent = true;
+    Staging* background = nullptr;
+    bool urgent_copy = false;
+    for (Staging& s : slots_) {
+      if (s.cell != cell || s.state == Staging::Free) continue;
+      if (s.state == Staging::Queued) s.urgent = true;
+      if (s.urgent || s.state == Staging::Ready || s.state == Staging::Failed) urgent_copy = true;
+      else if (s.state == Staging::Decoding && !s.abandon) background = &s;
+    }
+    // A host executor has no background thread: its jobs keep their place.
+    if (background && !urgent_copy && !executor_.submit)
+      for (uint32_t i = 0; i < kStagingSlots; ++i)
+        if (slots_[i].state == Staging::Free) {
+          Staging& copy = slots_[i];
+          order_[i] = ++seq_;
+          copy.state = Staging::Queued;
+          copy.cell = cell;
+          copy.target = background->target;
+          copy.urgent = true;
+          copy.abandon = false;
+          background->abandon = true;
+          break;
+        }
   }
   cv_.notify_all();
 }
@@ -151,10 +180,7 @@ void CellLoader::runOne() {
     if (job) job->state = Staging::Decoding;
   }
   // A request cancelled after its task was submitted leaves nothing to do.
-  if (job) {
-    decode(*job);
-    ++loads_;
-  }
+  if (job && decode(*job)) ++loads_;
   {
     std::lock_guard<std::mutex> lock(mu_);
     --tasks_out_;
@@ -164,10 +190,15 @@ void CellLoader::runOne() {
 
 void CellLoader::run(bool background) {
   if (background) {
-    // Linux nice values are per thread; raising one needs no privilege (and
-    // cannot be undone without it, hence a thread of its own). Failure, in a
-    // sandbox that forbids it, changes nothing else.
-    (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kBackgroundNice);
+    // SCHED_IDLE (sched(7)): the thread runs only on a core that nothing
+    // else wants, so a prediction never takes CPU from a frame, however the
+    // scheduler places a waking thread. Entering it needs no privilege;
+    // leaving it does (hence a thread of its own, and promote()'s urgent
+    // copy). Where it is refused, nice 19 (per thread on Linux); failure of
+    // both, in a sandbox that forbids them, changes nothing else.
+    const sched_param idle{};
+    if (::pthread_setschedparam(pthread_self(), SCHED_IDLE, &idle) != 0)
+      (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kBackgroundNice);
     pthread_setname_np(pthread_self(), "blvd-prefetch");
   } else {
     pthread_setname_np(pthread_self(), "blvd-loader");
@@ -189,12 +220,11 @@ void CellLoader::run(bool background) {
         if (mine(slots_[i]) && order_[i] < best_seq) job = &slots_[i], best_seq = order_[i];
       job->state = Staging::Decoding;
     }
-    decode(*job);
-    ++loads_;
+    if (decode(*job)) ++loads_;
   }
 }
 
-void CellLoader::decode(Staging& s) {
+bool CellLoader::decode(Staging& s) {
   s.arena.reset();
   s.mesh_count = 0;
   s.uploaded = 0;
@@ -204,18 +234,22 @@ void CellLoader::decode(Staging& s) {
     std::snprintf(s.error, sizeof s.error, "cell %u: %s", s.cell, what.c_str());
     std::lock_guard<std::mutex> lock(mu_);
     s.state = Staging::Failed;
+    return true;
+  };
+  // An urgent copy took over (promote): give the slot back.
+  auto abandoned = [&] {
+    if (!s.abandon.load(std::memory_order_relaxed)) return false;
+    std::lock_guard<std::mutex> lock(mu_);
+    s.state = Staging::Free;
+    s.cell = 0xffffffffu;
+    s.abandon = false;
+    return true;
   };
   auto stage = [&](MeshKind kind, uint32_t item, uint32_t level) {
     if (s.scratch.empty()) return true;  // an empty block draws nothing
-    if (s.mesh_count >= s.mesh_capacity) {
-      fail("more meshes than the plan's largest cell");
-      return false;
-    }
+    if (s.mesh_count >= s.mesh_capacity) return !fail("more meshes than the plan's largest cell");
     StagedMesh& m = s.meshes[s.mesh_count];
-    if (!render::prepareMesh(s.scratch, s.arena, m.mesh, err)) {
-      fail(err);
-      return false;
-    }
+    if (!render::prepareMesh(s.scratch, s.arena, m.mesh, err)) return !fail(err);
     m.kind = kind;
     m.item = item;
     m.level = level;
@@ -232,24 +266,27 @@ void CellLoader::decode(Staging& s) {
   const graph::StreetGraph& g = city_.graph();
   for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b)
     for (uint32_t k = 0; k < city_.blocks()[*b].lod_count; ++k) {
+      if (abandoned()) return false;
       const core::Status st = city_.decodeBlock(*b, k, s.scratch, err);
       if (st != core::Status::Ok) return fail(err);
-      if (!stage(MeshKind::Block, *b, k)) return;
+      if (!stage(MeshKind::Block, *b, k)) return true;
     }
   if (s.cell < city_.cellTables().impostors.size()) {
     const graph::CellImpostors& ci = city_.cellTables().impostors[s.cell];
     for (int single = 0; single < 2; ++single) {
       const auto& list = single ? ci.single : ci.layered;
       for (uint32_t i = 0; i < list.size(); ++i) {
+        if (abandoned()) return false;
         const core::Status st = city_.decodeImpostor(list[i], s.scratch, err);
         if (st != core::Status::Ok) return fail(err);
-        if (!stage(single ? MeshKind::Single : MeshKind::Layered, i, 0)) return;
+        if (!stage(single ? MeshKind::Single : MeshKind::Layered, i, 0)) return true;
       }
     }
   }
   if (s.arena.used > staging_high_water_) staging_high_water_ = s.arena.used;
   std::lock_guard<std::mutex> lock(mu_);
   s.state = Staging::Ready;
+  return true;
 }
 
 }  // namespace blvd::capi

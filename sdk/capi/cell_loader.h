@@ -51,6 +51,10 @@ struct Staging {
   uint32_t mesh_count = 0, mesh_capacity = 0;
   uint32_t uploaded = 0;  // render thread: meshes already copied to the slab
   bool urgent = false;    // the current cell: decoded at normal priority
+  // Set when the cell became current while a background thread decodes it:
+  // an urgent copy of the request takes over and this one stops at its next
+  // mesh (a SCHED_IDLE thread may not run again soon on a busy CPU).
+  std::atomic<bool> abandon{false};
   char error[256] = {0};
   geo::MeshData scratch;  // the decoder's reusable buffers (one per slot: jobs may run at once)
 };
@@ -71,9 +75,11 @@ class CellLoader {
   // Queues `cell` into a free staging slot, tagged `target`. False when every
   // slot is busy.
   // `urgent` (the cell the vehicle is in) is decoded by the normal-priority
-  // thread; predictions by the background one (nice 19), so that on a busy
-  // CPU they delay themselves, not the frames (a CPU renderer such as
-  // llvmpipe shares the cores with them).
+  // thread; predictions by the background one (SCHED_IDLE: it runs only on a
+  // core nothing else wants, or nice 19 where the policy is refused), so
+  // that they delay themselves, not the frames (a CPU renderer such as
+  // llvmpipe shares the cores with them). See promote() for a prediction
+  // that becomes urgent mid-decode.
   bool request(uint32_t cell, uint32_t target, bool urgent = false);
   // A slot in state Ready or Failed, oldest request first, or nullptr.
   Staging* finished();
@@ -81,8 +87,14 @@ class CellLoader {
   void release(Staging* s);
   // True when `cell` is queued, decoding or waiting for upload.
   bool pending(uint32_t cell) const;
-  // Hands a queued (not yet started) request for `cell` to the
-  // normal-priority thread: a prediction that became the current cell.
+  // True while a background (prediction) job decodes `cell`.
+  bool decodingInBackground(uint32_t cell) const;
+  // A prediction that became the current cell: a queued request for `cell`
+  // goes to the normal-priority thread; one the background thread is already
+  // decoding is requested again as urgent, into a free staging slot (when
+  // there is one: the runtime calls this every frame until the cell is
+  // resident), and the background copy stops at its next mesh. Whichever
+  // copy finishes first is uploaded; the other is dropped by the runtime.
   void promote(uint32_t cell);
   // Drops queued (not yet started) requests.
   void cancelQueued();
@@ -95,7 +107,8 @@ class CellLoader {
 
  private:
   void run(bool background);
-  void decode(Staging& s);
+  // False when the job was abandoned (its slot is then free again).
+  bool decode(Staging& s);
   // Host-executor path: decodes the oldest queued slot, if any.
   static void runTask(void* self);
   void runOne();

@@ -1,13 +1,15 @@
 // `blvd bench budget PKG`: the frame-time budget (issue 4, Marvie seed 004)
-// on a route, measured side by side in one run:
+// on a route, measured side by side in one run (the runs take turns every 64
+// poses, so that a shared machine's drifting speed reaches them all alike):
 //   0. blvd under a target it cannot meet: every block at its coarsest level
 //      and, with --min-scale < 1, the smallest render scale: the fastest the
 //      budget can make a frame (its floor);
 //   1. the local model alone at full detail (LOD 0 everywhere), which must
 //      exceed the target for the benchmark to mean anything;
 //   2. blvd without a budget (each block at its 1-pixel-error level);
-//   With --target-ms auto the target is halfway from 0's p50 to 2's: one the
-//   machine can hold by choosing levels (and scale), and the local model cannot.
+//   With --target-ms auto the target is halfway from 0's p50 to 2's on the
+//   warm-up lap: one the machine can hold by choosing levels (and scale), and
+//   the local model cannot.
 //   3. blvd with target_frame_ms: the polygon budget from the frame-time
 //      history, shared by coverage hints across the blocks' LOD chains, then
 //      the render scale once the polygons are spent (docs/decisions/0008).
@@ -40,6 +42,7 @@ struct BudgetOpts {
   int laps = 2;
   double auto_fraction = 0.5;  // of the way from the floor's p50 to unbudgeted blvd's p50
   double min_scale = 0.5;      // the budget's lowest render scale (1: polygons only)
+  uint32_t resident_cells = 0; // cell slots (0: the runtime's default)
 };
 
 using Runtime = std::unique_ptr<blvd_runtime, void (*)(blvd_runtime*)>;
@@ -55,6 +58,7 @@ Runtime create(const BudgetOpts& o, int w, int h, blvd_render_mode mode, float t
   d.target_frame_ms = target_ms;
   d.lod_error_px = lod_error_px;
   d.min_render_scale = min_scale;
+  d.max_resident_cells = o.resident_cells;
   blvd_runtime* rt = nullptr;
   check(blvd_runtime_create(&d, &rt), nullptr, "create runtime");
   return Runtime(rt, blvd_runtime_destroy);
@@ -69,41 +73,59 @@ struct Frame {
   double upload_ms;  // GL uploads inside the frame (prefetched cells)
 };
 
-// Drives `laps` laps (the first warms up and is not kept). A frame whose cell
-// is not resident yet is waited for and drawn again; the kept time is the
-// second one (residency is `bench memory`'s subject, not this one's).
-std::vector<Frame> drive(blvd_runtime* rt, const std::vector<Pose>& poses, const std::vector<uint32_t>& route,
-                         int laps, std::vector<std::vector<uint8_t>>* images, size_t image_every, int w, int h) {
-  check(blvd_set_route(rt, route.data(), route.size()), rt, "route");
-  std::vector<Frame> out;
+// One run of the benchmark: a runtime, its kept frames and images.
+struct Run {
+  Runtime rt{nullptr, blvd_runtime_destroy};
+  std::vector<Frame> frames;
+  std::vector<std::vector<uint8_t>> images;  // every image_every-th pose, when kept
+  bool want_images = false;
   uint32_t last_cell = 0xffffffffu;
-  for (int lap = 0; lap < laps; ++lap)
-    for (size_t i = 0; i < poses.size(); ++i) {
-      const Pose& p = poses[i];
-      check(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), rt, "pose");
-      blvd_frame_stats fs{};
-      fs.struct_size = sizeof fs;
-      auto t0 = std::chrono::steady_clock::now();
-      check(blvd_render(rt, &fs), rt, "render");
-      if (fs.flags & BLVD_FRAME_DEGRADED) {
-        check(blvd_wait_resident(rt, 60000), rt, "wait");
-        t0 = std::chrono::steady_clock::now();
-        check(blvd_render(rt, &fs), rt, "render");
-      }
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      const bool boundary = fs.cell != last_cell;
-      last_cell = fs.cell;
-      if (lap + 1 < laps) continue;
-      blvd_stats st{};
-      st.struct_size = sizeof st;
-      check(blvd_runtime_stats(rt, &st), rt, "stats");
-      out.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale, st.upload_ms});
-      if (images && i % image_every == 0) {
-        images->emplace_back(size_t(w) * h * 4);
-        check(blvd_read_pixels(rt, images->back().data(), images->back().size()), rt, "pixels");
-      }
+};
+
+// Draws pose p with run r. A frame whose cell is not resident yet is waited
+// for and drawn again; the kept time is the second one (residency is `bench
+// memory`'s subject, not this one's).
+void drawPose(Run& r, const Pose& p, bool keep, bool image, int w, int h) {
+  blvd_runtime* rt = r.rt.get();
+  check(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), rt, "pose");
+  blvd_frame_stats fs{};
+  fs.struct_size = sizeof fs;
+  auto t0 = std::chrono::steady_clock::now();
+  check(blvd_render(rt, &fs), rt, "render");
+  if (fs.flags & BLVD_FRAME_DEGRADED) {
+    check(blvd_wait_resident(rt, 60000), rt, "wait");
+    t0 = std::chrono::steady_clock::now();
+    check(blvd_render(rt, &fs), rt, "render");
+  }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const bool boundary = fs.cell != r.last_cell;
+  r.last_cell = fs.cell;
+  if (!keep) return;
+  blvd_stats st{};
+  st.struct_size = sizeof st;
+  check(blvd_runtime_stats(rt, &st), rt, "stats");
+  r.frames.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale, st.upload_ms});
+  if (image && r.want_images) {
+    r.images.emplace_back(size_t(w) * h * 4);
+    check(blvd_read_pixels(rt, r.images.back().data(), r.images.back().size()), rt, "pixels");
+  }
+}
+
+// One lap of the route with the runs in `runs` taking turns, kSegment poses
+// each: all of them see the same machine (on a shared VM the speed drifts by
+// tens of per cent within a minute, and runs made one after another would
+// compare different machines), while each still draws its poses in order
+// with its caches warm. A run that takes its turn first redraws its last pose
+// unmeasured (its GL context was just made current again).
+void lap(const std::vector<Run*>& runs, const std::vector<Pose>& poses, bool keep, size_t image_every, int w,
+         int h) {
+  constexpr size_t kSegment = 64;
+  for (size_t s = 0; s < poses.size(); s += kSegment)
+    for (Run* r : runs) {
+      if (s > 0 && runs.size() > 1) drawPose(*r, poses[s - 1], false, false, w, h);
+      for (size_t i = s; i < std::min(poses.size(), s + kSegment); ++i)
+        drawPose(*r, poses[i], keep, i % image_every == 0, w, h);
     }
-  return out;
 }
 
 std::vector<double> times(const std::vector<Frame>& f, int which /* -1 all, 0 inside, 1 boundary */) {
@@ -131,63 +153,62 @@ int runBudget(const BudgetOpts& o) {
   }
   const size_t image_every = std::max<size_t>(1, poses.size() / 40);
 
-  // 1. The local model alone at full detail: a tiny error bound keeps LOD 0.
-  std::fprintf(stderr, "bench budget: %zu cells, %zu poses; local model at LOD 0 ...\n", route.size(), poses.size());
-  std::vector<Frame> local;
-  {
-    Runtime rt = create(o, w, h, BLVD_MODE_LOCAL, 0.f, 1e-6f);
-    local = drive(rt.get(), poses, route, o.laps, nullptr, image_every, w, h);
-  }
-  const double local_p50 = pct(times(local, -1), 50);
-  std::fprintf(stderr, "bench budget: blvd at the budget's floor ...\n");
-  std::vector<Frame> coarsest;
-  {
-    // A target no frame can meet drives every block to its coarsest level
-    // and the scale to its minimum.
-    Runtime rt = create(o, w, h, BLVD_MODE_BLVD, 0.01f, 0.f, float(o.min_scale));
-    coarsest = drive(rt.get(), poses, route, o.laps, nullptr, image_every, w, h);
-  }
-  const double floor_p50 = pct(times(coarsest, -1), 50);
-  std::fprintf(stderr, "bench budget: blvd without a budget ...\n");
-  std::vector<std::vector<uint8_t>> free_images, budget_images;
-  std::vector<Frame> unbudgeted, budgeted;
-  {
-    Runtime rt = create(o, w, h, BLVD_MODE_BLVD, 0.f, 0.f);
-    unbudgeted = drive(rt.get(), poses, route, o.laps, &free_images, image_every, w, h);
-  }
-  const double free_p50 = pct(times(unbudgeted, -1), 50);
+  // 0-2 side by side. A tiny error bound keeps the local model at LOD 0; a
+  // target no frame can meet drives every block to its coarsest level and
+  // the scale to its minimum (the floor).
+  std::fprintf(stderr, "bench budget: %zu cells, %zu poses; local model at LOD 0, blvd at the budget's floor and "
+                       "without a budget, side by side ...\n", route.size(), poses.size());
+  Run local, coarsest, unbudgeted, budgeted;
+  local.rt = create(o, w, h, BLVD_MODE_LOCAL, 0.f, 1e-6f);
+  coarsest.rt = create(o, w, h, BLVD_MODE_BLVD, 0.01f, 0.f, float(o.min_scale));
+  unbudgeted.rt = create(o, w, h, BLVD_MODE_BLVD, 0.f, 0.f);
+  unbudgeted.want_images = budgeted.want_images = true;
+  const std::vector<Run*> reference = {&local, &coarsest, &unbudgeted};
+  for (Run* r : reference) check(blvd_set_route(r->rt.get(), route.data(), route.size()), r->rt.get(), "route");
+  // Warm-up laps; the last one also calibrates the auto target.
+  for (int l = 0; l + 1 < o.laps; ++l) lap(reference, poses, l + 2 == o.laps, image_every, w, h);
+  const double cal_floor = pct(times(coarsest.frames, -1), 50), cal_free = pct(times(unbudgeted.frames, -1), 50);
+  for (Run* r : reference) r->frames.clear(), r->images.clear();
   double target = 0;
   std::string target_rule;
   if (o.target == "auto") {
-    target = floor_p50 + o.auto_fraction * (free_p50 - floor_p50);
-    char b[160];
-    std::snprintf(b, sizeof b, "floor p50 + %.2f × (unbudgeted blvd p50 − floor p50)", o.auto_fraction);
+    target = cal_floor + o.auto_fraction * (cal_free - cal_floor);
+    char b[200];
+    std::snprintf(b, sizeof b, "floor p50 + %.2f × (unbudgeted blvd p50 − floor p50), from the warm-up lap",
+                  o.auto_fraction);
     target_rule = b;
   } else {
     target = std::stod(o.target);
     target_rule = "given";
   }
+  if (o.target == "auto" && o.laps < 2)
+    throw core::Error(core::Status::InvalidArg, "--target-ms auto is calibrated on a warm-up lap: --laps must be 2 or more");
   if (!(target > 0)) throw core::Error(core::Status::InvalidArg, "--target-ms must be > 0 or auto");
 
+  // 3. blvd with the target: its own warm-up laps, then the kept lap with
+  // all four side by side.
   std::fprintf(stderr, "bench budget: blvd with a %.2f ms target ...\n", target);
+  budgeted.rt = create(o, w, h, BLVD_MODE_BLVD, float(target), 0.f, float(o.min_scale));
+  check(blvd_set_route(budgeted.rt.get(), route.data(), route.size()), budgeted.rt.get(), "route");
+  for (int l = 0; l + 1 < o.laps; ++l) lap({&budgeted}, poses, false, image_every, w, h);
+  lap({&local, &coarsest, &unbudgeted, &budgeted}, poses, true, image_every, w, h);
   blvd_stats bs{};
   bs.struct_size = sizeof bs;
-  {
-    Runtime rt = create(o, w, h, BLVD_MODE_BLVD, float(target), 0.f, float(o.min_scale));
-    budgeted = drive(rt.get(), poses, route, o.laps, &budget_images, image_every, w, h);
-    check(blvd_runtime_stats(rt.get(), &bs), rt.get(), "stats");
-  }
+  check(blvd_runtime_stats(budgeted.rt.get(), &bs), budgeted.rt.get(), "stats");
+  const double local_p50 = pct(times(local.frames, -1), 50);
+  const double floor_p50 = pct(times(coarsest.frames, -1), 50);
+  const double free_p50 = pct(times(unbudgeted.frames, -1), 50);
   std::vector<double> ssim;
-  for (size_t i = 0; i < std::min(free_images.size(), budget_images.size()); ++i)
-    ssim.push_back(render::compareImages(free_images[i].data(), budget_images[i].data(), w, h).ssim);
+  for (size_t i = 0; i < std::min(unbudgeted.images.size(), budgeted.images.size()); ++i)
+    ssim.push_back(render::compareImages(unbudgeted.images[i].data(), budgeted.images[i].data(), w, h).ssim);
 
-  const std::vector<double> all = times(budgeted, -1);
+  const std::vector<double> all = times(budgeted.frames, -1);
   const double p50 = pct(all, 50), p95 = pct(all, 95);
-  const double p99_inside = pct(times(budgeted, 0), 99), p99_boundary = pct(times(budgeted, 1), 99);
+  const double p99_inside = pct(times(budgeted.frames, 0), 99), p99_boundary = pct(times(budgeted.frames, 1), 99);
   std::vector<double> tris_local, tris_budget, scales;
-  for (const Frame& f : local) tris_local.push_back(double(f.tris));
+  for (const Frame& f : local.frames) tris_local.push_back(double(f.tris));
   size_t scaled_frames = 0;
-  for (const Frame& f : budgeted) {
+  for (const Frame& f : budgeted.frames) {
     tris_budget.push_back(double(f.tris));
     scales.push_back(f.scale);
     scaled_frames += f.scale < 1.f;
@@ -200,12 +221,16 @@ int runBudget(const BudgetOpts& o) {
   j["stutter_ratio"] = p99_boundary / p99_inside;
   j["p99_boundary_ms"] = p99_boundary;
   j["p99_inside_ms"] = p99_inside;
+  j["boundary_frames"] = times(budgeted.frames, 1).size();  // the stutter's p99 is over these few
   j["local_lod0_ms_p50"] = local_p50;
   j["floor_ms_p50"] = floor_p50;
+  j["floor_ms_p95"] = pct(times(coarsest.frames, -1), 95);
+  j["calibration_floor_ms_p50"] = cal_floor;
+  j["calibration_unbudgeted_ms_p50"] = cal_free;
   j["min_render_scale"] = o.min_scale;
   j["render_scale_p50"] = pct(scales, 50);
   j["render_scale_p5"] = pct(scales, 5);
-  j["scaled_frames_share"] = budgeted.empty() ? 0.0 : double(scaled_frames) / double(budgeted.size());
+  j["scaled_frames_share"] = budgeted.frames.empty() ? 0.0 : double(scaled_frames) / double(budgeted.frames.size());
   j["local_lod0_triangles_p50"] = pct(tris_local, 50);
   j["unbudgeted_ms_p50"] = free_p50;
   j["budgeted_triangles_p50"] = pct(tris_budget, 50);
@@ -213,7 +238,7 @@ int runBudget(const BudgetOpts& o) {
   j["ssim_vs_unbudgeted_p50"] = pct(ssim, 50);
   j["ssim_vs_unbudgeted_p5"] = pct(ssim, 5);
   j["budget_unreachable_at_end"] = bs.budget_unreachable != 0;
-  j["frames"] = budgeted.size();
+  j["frames"] = budgeted.frames.size();
   j["checks"] = {{"local_exceeds_target", local_p50 > target},
                  {"p50_within_10pct", std::fabs(p50 - target) <= 0.1 * target},
                  {"p95_within_1_25x", p95 <= 1.25 * target},
@@ -224,7 +249,8 @@ int runBudget(const BudgetOpts& o) {
   if (!o.csv_path.empty()) {
     std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell\n";
     const std::pair<const char*, const std::vector<Frame>*> runs[] = {
-        {"local_lod0", &local}, {"floor", &coarsest}, {"unbudgeted", &unbudgeted}, {"budgeted", &budgeted}};
+        {"local_lod0", &local.frames}, {"floor", &coarsest.frames}, {"unbudgeted", &unbudgeted.frames},
+        {"budgeted", &budgeted.frames}};
     for (const auto& [name, frames] : runs)
       for (size_t i = 0; i < frames->size(); ++i) {
         const Frame& f = (*frames)[i];
@@ -241,9 +267,9 @@ int runBudget(const BudgetOpts& o) {
     ft.x_label = "frame";
     ft.y_label = "ms";
     Series a{"local, LOD 0", {}, ""}, b{"blvd, no budget", {}, ""}, c{"blvd, budget", {}, ""}, t{"target", {}, ""};
-    for (const Frame& f : local) a.y.push_back(f.ms);
-    for (const Frame& f : unbudgeted) b.y.push_back(f.ms);
-    for (const Frame& f : budgeted) c.y.push_back(f.ms), t.y.push_back(target);
+    for (const Frame& f : local.frames) a.y.push_back(f.ms);
+    for (const Frame& f : unbudgeted.frames) b.y.push_back(f.ms);
+    for (const Frame& f : budgeted.frames) c.y.push_back(f.ms), t.y.push_back(target);
     ft.series = {a, b, c, t};
     HtmlPage page("blvd bench budget: " + o.package);
     page.paragraph(std::to_string(route.size()) + " cells, " + std::to_string(poses.size()) + " frames a lap, " +
@@ -272,6 +298,7 @@ void addBenchBudget(CLI::App& bench, Runner& run) {
   b->add_option("--min-scale", o->min_scale, "lowest render scale the budget may use (1: polygons only)")
       ->capture_default_str()->check(CLI::Range(0.25, 1.0));
   b->add_option("--size", o->size)->capture_default_str();
+  b->add_option("--resident-cells", o->resident_cells, "cell slots (0: the runtime's default)")->capture_default_str();
   b->add_option("--json", o->json_path, "write the JSON here too");
   b->add_option("--html", o->html_dir, "write an HTML page with the frame-time plot");
   b->add_option("--csv", o->csv_path, "write every kept frame of every run (time, uploads, triangles, scale)");

@@ -14,7 +14,7 @@ for t in 1x1 2x2; do
 done
 "$blvd" bench memory "$work/1x1.blvd" "$work/2x2.blvd" --route auto:8 --seed 3 --laps 2 --size 320x192 \
   --json "$work/memory.json" > /dev/null
-"$blvd" bench budget "$pkg" --route auto:6 --seed 7 --laps 1 --size 320x192 --json "$work/budget.json" > /dev/null
+"$blvd" bench budget "$pkg" --route auto:6 --seed 7 --laps 2 --size 320x192 --json "$work/budget.json" > /dev/null
 python3 - "$work/memory.json" "$work/budget.json" <<'PY'
 import json, math, sys
 m, b = (json.load(open(p)) for p in sys.argv[1:3])
@@ -24,7 +24,8 @@ assert m["rss_peak_1x"] > 0 and m["rss_peak_4x"] > 0
 assert m["allocs_per_frame_max"] == 0, m["allocs_per_frame_max"]
 assert m["runs"]["1x"]["frames"] == m["runs"]["4x"]["frames"] > 0
 assert m["runs"]["4x"]["table_bytes"] > 3 * m["runs"]["1x"]["table_bytes"]  # the 4x package really is bigger
-for k in ("target_ms", "frame_ms_p50", "frame_ms_p95", "stutter_ratio", "ssim_vs_unbudgeted_p50"):
+for k in ("target_ms", "frame_ms_p50", "frame_ms_p95", "stutter_ratio", "ssim_vs_unbudgeted_p50",
+          "calibration_floor_ms_p50", "calibration_unbudgeted_ms_p50", "floor_ms_p95"):
     assert isinstance(b[k], float) and math.isfinite(b[k]) and b[k] > 0, (k, b[k])
 assert b["frames"] > 0
 print("memory: rss 1x %.1f MiB, 4x %.1f MiB (%+.2f %%), allocs/frame %d (driver %d); budget: target %.2f ms, p50 %.2f, p95 %.2f, stutter %.2f"

@@ -1,0 +1,119 @@
+// The loader's two threads (issue 4, "Streaming"; docs/decisions/0008):
+// predictions decode on a SCHED_IDLE thread, which a busy CPU starves. When a
+// prediction becomes the current cell while that thread decodes it, promote()
+// must get the cell decoded anyway: an urgent copy at normal priority takes
+// over, the starved copy gives its staging slot back once it runs again.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "blvd/blvd.h"
+#include "capi/cell_loader.h"
+#include "capi/memory_plan.h"
+#include "stream/city.h"
+
+namespace {
+
+using namespace blvd;
+using Clock = std::chrono::steady_clock;
+
+struct Loader {
+  stream::City city;
+  capi::MemoryPlan plan;
+  std::unique_ptr<capi::CellLoader> loader;
+  Loader() {
+    std::string err;
+    EXPECT_EQ(city.open(BLVD_TEST_PACKAGE, err), core::Status::Ok) << err;
+    blvd_runtime_desc d{};
+    d.struct_size = sizeof d;
+    d.max_resident_cells = 4;
+    plan = capi::planMemory(d, city);
+    loader = std::make_unique<capi::CellLoader>(city, capi::Allocator{}, plan.staging_arena_bytes, plan.staging_meshes);
+  }
+  // Waits up to `s` seconds for a finished slot of `cell`; releases others.
+  capi::Staging* waitFinished(uint32_t cell, double s) {
+    const auto end = Clock::now() + std::chrono::duration<double>(s);
+    while (Clock::now() < end) {
+      if (capi::Staging* st = loader->finished()) {
+        if (st->cell == cell) return st;
+        loader->release(st);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return nullptr;
+  }
+};
+
+TEST(CellLoader, PredictionAndUrgentRequestsBothFinish) {
+  Loader l;
+  const uint32_t a = l.plan.largest_cell, b = a == 0 ? 1 : 0;
+  ASSERT_TRUE(l.loader->request(a, 0, false));
+  ASSERT_TRUE(l.loader->request(b, 1, true));
+  EXPECT_FALSE(l.loader->request(b == 2 || a == 2 ? 3 : 2, 2, false)) << "only two staging slots";
+  // Either may finish first (the prediction waits for an idle core).
+  std::vector<uint32_t> done;
+  const auto end = Clock::now() + std::chrono::seconds(120);
+  while (done.size() < 2 && Clock::now() < end) {
+    if (capi::Staging* st = l.loader->finished()) {
+      EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+      EXPECT_GT(st->mesh_count, 0u);
+      EXPECT_EQ(st->target, st->cell == a ? 0u : 1u);
+      done.push_back(st->cell);
+      l.loader->release(st);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_EQ(done.size(), 2u);
+  EXPECT_NE(done[0], done[1]);
+  EXPECT_FALSE(l.loader->pending(a));
+  EXPECT_EQ(l.loader->loads(), 2u);
+}
+
+// The current cell stuck in a starved background decode: with every core
+// kept busy at normal priority, the SCHED_IDLE thread takes the job in one of
+// its rare slices and crawls; promote() hands the cell to an urgent copy,
+// which finishes first. (Where SCHED_IDLE is refused the thread runs at
+// nice 19 and the copy still wins by far.)
+TEST(CellLoader, PromotedWhileDecodingInBackgroundFinishesOnBusyCores) {
+  Loader l;
+  const uint32_t cell = l.plan.largest_cell;
+  std::atomic<bool> stop{false};
+  std::vector<std::thread> spin;
+  for (unsigned i = 0; i < std::max(2u, std::thread::hardware_concurrency()); ++i)
+    spin.emplace_back([&] {
+      while (!stop.load(std::memory_order_relaxed)) {
+      }
+    });
+  ASSERT_TRUE(l.loader->request(cell, 3, false));
+  const auto end = Clock::now() + std::chrono::seconds(60);
+  while (!l.loader->decodingInBackground(cell) && Clock::now() < end)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const bool caught = l.loader->decodingInBackground(cell);
+  l.loader->promote(cell);
+  capi::Staging* st = l.waitFinished(cell, 120);
+  stop = true;
+  for (std::thread& t : spin) t.join();
+  ASSERT_TRUE(caught) << "the background thread never started the job";
+  ASSERT_NE(st, nullptr) << "the current cell never finished";
+  EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+  EXPECT_TRUE(st->urgent) << "the starved background copy finished first: no urgent copy was made";
+  EXPECT_EQ(st->target, 3u);
+  l.loader->release(st);
+  // The background copy, abandoned, gives its slot back once it runs again.
+  const auto drain = Clock::now() + std::chrono::seconds(60);
+  while (l.loader->pending(cell) && Clock::now() < drain) {
+    if (capi::Staging* other = l.loader->finished()) l.loader->release(other);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_FALSE(l.loader->pending(cell));
+  EXPECT_EQ(l.loader->loads(), 1u) << "the abandoned copy is not counted as a load";
+  // Both slots are free again.
+  EXPECT_TRUE(l.loader->request(cell, 0, true));
+  EXPECT_TRUE(l.loader->request(cell == 0 ? 1 : 0, 1, true));
+}
+
+}  // namespace
