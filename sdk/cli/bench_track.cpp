@@ -245,7 +245,8 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
   FILE* tf = trace_path.empty() ? nullptr : std::fopen(trace_path.c_str(), "w");
   if (tf)
     std::fprintf(tf, "drive,t,fix,true_cell,true_arc,true_len,cell,arc,conf,err_m,sigma_m,true_e,true_n,e,n,heading,"
-                     "true_heading,est_arc_on_true,est_dist_on_true\n");
+                     "true_heading,est_arc_on_true,est_dist_on_true,map_aids,true_dist_on_est,est_cell_heading,yaw_bias_dps,"
+                     "odo_scale,true_h0,true_h1\n");
   const graph::StreetGraph& g = ms.city->graph();
   for (uint32_t r = 0; r < ms.routes; ++r) {
     sim::FeedDesc fd;
@@ -323,10 +324,15 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
       const bool ok = p.cell == s.cell;
       if (tf) {
         const track::CellPoint q = tr.matcher()->project(s.cell, p.e, p.n);
-        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f\n", r,
+        const track::CellPoint qe = tr.matcher()->project(p.cell, s.e, s.n);  // the truth on the pose's cell
+        const glm::dvec2 d0 = graph::cellDirection(g, s.cell, false), d1 = graph::cellDirection(g, s.cell, true);
+        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f,%llu,%.2f,%.1f,%.3f,%.5f,%.1f,%.1f\n", r,
                      s.t - feed.start_unix, s.fix ? 1 : 0, s.cell, s.arc_m, g.halfedges[s.cell].length, p.cell, p.arc_m,
                      p.confidence, std::hypot(p.e - s.e, p.n - s.n), p.pos_sigma_m, s.e, s.n, p.e, p.n, p.heading_deg,
-                     s.heading_deg, q.arc_m, q.dist_m);
+                     s.heading_deg, q.arc_m, q.dist_m, static_cast<unsigned long long>(tr.stats().map_aids),
+                     qe.cell == track::kNoCell ? -1.0 : qe.dist_m, qe.heading_rad * 57.29577951308232,
+                     tr.filter().bias() * 57.29577951308232, tr.filter().odometryScale(),
+                     std::atan2(d0.x, d0.y) * 57.29577951308232, std::atan2(d1.x, d1.y) * 57.29577951308232);
       }
       res.on_cell += ok;
       if (s.fix) ++res.fix_epochs, res.fix_on_cell += ok;
@@ -437,7 +443,8 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
                                                  "/monaco-geofabrik-2026.osm.pbf"
                                            : opt.osm,
                            opt.quiet);
-  const FusionResult fu = benchFusion(data, opt.gnss_latency_s, opt.trace_prefix);
+  const bool quick = opt.match_only || opt.match_low_only;
+  const FusionResult fu = quick ? FusionResult{} : benchFusion(data, opt.gnss_latency_s, opt.trace_prefix);
 
   stream::City city;
   std::string err;
@@ -455,10 +462,11 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   ms.tracker = opt.tracker;
   const std::string& tp = opt.trace_prefix;
   const MatchResult m5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5.csv");
-  const MatchResult m15 = benchMatching(ms, opt.sigma_high, true, tp.empty() ? "" : tp + "-match15.csv");
-  const MatchResult g5 = benchMatching(ms, opt.sigma_low, false, "");
-  const MatchResult g15 = benchMatching(ms, opt.sigma_high, false, "");
-  const double us = timeSteps(city.graph(), {&m5, &m15}, 3);
+  const MatchResult m15 =
+      opt.match_low_only ? MatchResult{} : benchMatching(ms, opt.sigma_high, true, tp.empty() ? "" : tp + "-match15.csv");
+  const MatchResult g5 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_low, false, "");
+  const MatchResult g15 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_high, false, "");
+  const double us = quick ? NAN : timeSteps(city.graph(), {&m5, &m15}, 3);
   const track::MapMatcher probe(city.graph());
 
   const double on5 = share(m5.on_cell, m5.epochs), on15 = share(m15.on_cell, m15.epochs);

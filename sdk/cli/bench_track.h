@@ -18,6 +18,10 @@
 //                      replaying the drives' observations (steady_clock per step, 3 passes).
 //                      Target <= 20 us (tests/bench/bench_tracker.cpp measures the same
 //                      with Google Benchmark).
+//
+// --trace PREFIX writes one CSV row per pose of the matching runs (PREFIX-match5.csv,
+// PREFIX-match15.csv): the truth, the pose and the filter's state (columns in the header),
+// for classifying the misses; --match-only / --match5-only run just the on-cell parts.
 #pragma once
 
 #include <cstdint>
@@ -40,6 +44,9 @@ struct TrackBenchOptions {
   std::string trace_prefix;  // writes per-pose CSVs PREFIX.csv, PREFIX-dr.csv, PREFIX-match5.csv, ...
   track::TrackerDesc tracker;  // for the matching runs (experiments: map aid, lane offset, ...)
   bool quiet = false;          // no progress on stderr
+  // Experiments: only the on-cell runs with odometry (sigma_low, and sigma_high unless
+  // match_low_only); no fusion, no GNSS-only runs, no timing (those keys are NaN).
+  bool match_only = false, match_low_only = false;
 };
 
 // Runs everything; throws core::Error naming the file on bad input. The JSON holds

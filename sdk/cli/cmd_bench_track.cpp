@@ -5,6 +5,7 @@
 //
 // --check exits 1 when a target is missed; --min-on-cell5/15 lower the on-cell
 // targets (CTest track.bench uses regression floors, tests/track/CMakeLists.txt).
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -34,7 +35,7 @@ int runTrack(const TrackCmd& c) {
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     for (const char* k : {"on_cell_sigma5", "on_cell_sigma15", "update_us_p50", "fusion_err_m_p50", "dr_drift_pct"})
-      std::printf("%-18s %10.4f   target %s %g: %s\n", k, double(j[k]), j["targets"][k].contains("min") ? ">=" : "<=",
+      std::printf("%-18s %10.4f   target %s %g: %s\n", k, j[k].is_number() ? double(j[k]) : NAN, j["targets"][k].contains("min") ? ">=" : "<=",
                   double(j["targets"][k].contains("min") ? j["targets"][k]["min"] : j["targets"][k]["max"]),
                   bool(j["targets"][k]["met"]) ? "met" : "NOT met");
   }
@@ -78,6 +79,8 @@ void addBenchTrack(CLI::App& bench, Runner& run) {
   t->add_option("--min-on-cell15", c->min_on15, "on_cell_sigma15 bound for --check")->capture_default_str();
   t->add_flag("!--no-timing-check", c->timing_check, "--check ignores update_us_p50 (sanitizer builds)");
   t->add_flag("-q,--quiet", c->bench.quiet, "no progress on stderr");
+  t->add_flag("--match-only", c->bench.match_only, "experiments: only the two on-cell runs with odometry");
+  t->add_flag("--match5-only", c->bench.match_low_only, "experiments: only the sigma-low on-cell run with odometry");
   // Experiments with the tracker's parameters (track/tracker.h).
   t->add_option("--map-aid-sigma", c->bench.tracker.map_aid_sigma_m);
   t->add_option("--map-aid-confidence", c->bench.tracker.map_aid_min_confidence);

@@ -110,6 +110,9 @@ class Ekf {
   double heading() const { return x_[kPsi]; }  // radians, [0, 2 pi)
   double speed() const { return x_[kV]; }
   double bias() const { return x_[kB]; }
+  // The heading's rate of change, rad/s clockwise (the yaw rate less its bias),
+  // 0 without a fresh yaw rate.
+  double turnRate() const { return t_ - gyro_t_ <= d_.gyro_timeout_s ? -(omega_ - x_[kB]) : 0.0; }
   double odometryScale() const { return x_[kK]; }
   // 1-sigma of the position along its worst axis.
   double positionSigma() const;

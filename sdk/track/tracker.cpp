@@ -127,13 +127,32 @@ void Tracker::matchStep(const double* fix_en, double fix_sigma) {
     obs.fix_n = fix_en[1];
     obs.fix_sigma_m = fix_sigma;
   }
+  const CellPoint before = cur_;
   if (matcher_->step(obs)) {
     cur_ = matcher_->head();
+    // The head's emission cannot tell the end of a cell from the start of its
+    // successor (both are the junction point, a fraction of the position sigma
+    // apart), so the HMM may name the successor while the position still lies
+    // before the junction. The pose's cell follows the nearest-point rule of
+    // `follow` (and of the truth): a position before the head cell's start that
+    // is nearer to the cell it came from stays on that cell.
+    if (before.cell != graph::kNone && before.cell != cur_.cell && cur_.arc_m <= 0.01) {
+      const graph::StreetGraph& g = *graph_;
+      bool pred = false;
+      for (const uint32_t* s = g.successors.begin(before.cell); s != g.successors.end(before.cell); ++s) pred |= *s == cur_.cell;
+      if (pred) {
+        const CellPoint q = matcher_->project(before.cell, obs.e, obs.n);
+        if (q.cell != graph::kNone && q.dist_m < cur_.dist_m) cur_ = q;
+      }
+    }
     confidence_ = matcher_->confidence();
     if (d_.map_aid_sigma_m > 0 && confidence_ >= d_.map_aid_min_confidence && street_agrees_ && !ambiguous()) {
-      // Right of a bearing h is (cos h, -sin h).
-      if (ekf_.updateLine(cur_.e, cur_.n, std::cos(cur_.heading_rad), -std::sin(cur_.heading_rad),
-                          expectedOffset(cur_.cell), d_.map_aid_sigma_m))
+      // Where the vehicle is expected across the street: its lane, shifted to
+      // the inside while it turns through a corner (cornerShift). Right of a
+      // bearing h is (cos h, -sin h).
+      double offset = expectedOffset(cur_.cell), sigma = d_.map_aid_sigma_m;
+      cornerShift(offset, sigma);
+      if (ekf_.updateLine(cur_.e, cur_.n, std::cos(cur_.heading_rad), -std::sin(cur_.heading_rad), offset, sigma))
         ++st_.map_aids;
       else
         ++st_.map_aids_rejected;
@@ -143,6 +162,33 @@ void Tracker::matchStep(const double* fix_en, double fix_sigma) {
     confidence_ = 0;
   }
   last_step_t_ = obs.t;
+}
+
+void Tracker::cornerShift(double& offset, double& sigma) const {
+  // A vehicle turning through a corner leaves its lane line for the inside: a
+  // driver follows an arc tangent to the lane (the circular curve of road
+  // design between two tangents, e.g. AASHTO "A Policy on Geometric Design",
+  // ch. 3, and the curve cutting observed in driving studies, Spacek 2005,
+  // "Track behavior in curve areas", J. Transp. Eng. 131(9)). On an arc of
+  // curvature kappa whose heading has turned by dpsi since it left the tangent
+  // (or has dpsi to go before it meets the next one), the vehicle is
+  // (1 - cos dpsi) / kappa inside that tangent. kappa is the filter's turn rate
+  // over its speed, dpsi its heading against the matched street's direction.
+  // Without this, the aid pins the filter to the lane line through the corner
+  // and the part cut off comes out as an along-track error on the next street
+  // (its cross-track before the turn is its along-track after). The shift is
+  // a model, not a measurement: half of it is added to the sigma.
+  constexpr double kMinCurvature = 0.01;  // 1/m: radius < 100 m; straighter is lane keeping
+  constexpr double kMaxShift = 3.0;       // m: about a lane and a half
+  const double v = ekf_.speed();
+  if (!(std::fabs(v) > 1.0)) return;
+  const double kappa = ekf_.turnRate() / v;  // clockwise positive: the inside is to the right
+  if (std::fabs(kappa) < kMinCurvature) return;
+  const double dpsi = wrapPi(ekf_.heading() - cur_.heading_rad);
+  if (std::fabs(dpsi) >= 0.5 * kPi) return;
+  const double y = std::clamp((1 - std::cos(dpsi)) / kappa, -kMaxShift, kMaxShift);
+  offset += y;
+  sigma = std::sqrt(sigma * sigma + 0.25 * y * y);
 }
 
 bool Tracker::ambiguous() const {
@@ -227,13 +273,12 @@ void Tracker::processGnss(const GnssFix& f, double t) {
   }
 }
 
-void Tracker::processOdometry(const Odometry& o) {
+void Tracker::processOdometry(const Odometry& o, bool advance) {
   if (!finite(o.t)) {
     ++st_.odometry_ignored;
     return;
   }
   if (ekf_.initialized() && o.t < ekf_.time()) ++st_.late_events;
-  ekf_.predict(o.t);
   if ((o.flags & kOdoYawRate) && finite(o.yaw_rate_dps)) {
     ekf_.setYawRate(o.t, o.yaw_rate_dps * kDeg);
     last_gyro_t_ = o.t;
@@ -258,15 +303,13 @@ void Tracker::processOdometry(const Odometry& o) {
     last_odo_speed_t_ = o.t;
   }
   if ((o.flags & kOdoHeading) && finite(o.heading_deg)) ekf_.updateHeading(o.heading_deg * kDeg, d_.ekf.heading_sigma_deg * kDeg);
+  // These samples describe the interval that ends at o.t (see update()), so
+  // the filter moves to o.t with them rather than with the previous ones.
+  if (advance) ekf_.predict(o.t);
   // Dead reckoning through an outage still moves along the graph.
   const double now = ekf_.time();
   if (ekf_.initialized() && now - last_step_t_ >= d_.match_interval_s && now - last_fix_event_t_ >= 1.5 * d_.match_interval_s)
     matchStep();
-}
-
-void Tracker::process(const Event& ev) {
-  if (ev.is_gnss) processGnss(ev.gnss, ev.t);
-  else processOdometry(ev.odo);
 }
 
 const Pose& Tracker::update(double t) {
@@ -285,7 +328,20 @@ const Pose& Tracker::update(double t) {
       std::swap(batch_[j - 1], batch_[j]);
     }
   }
-  for (size_t i = 0; i < n; ++i) process(batch_[i]);
+  for (size_t i = 0; i < n; ++i) {
+    const Event& ev = batch_[i];
+    if (ev.is_gnss) {
+      processGnss(ev.gnss, ev.t);
+    } else {
+      // A wheel speed (counted over the last sample period) or a yaw rate
+      // describes the interval that ends at its stamp (Groves 2013, §16.2:
+      // odometry as distance increments); one sample comes as several CAN
+      // frames of the same stamp, so the filter moves to that time once all of
+      // them are in.
+      const bool last = !(i + 1 < n && !batch_[i + 1].is_gnss && batch_[i + 1].t == ev.t);
+      processOdometry(ev.odo, last);
+    }
+  }
 
   Pose& p = pose_;
   p = Pose{};

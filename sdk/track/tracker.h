@@ -139,13 +139,15 @@ class Tracker {
   };
 
   bool push(const Event& ev);
-  void process(const Event& ev);
   void processGnss(const GnssFix& f, double t);
-  void processOdometry(const Odometry& o);
+  // advance: move the filter to o.t after applying o (false while more samples of the same stamp follow).
+  void processOdometry(const Odometry& o, bool advance);
   void matchStep(const double* fix_en = nullptr, double fix_sigma = 0);
   // The fixes' side of the matched street: suspends the map aid when they disagree.
   void checkStreetAgreement(double e, double n, double sigma);
   double expectedOffset(uint32_t cell) const;
+  // The map aid's expected offset and sigma through a corner (tracker.cpp).
+  void cornerShift(double& offset, double& sigma) const;
   bool ambiguous() const;
 
   TrackerDesc d_;
