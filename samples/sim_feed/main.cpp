@@ -22,6 +22,7 @@
 
 #include "can/candump.h"
 #include "can/socketcan.h"
+#include "common/data_dir.h"
 #include "gnss/fix.h"
 #include "sim/sim_feed.h"
 #include "stream/city.h"
@@ -130,7 +131,8 @@ int main(int argc, char** argv) {
   track::SimDesc& d = o.feed.drive;
   CLI::App app{"sim_feed: simulated vehicle NMEA + CAN output on a blvd package's streets"};
   app.add_option("--package", o.package, "the .blvd whose street graph is driven")->required()->check(CLI::ExistingFile);
-  app.add_option("--dbc", o.dbc, "vehicle DBC (default: tests/data/can/dbc/toyota_new_mc_pt_generated.dbc)");
+  o.dbc = blvd::samples::defaultDbc("toyota_new_mc_pt_generated.dbc");  // $BLVD_DATA_DIR, the source tree, the installed SDK
+  app.add_option("--dbc", o.dbc, "vehicle DBC (default: see samples/common/data_dir.h)")->capture_default_str();
   app.add_option("--vehicle", o.vehicle, "toyota, vw_mqb or hyundai (the DBC must match)")->capture_default_str();
   app.add_option("--seed", d.seed, "route and noise seed")->capture_default_str();
   app.add_option("--cells", d.route_cells, "cells in the route")->capture_default_str()->check(CLI::Range(2u, 100000u));
@@ -155,7 +157,6 @@ int main(int argc, char** argv) {
 
   if (!gnss::parseIso8601(o.start.c_str(), o.start.size(), &o.feed.start_unix))
     die("--start " + o.start + ": expected YYYY-MM-DDThh:mm:ss[.fff]Z");
-  if (o.dbc.empty()) o.dbc = std::string(BLVD_SOURCE_DIR) + "/tests/data/can/dbc/toyota_new_mc_pt_generated.dbc";
 
   stream::City city;
   std::string err;

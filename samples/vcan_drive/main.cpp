@@ -21,6 +21,7 @@
 #include "can_input.h"
 #include "gnss_feed.h"
 #include "common/backend.h"
+#include "common/data_dir.h"
 #include "common/logs.h"
 #include "common/memory.h"
 #include "tracking.h"
@@ -40,7 +41,7 @@ void onSignal(int) { g_stop = 1; }
 struct Options {
   std::string iface = "vcan0";
   std::string candump;
-  std::string dbc = VCAN_DRIVE_DEFAULT_DBC;
+  std::string dbc = blvd::samples::defaultDbc("toyota_new_mc_pt_generated.dbc");  // common/data_dir.h
   std::string vehicle = "toyota";
   std::string package;
   bool no_render = false;
