@@ -246,6 +246,9 @@ typedef struct blvd_stats {
   uint32_t budget_unreachable;   /* 1 when even the coarsest levels (and min_render_scale) are predicted
                                   * to miss the target */
   float render_scale;            /* the scale the last frame was drawn at; 1 unless min_render_scale < 1 */
+  float frame_aim_ms;            /* with target_frame_ms: the frame time the budget aims for now; below the
+                                  * target (down to 0.92x) while frames scatter enough that their p95
+                                  * would pass 1.25x the target; else 0 */
 } blvd_stats;
 
 /* Fills *stats. Render thread. */

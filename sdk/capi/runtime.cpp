@@ -503,6 +503,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_frame).count();
     budget_->next(ms, block_tris_, floor_tris_, fs.pixels, full_pixels);
     stats_.polygon_budget = budget_->polygonBudget();
+    stats_.frame_aim_ms = float(budget_->aim());
     stats_.budget_unreachable = budget_->unreachable() ? 1 : 0;
   }
   stats_.render_scale = float(ro.scale);

@@ -8,9 +8,21 @@ namespace {
 constexpr double kForget = 0.9;   // history weight kept per frame (~10 frames)
 constexpr double kMaxStep = 2.0;  // the budget changes by at most ×2 or ÷2 a frame
 constexpr double kMaxScaleStep = 0.0625;  // the render scale moves by at most 1/16 a frame
+// Robust fit: once the line has history, a sample is taken as at most kClip
+// times (or 1/kClip of) what the line predicts (Huber's M-estimation, the
+// residual clipped: Huber 1964). A frame delayed by something other than its
+// triangles and pixels (a CPU shared with other work) then moves the line by
+// little, so the knobs do not chase noise; a real change in cost still gets
+// through, kClip a frame.
+constexpr double kClip = 1.15;
+constexpr double kRobustAfter = 4.0;  // weighted samples before clipping starts
 }  // namespace
 
 void CostLine::add(double x, double y) {
+  if (fitted_ && sw_ >= kRobustAfter) {  // not against the proportional guess
+    const double predicted = a_ + b_ * x;
+    if (predicted > 0) y = std::clamp(y, predicted / kClip, predicted * kClip);
+  }
   sw_ = sw_ * kForget + 1;
   sx_ = sx_ * kForget + x;
   sy_ = sy_ * kForget + y;
@@ -20,7 +32,8 @@ void CostLine::add(double x, double y) {
   const double var = sxx_ / sw_ - mx * mx, cov = sxy_ / sw_ - mx * my;
   // The slope needs spread in the history; until then (or if the fit says
   // x is free) assume y is proportional to x.
-  if (var > 1e-6 * (mx * mx + 1) && cov > 0) {
+  fitted_ = var > 1e-6 * (mx * mx + 1) && cov > 0;
+  if (fitted_) {
     b_ = cov / var;
     a_ = std::max(0.0, my - b_ * mx);
   } else {
@@ -75,12 +88,26 @@ double RenderScale::next(double frame_ms, uint64_t pixels, uint64_t full_pixels)
 }
 
 FrameBudget::FrameBudget(double target_ms, uint64_t max_triangles, double min_scale)
-    : poly_(target_ms, 0, max_triangles), scale_(target_ms, min_scale) {}
+    : poly_(target_ms, 0, max_triangles), scale_(target_ms, min_scale), target_ms_(target_ms), aim_ms_(target_ms) {}
+
+void FrameBudget::updateAim(double frame_ms) {
+  ratio_[next_ratio_] = float(frame_ms / aim_ms_);
+  next_ratio_ = (next_ratio_ + 1) % kTailWindow;
+  ratios_ = std::min(ratios_ + 1, kTailWindow);
+  if (ratios_ < kTailWindow / 4) return;  // too few frames to tell a tail
+  std::copy(ratio_, ratio_ + ratios_, scratch_);
+  float* q = scratch_ + size_t(0.95 * double(ratios_ - 1));
+  std::nth_element(scratch_, q, scratch_ + ratios_);
+  aim_ms_ = target_ms_ * std::clamp(kTailLimit / double(*q), kMinAim, 1.0);
+  poly_.setTarget(aim_ms_);
+  scale_.setTarget(aim_ms_);
+}
 
 void FrameBudget::next(double frame_ms, uint64_t triangles, uint64_t floor_triangles, uint64_t pixels,
                        uint64_t full_pixels) {
   if (!(frame_ms > 0) || !std::isfinite(frame_ms)) return;
-  const double target = poly_.target();
+  updateAim(frame_ms);
+  const double target = aim_ms_;
   if (scalable() && !fill_ && poly_.budget() <= floor_triangles && frame_ms > target) fill_ = true;
   if (!fill_) {
     poly_.next(frame_ms, triangles);

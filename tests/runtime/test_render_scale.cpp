@@ -40,7 +40,9 @@ TEST(RenderScale, AnUnreachableTargetScalesDownToTheMinimum) {
   blvd_runtime_desc d = baseDesc();
   Runtime full;
   ASSERT_EQ(blvd_runtime_create(&d, &full.rt), BLVD_OK) << blvd_last_error(nullptr);
-  EXPECT_EQ(drive(full.rt, 2).render_scale, 1.f);
+  const blvd_stats f = drive(full.rt, 2);
+  EXPECT_EQ(f.render_scale, 1.f);
+  EXPECT_EQ(f.frame_aim_ms, 0.f);  // no target, no aim
   const std::vector<uint8_t> reference = frame(full.rt, d);
 
   d.target_frame_ms = 0.01f;  // no frame meets it
@@ -52,6 +54,8 @@ TEST(RenderScale, AnUnreachableTargetScalesDownToTheMinimum) {
   const blvd_stats s = drive(scaled.rt, 60);
   EXPECT_EQ(s.render_scale, 0.5f);
   EXPECT_EQ(s.budget_unreachable, 1u);
+  // Every frame misses by far: the aim sits at its lowest, 0.92 × the target.
+  EXPECT_NEAR(s.frame_aim_ms, 0.92f * 0.01f, 1e-5f);
   const std::vector<uint8_t> half = frame(scaled.rt, d);
   // The whole frame was written (stretched), and it is the same street.
   const blvd::render::ImageMetrics m =
