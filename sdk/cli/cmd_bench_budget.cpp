@@ -71,6 +71,7 @@ struct Frame {
   uint32_t cell;
   float scale;     // render scale the frame was drawn at
   double upload_ms;  // GL uploads inside the frame (prefetched cells)
+  float aim_ms;      // what the budget aimed for (its tail margin; 0 without a target)
 };
 
 // One run of the benchmark: a runtime, its kept frames and images.
@@ -104,7 +105,7 @@ void drawPose(Run& r, const Pose& p, bool keep, bool image, int w, int h) {
   blvd_stats st{};
   st.struct_size = sizeof st;
   check(blvd_runtime_stats(rt, &st), rt, "stats");
-  r.frames.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale, st.upload_ms});
+  r.frames.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale, st.upload_ms, st.frame_aim_ms});
   if (image && r.want_images) {
     r.images.emplace_back(size_t(w) * h * 4);
     check(blvd_read_pixels(rt, r.images.back().data(), r.images.back().size()), rt, "pixels");
@@ -247,7 +248,7 @@ int runBudget(const BudgetOpts& o) {
   std::printf("%s\n", text.c_str());
   writeText(o.json_path, text);
   if (!o.csv_path.empty()) {
-    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell\n";
+    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms\n";
     const std::pair<const char*, const std::vector<Frame>*> runs[] = {
         {"local_lod0", &local.frames}, {"floor", &coarsest.frames}, {"unbudgeted", &unbudgeted.frames},
         {"budgeted", &budgeted.frames}};
@@ -255,8 +256,9 @@ int runBudget(const BudgetOpts& o) {
       for (size_t i = 0; i < frames->size(); ++i) {
         const Frame& f = (*frames)[i];
         char row[160];
-        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u\n", name, i, f.ms, f.upload_ms,
-                      static_cast<unsigned long long>(f.tris), double(f.scale), int(f.boundary), f.cell);
+        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u,%.4f\n", name, i, f.ms, f.upload_ms,
+                      static_cast<unsigned long long>(f.tris), double(f.scale), int(f.boundary), f.cell,
+                      double(f.aim_ms));
         csv += row;
       }
     writeText(o.csv_path, csv);
@@ -266,15 +268,28 @@ int runBudget(const BudgetOpts& o) {
     ft.title = "Frame time along the route (last lap)";
     ft.x_label = "frame";
     ft.y_label = "ms";
-    Series a{"local, LOD 0", {}, ""}, b{"blvd, no budget", {}, ""}, c{"blvd, budget", {}, ""}, t{"target", {}, ""};
+    Series a{"local, LOD 0", {}, ""}, b{"blvd, no budget", {}, ""}, c{"blvd, budget", {}, ""}, t{"target", {}, ""},
+        m{"budget's aim", {}, ""};
     for (const Frame& f : local.frames) a.y.push_back(f.ms);
     for (const Frame& f : unbudgeted.frames) b.y.push_back(f.ms);
-    for (const Frame& f : budgeted.frames) c.y.push_back(f.ms), t.y.push_back(target);
-    ft.series = {a, b, c, t};
+    for (const Frame& f : budgeted.frames) c.y.push_back(f.ms), t.y.push_back(target), m.y.push_back(f.aim_ms);
+    ft.series = {a, b, c, t, m};
+    PlotSpec sc;
+    sc.title = "The budget's knobs along the route (last lap)";
+    sc.x_label = "frame";
+    sc.y_label = "render scale / share of the local model's triangles";
+    Series scale{"render scale", {}, ""}, tris{"block triangles / local LOD 0", {}, ""};
+    for (size_t i = 0; i < budgeted.frames.size(); ++i) {
+      scale.y.push_back(budgeted.frames[i].scale);
+      const double full = i < local.frames.size() ? double(local.frames[i].tris) : 0.0;
+      tris.y.push_back(full > 0 ? std::min(1.0, double(budgeted.frames[i].tris) / full) : 0.0);
+    }
+    sc.series = {scale, tris};
     HtmlPage page("blvd bench budget: " + o.package);
     page.paragraph(std::to_string(route.size()) + " cells, " + std::to_string(poses.size()) + " frames a lap, " +
                    o.size + ". Target " + std::to_string(target) + " ms (" + target_rule + ").");
     page.raw(svgLinePlot(ft));
+    page.raw(svgLinePlot(sc));
     std::string err;
     ::mkdir(o.html_dir.c_str(), 0755);
     if (!page.write(o.html_dir + "/index.html", err)) throw core::Error(core::Status::Io, err);
