@@ -54,6 +54,7 @@ class Context;
   X(PFNGLFINISHPROC, Finish)                                   \
   X(PFNGLFLUSHPROC, Flush)                                     \
   X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer) \
+  X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)       \
   X(PFNGLFRONTFACEPROC, FrontFace)                             \
   X(PFNGLGENBUFFERSPROC, GenBuffers)                           \
   X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers)                 \

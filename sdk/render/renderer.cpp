@@ -63,6 +63,7 @@ struct Uniforms {
   GLint ray_basis = -1, zenith = -1, ground = -1, eye_height = -1;  // background
   GLint viewproj = -1, offset = -1;                                 // meshes
   GLint item = -1, forward = -1, depth_scale = -1, texture = -1, uv_scale = -1;    // capture, impostors
+  GLint uv_clamp = -1;                                                            // upscale
 };
 
 glm::vec3 srgbToLinear(const float c[3]) {
@@ -85,11 +86,11 @@ struct Renderer::Slab {
 
 struct Renderer::Impl {
   GLuint bg_program = 0, mesh_program = 0;
-  GLuint item_program = 0, cap_color_program = 0, cap_depth_program = 0, tex_program = 0;
-  Uniforms bg, mesh, item, cap_color, cap_depth, tex;
+  GLuint item_program = 0, cap_color_program = 0, cap_depth_program = 0, tex_program = 0, up_program = 0;
+  Uniforms bg, mesh, item, cap_color, cap_depth, tex, up;
   GLuint empty_vao = 0;  // core profile needs a VAO even for attribute-less draws
   GLuint fbo = 0, color_rb = 0, depth_rb = 0;
-  GLuint scaled_fbo = 0, scaled_color_rb = 0, scaled_depth_rb = 0;  // RendererDesc::scaled_target
+  GLuint scaled_fbo = 0, scaled_color_tex = 0, scaled_depth_rb = 0;  // RendererDesc::scaled_target
   int scaled_w = 0, scaled_h = 0;
   GLint host_fbo = 0;  // shared: framebuffer bound during the last render()
 
@@ -195,6 +196,7 @@ Uniforms locate(const GlApi& gl, GLuint p) {
   u.depth_scale = gl.GetUniformLocation(p, "u_depth_scale");
   u.texture = gl.GetUniformLocation(p, "u_texture");
   u.uv_scale = gl.GetUniformLocation(p, "u_uv_scale");
+  u.uv_clamp = gl.GetUniformLocation(p, "u_uv_clamp");
   return u;
 }
 
@@ -267,20 +269,37 @@ bool Renderer::init(const RendererDesc& desc) {
   impl_->cap_color = locate(gl, impl_->cap_color_program);
   impl_->cap_depth = locate(gl, impl_->cap_depth_program);
   impl_->tex = locate(gl, impl_->tex_program);
+  if (desc.scaled_target) {
+    impl_->up_program = link(gl, gles_, shaders::kUpscaleVs, shaders::kUpscaleFs, error_);
+    if (!impl_->up_program) return false;
+    impl_->up = locate(gl, impl_->up_program);
+  }
   gl.GenVertexArrays(1, &impl_->empty_vao);
 
-  // An RGBA8 + depth24 framebuffer of w x h.
-  // (init's guard restores a host's bindings.)
-  auto makeTarget = [&](int w, int h, GLuint& fbo, GLuint& color, GLuint& depth) {
-    gl.GenRenderbuffers(1, &color);
-    gl.BindRenderbuffer(GL_RENDERBUFFER, color);
-    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+  // An RGBA8 + depth24 framebuffer of w x h; colour in a texture when
+  // `color_tex` is given (the scaled target, sampled by the upscale pass),
+  // else in a renderbuffer. (init's guard restores a host's bindings.)
+  auto makeTarget = [&](int w, int h, GLuint& fbo, GLuint* color_rb, GLuint* color_tex, GLuint& depth) {
+    if (color_tex) {
+      gl.GenTextures(1, color_tex);
+      gl.BindTexture(GL_TEXTURE_2D, *color_tex);
+      gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    } else {
+      gl.GenRenderbuffers(1, color_rb);
+      gl.BindRenderbuffer(GL_RENDERBUFFER, *color_rb);
+      gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+    }
     gl.GenRenderbuffers(1, &depth);
     gl.BindRenderbuffer(GL_RENDERBUFFER, depth);
     gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
     gl.GenFramebuffers(1, &fbo);
     gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
-    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
+    if (color_tex) gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, *color_tex, 0);
+    else gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, *color_rb);
     gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
     const GLenum status = gl.CheckFramebufferStatus(GL_FRAMEBUFFER);
     if (status == GL_FRAMEBUFFER_COMPLETE) return true;
@@ -291,13 +310,14 @@ bool Renderer::init(const RendererDesc& desc) {
   if (!shared_) {
     fb_w_ = desc.width;
     fb_h_ = desc.height;
-    if (!makeTarget(fb_w_, fb_h_, impl_->fbo, impl_->color_rb, impl_->depth_rb)) return false;
+    if (!makeTarget(fb_w_, fb_h_, impl_->fbo, &impl_->color_rb, nullptr, impl_->depth_rb)) return false;
   }
   if (desc.scaled_target) {
     if (desc.width <= 0 || desc.height <= 0) return fail("scaled target needs the frame's width and height");
     impl_->scaled_w = desc.width;
     impl_->scaled_h = desc.height;
-    if (!makeTarget(desc.width, desc.height, impl_->scaled_fbo, impl_->scaled_color_rb, impl_->scaled_depth_rb))
+    if (!makeTarget(desc.width, desc.height, impl_->scaled_fbo, nullptr, &impl_->scaled_color_tex,
+                    impl_->scaled_depth_rb))
       return false;
   }
 
@@ -337,14 +357,14 @@ Renderer::~Renderer() {
     if (s.texture) gl.DeleteTextures(1, &s.texture);
   }
   for (GLuint p : {impl_->bg_program, impl_->mesh_program, impl_->item_program, impl_->cap_color_program,
-                   impl_->cap_depth_program, impl_->tex_program})
+                   impl_->cap_depth_program, impl_->tex_program, impl_->up_program})
     if (p) gl.DeleteProgram(p);
   if (impl_->empty_vao) gl.DeleteVertexArrays(1, &impl_->empty_vao);
   if (impl_->fbo) gl.DeleteFramebuffers(1, &impl_->fbo);
   if (impl_->color_rb) gl.DeleteRenderbuffers(1, &impl_->color_rb);
   if (impl_->depth_rb) gl.DeleteRenderbuffers(1, &impl_->depth_rb);
   if (impl_->scaled_fbo) gl.DeleteFramebuffers(1, &impl_->scaled_fbo);
-  if (impl_->scaled_color_rb) gl.DeleteRenderbuffers(1, &impl_->scaled_color_rb);
+  if (impl_->scaled_color_tex) gl.DeleteTextures(1, &impl_->scaled_color_tex);
   if (impl_->scaled_depth_rb) gl.DeleteRenderbuffers(1, &impl_->scaled_depth_rb);
 }
 
@@ -903,14 +923,27 @@ bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, Frame
     }
     if (opt.pass == Pass::Shaded) drawBackground();
     if (scaled) {
-      // Stretch the scaled view over the real one; the scissor box must let
-      // the whole destination through.
-      gl.BindFramebuffer(GL_READ_FRAMEBUFFER, m.scaled_fbo);
-      gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, shared_ ? static_cast<GLuint>(m.host_fbo) : m.fbo);
+      // Stretch the scaled view over the real one: a textured triangle over
+      // the viewport, bilinear (cheaper than a linear glBlitFramebuffer on
+      // llvmpipe, decision 0008 §7). Only colour goes to the destination;
+      // its depth is left alone.
+      gl.BindFramebuffer(GL_FRAMEBUFFER, shared_ ? static_cast<GLuint>(m.host_fbo) : m.fbo);
+      gl.Viewport(out.viewport_x, out.viewport_y, out.width, out.height);
       gl.Scissor(out.viewport_x, out.viewport_y, out.width, out.height);
-      gl.BlitFramebuffer(0, 0, cam.width, cam.height, out.viewport_x, out.viewport_y,
-                         out.viewport_x + out.width, out.viewport_y + out.height, GL_COLOR_BUFFER_BIT,
-                         GL_LINEAR);
+      gl.Disable(GL_DEPTH_TEST);
+      gl.DepthMask(GL_FALSE);
+      gl.Disable(GL_CULL_FACE);
+      gl.UseProgram(m.up_program);
+      gl.ActiveTexture(GL_TEXTURE0);
+      gl.BindTexture(GL_TEXTURE_2D, m.scaled_color_tex);
+      gl.Uniform1i(m.up.texture, 0);
+      const float tw = static_cast<float>(m.scaled_w), th = static_cast<float>(m.scaled_h);
+      gl.Uniform2f(m.up.uv_scale, static_cast<float>(cam.width) / tw, static_cast<float>(cam.height) / th);
+      gl.Uniform4f(m.up.uv_clamp, 0.5f / tw, 0.5f / th, (static_cast<float>(cam.width) - 0.5f) / tw,
+                   (static_cast<float>(cam.height) - 0.5f) / th);
+      gl.BindVertexArray(m.empty_vao);
+      gl.DrawArrays(GL_TRIANGLES, 0, 3);
+      gl.DepthMask(GL_TRUE);
       ++fs.draw_calls;
     }
     gl.BindVertexArray(0);

@@ -166,4 +166,28 @@ void main() {
 }
 )";
 
+// The render scale's upscale (docs/decisions/0008 §7): the view drawn at
+// fewer pixels into the lower-left of the scaled target's colour texture,
+// stretched over the real viewport with bilinear filtering. On llvmpipe this
+// pass is cheaper than a linear glBlitFramebuffer of the same size.
+const char* const kUpscaleVs = R"(
+uniform vec2 u_uv_scale;  // the drawn part of the texture, in texture units
+out vec2 v_uv;
+void main() {
+  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
+  v_uv = (p * 0.5 + 0.5) * u_uv_scale;
+}
+)";
+
+const char* const kUpscaleFs = R"(
+uniform sampler2D u_texture;
+uniform vec4 u_uv_clamp;  // texel centres at the drawn part's edges: no bleed from outside it
+in vec2 v_uv;
+layout(location = 0) out vec4 o_color;
+void main() {
+  o_color = texture(u_texture, clamp(v_uv, u_uv_clamp.xy, u_uv_clamp.zw));
+}
+)";
+
 }  // namespace blvd::render::shaders

@@ -28,5 +28,7 @@ extern const char* const kCaptureDepthFs;
 // Textured depth meshes (impostors): the baked colour, fogged at draw time.
 extern const char* const kTexturedVs;
 extern const char* const kTexturedFs;
+extern const char* const kUpscaleVs;
+extern const char* const kUpscaleFs;
 
 }  // namespace blvd::render::shaders
