@@ -115,6 +115,17 @@ typedef struct blvd_executor {
   void* user;
 } blvd_executor;
 
+/* Thread priority of predicted cells' decoding (blvd_runtime_desc.prefetch_priority). */
+typedef enum blvd_prefetch_priority {
+  /* SCHED_IDLE: only on a core nothing else wants, so predictions never take CPU from a frame (the
+   * default; nice 19 where the policy is refused). On a CPU the host keeps saturated they then
+   * wait, and a cell is decoded only once it is current. */
+  BLVD_PREFETCH_IDLE = 0,
+  /* nice 19 (SCHED_OTHER): predictions take a small share of a saturated CPU, and a waking decoder
+   * may delay a frame. For hosts that keep every core busy. */
+  BLVD_PREFETCH_LOW = 1
+} blvd_prefetch_priority;
+
 typedef struct blvd_runtime_desc {
   uint32_t struct_size;     /* sizeof(blvd_runtime_desc); 0 is treated as the current size */
   const char* package_path; /* required: a .blvd file made by `blvd bake`; copied */
@@ -151,6 +162,11 @@ typedef struct blvd_runtime_desc {
    * framebuffer (its depth buffer is left alone). Costs one more width x height RGBA8 + depth24
    * framebuffer. 0 means 1: never scale. Within [0.25, 1]. */
   float min_render_scale;
+
+  /* How blvd's own loader decodes predicted cells (the cell the vehicle is in always decodes at
+   * normal priority, and takes over a prediction that becomes current). With a host executor the
+   * host decides. */
+  blvd_prefetch_priority prefetch_priority;
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */

@@ -125,6 +125,10 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
     t_create_error = "blvd_runtime_create: min_render_scale must be within 0.25..1 (0 means 1)";
     return BLVD_ERR_INVALID_ARG;
   }
+  if (d.prefetch_priority != BLVD_PREFETCH_IDLE && d.prefetch_priority != BLVD_PREFETCH_LOW) {
+    t_create_error = "blvd_runtime_create: prefetch_priority must be BLVD_PREFETCH_IDLE or BLVD_PREFETCH_LOW";
+    return BLVD_ERR_INVALID_ARG;
+  }
   if (!d.allocator.alloc != !d.allocator.free) {
     t_create_error = "blvd_runtime_create: allocator needs both alloc and free, or neither";
     return BLVD_ERR_INVALID_ARG;

@@ -66,8 +66,10 @@ class CellLoader {
   // allocator fails (nothing is leaked).
   // With `executor.submit` set, no thread is started: each request becomes a
   // task handed to the host.
+  // `low_prefetch`: predictions at nice 19 instead of SCHED_IDLE
+  // (BLVD_PREFETCH_LOW).
   CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes,
-             const blvd_executor& executor = blvd_executor{});
+             const blvd_executor& executor = blvd_executor{}, bool low_prefetch = false);
   ~CellLoader();
   CellLoader(const CellLoader&) = delete;
   CellLoader& operator=(const CellLoader&) = delete;
@@ -76,7 +78,8 @@ class CellLoader {
   // slot is busy.
   // `urgent` (the cell the vehicle is in) is decoded by the normal-priority
   // thread; predictions by the background one (SCHED_IDLE: it runs only on a
-  // core nothing else wants, or nice 19 where the policy is refused), so
+  // core nothing else wants, or nice 19 where the policy is refused or
+  // low_prefetch is set), so
   // that they delay themselves, not the frames (a CPU renderer such as
   // llvmpipe shares the cores with them). See promote() for a prediction
   // that becomes urgent mid-decode.
@@ -124,6 +127,7 @@ class CellLoader {
   bool stop_ = false;
   std::thread thread_, background_;  // urgent jobs; predictions
   blvd_executor executor_{};
+  bool low_prefetch_ = false;
   uint32_t tasks_out_ = 0;  // submitted to the host and not yet run
   std::atomic<uint64_t> loads_{0};
   std::atomic<uint64_t> decode_high_water_{0}, staging_high_water_{0};

@@ -28,7 +28,8 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   alloc.free = desc.allocator.free;
   alloc.user = desc.allocator.user;
   if (!alloc.alloc != !alloc.free) throw Error(Status::InvalidArg, "allocator needs both alloc and free, or neither");
-  loader_ = std::make_unique<CellLoader>(city_, alloc, plan_.staging_arena_bytes, plan_.staging_meshes, desc.executor);
+  loader_ = std::make_unique<CellLoader>(city_, alloc, plan_.staging_arena_bytes, plan_.staging_meshes, desc.executor,
+                                         desc.prefetch_priority == BLVD_PREFETCH_LOW);
 
   ctx_ = render::createContext(static_cast<render::Backend>(desc.backend), err);
   if (!ctx_) throw Error(Status::Backend, err);

@@ -5,8 +5,14 @@
 // over, the starved copy gives its staging slot back once it runs again.
 #include <gtest/gtest.h>
 
+#include <sched.h>
+#include <cerrno>
+#include <sys/resource.h>
+
 #include <atomic>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -25,14 +31,15 @@ struct Loader {
   stream::City city;
   capi::MemoryPlan plan;
   std::unique_ptr<capi::CellLoader> loader;
-  Loader() {
+  explicit Loader(bool low_prefetch = false) {
     std::string err;
     EXPECT_EQ(city.open(BLVD_TEST_PACKAGE, err), core::Status::Ok) << err;
     blvd_runtime_desc d{};
     d.struct_size = sizeof d;
     d.max_resident_cells = 4;
     plan = capi::planMemory(d, city);
-    loader = std::make_unique<capi::CellLoader>(city, capi::Allocator{}, plan.staging_arena_bytes, plan.staging_meshes);
+    loader = std::make_unique<capi::CellLoader>(city, capi::Allocator{}, plan.staging_arena_bytes, plan.staging_meshes,
+                                                blvd_executor{}, low_prefetch);
   }
   // Waits up to `s` seconds for a finished slot of `cell`; releases others.
   capi::Staging* waitFinished(uint32_t cell, double s) {
@@ -114,6 +121,43 @@ TEST(CellLoader, PromotedWhileDecodingInBackgroundFinishesOnBusyCores) {
   // Both slots are free again.
   EXPECT_TRUE(l.loader->request(cell, 0, true));
   EXPECT_TRUE(l.loader->request(cell == 0 ? 1 : 0, 1, true));
+}
+
+// The thread named blvd-prefetch in this process (0 if none).
+pid_t prefetchThread() {
+  for (const auto& e : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream comm(e.path() / "comm");
+    std::string name;
+    std::getline(comm, name);
+    if (name == "blvd-prefetch") return pid_t(std::stol(e.path().filename().string()));
+  }
+  return 0;
+}
+
+// blvd_runtime_desc.prefetch_priority: SCHED_IDLE by default, nice 19 with
+// BLVD_PREFETCH_LOW (and where SCHED_IDLE is refused).
+TEST(CellLoader, PredictionThreadPolicy) {
+  for (bool low : {false, true}) {
+    Loader l(low);
+    pid_t tid = 0;
+    for (int i = 0; i < 1000 && !(tid = prefetchThread()); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ASSERT_NE(tid, 0) << "no blvd-prefetch thread";
+    // The thread sets its policy first thing; give it a moment.
+    int policy = -1, nice = 0;
+    for (int i = 0; i < 1000; ++i) {
+      policy = sched_getscheduler(tid);
+      errno = 0;
+      nice = getpriority(PRIO_PROCESS, id_t(tid));
+      if (policy == SCHED_IDLE || nice == 19) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    if (low) {
+      EXPECT_EQ(policy, SCHED_OTHER);
+      EXPECT_EQ(nice, 19);
+    } else {
+      EXPECT_TRUE(policy == SCHED_IDLE || nice == 19) << "policy " << policy << ", nice " << nice;
+    }
+  }
 }
 
 }  // namespace
