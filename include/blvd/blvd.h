@@ -166,7 +166,7 @@ typedef struct blvd_runtime_desc {
   /* How blvd's own loader decodes predicted cells (the cell the vehicle is in always decodes at
    * normal priority, and takes over a prediction that becomes current). With a host executor the
    * host decides. */
-  blvd_prefetch_priority prefetch_priority;
+  uint32_t prefetch_priority; /* a blvd_prefetch_priority; 0 means BLVD_PREFETCH_IDLE */
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */

@@ -46,7 +46,7 @@ TEST(RuntimeMemory, TooSmallABudgetFailsWithTheNumbers) {
   bad.allocator.alloc = [](size_t, size_t, void*) -> void* { return nullptr; };
   EXPECT_EQ(blvd_runtime_create(&bad, &none), BLVD_ERR_INVALID_ARG);  // alloc without free
   bad = baseDesc();
-  bad.prefetch_priority = static_cast<blvd_prefetch_priority>(7);
+  bad.prefetch_priority = 7;
   EXPECT_EQ(blvd_runtime_create(&bad, &none), BLVD_ERR_INVALID_ARG);
   EXPECT_NE(std::string(blvd_last_error(nullptr)).find("prefetch_priority"), std::string::npos);
 }
