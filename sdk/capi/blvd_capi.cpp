@@ -8,6 +8,7 @@
 #include "blvd/blvd.h"
 #include "capi/create_error.h"
 #include "capi/runtime.h"
+#include "capi/sized.h"
 #include "core/status.h"
 
 struct blvd_runtime {
@@ -133,11 +134,11 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
     t_create_error = "blvd_runtime_create: allocator needs both alloc and free, or neither";
     return BLVD_ERR_INVALID_ARG;
   }
-  if (static_cast<int>(d.mode) < 0 || d.mode > BLVD_MODE_SINGLE) {
+  if (blvd::capi::rawEnum(d.mode) < 0 || blvd::capi::rawEnum(d.mode) > BLVD_MODE_SINGLE) {
     t_create_error = "blvd_runtime_create: unknown render mode";
     return BLVD_ERR_INVALID_ARG;
   }
-  if (static_cast<int>(d.backend) < 0 || d.backend > BLVD_CONTEXT_SHARED) {
+  if (blvd::capi::rawEnum(d.backend) < 0 || blvd::capi::rawEnum(d.backend) > BLVD_CONTEXT_SHARED) {
     t_create_error = "blvd_runtime_create: unknown backend";
     return BLVD_ERR_INVALID_ARG;
   }
@@ -205,6 +206,11 @@ blvd_status blvd_set_pose_local(blvd_runtime* rt, double x, double y, float head
 
 blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mode, float radius_m) {
   if (!rt) return misuse(nullptr, "blvd_set_render_mode: rt is NULL");
+  const int32_t m = blvd::capi::rawEnum(mode);
+  if (m < BLVD_MODE_BLVD || m > BLVD_MODE_SINGLE) {
+    rt->impl->last_error = "blvd_set_render_mode: unknown render mode " + std::to_string(m);
+    return BLVD_ERR_INVALID_ARG;
+  }
   return guarded(rt, [&] { rt->impl->setMode(mode, radius_m); });
 }
 

@@ -103,10 +103,12 @@ blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_
   if (!desc) return fail(BLVD_ERR_MISUSE, "blvd_can_profile_create: desc is NULL");
   const blvd_can_profile_desc d = blvd::capi::sized(*desc);
   if (!d.dbc_path || !*d.dbc_path) return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: desc.dbc_path is required");
-  if (static_cast<int>(d.vehicle) < 0 || d.vehicle > BLVD_VEHICLE_HYUNDAI)
-    return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: unknown vehicle " + std::to_string(d.vehicle));
-  if (static_cast<int>(d.speed) < 0 || d.speed > BLVD_CAN_SPEED_VEHICLE)
-    return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: unknown speed source " + std::to_string(d.speed));
+  using blvd::capi::rawEnum;
+  if (rawEnum(d.vehicle) < 0 || rawEnum(d.vehicle) > BLVD_VEHICLE_HYUNDAI)
+    return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: unknown vehicle " + std::to_string(rawEnum(d.vehicle)));
+  if (rawEnum(d.speed) < 0 || rawEnum(d.speed) > BLVD_CAN_SPEED_VEHICLE)
+    return fail(BLVD_ERR_INVALID_ARG,
+                "blvd_can_profile_create: unknown speed source " + std::to_string(rawEnum(d.speed)));
   if (!(d.wheel_stale_s >= 0 && d.wheel_stale_s < 3600))
     return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: wheel_stale_s out of range");
   try {

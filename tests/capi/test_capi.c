@@ -58,6 +58,22 @@ int main(int argc, char** argv) {
     EXPECT(d.width == 800 && d.height == 480 && d.fov_y_deg == 45.0f && d.struct_size == sizeof d);
   }
 
+  /* Enum fields and arguments holding ints outside their enums are refused
+   * (C lets a host store any int there). */
+  memset(&desc, 0, sizeof desc);
+  desc.struct_size = sizeof desc;
+  desc.package_path = argv[1];
+  desc.mode = (blvd_render_mode)99;
+  EXPECT(blvd_runtime_create(&desc, &rt) == BLVD_ERR_INVALID_ARG);
+  EXPECT(strstr(blvd_last_error(NULL), "render mode") != NULL);
+  desc.mode = BLVD_MODE_BLVD;
+  desc.backend = (blvd_backend)-3;
+  EXPECT(blvd_runtime_create(&desc, &rt) == BLVD_ERR_INVALID_ARG);
+  desc.backend = BLVD_BACKEND_AUTO;
+  desc.prefetch_priority = 2;
+  EXPECT(blvd_runtime_create(&desc, &rt) == BLVD_ERR_INVALID_ARG);
+  EXPECT(rt == NULL);
+
   /* A real runtime on the baked package (small frame to keep it quick). */
   memset(&desc, 0, sizeof desc);
   desc.struct_size = sizeof desc;
@@ -80,6 +96,8 @@ int main(int argc, char** argv) {
   EXPECT(strstr(blvd_last_error(rt), "latitude") != NULL);
   EXPECT(blvd_set_pose_local(rt, NAN, 0, 0, 0) == BLVD_ERR_INVALID_ARG);
   EXPECT(blvd_set_pose_local(rt, 0, 0, 0, 95.0f) == BLVD_ERR_INVALID_ARG);
+  EXPECT(blvd_set_render_mode(rt, (blvd_render_mode)42, 0) == BLVD_ERR_INVALID_ARG);
+  EXPECT(strstr(blvd_last_error(rt), "render mode") != NULL);
   EXPECT(blvd_set_pose_geo(rt, info.origin_lat, info.origin_lon, 90.0f, 0.0f) == BLVD_OK);
   memset(&fs, 0, sizeof fs);
   fs.struct_size = sizeof fs;
