@@ -72,6 +72,11 @@ TEST(RuntimeStream, DriveStaysWithinItsSlotsAndTheStatsAddUp) {
   ASSERT_GE(dr.cells.size(), 10u);
   blvd_runtime_desc d = baseDesc();
   d.max_resident_cells = 3;
+  // The drive passes 30 cells in well under a second. Predictions under
+  // SCHED_IDLE (the default) get no CPU while other tests keep the cores
+  // busy, so this test asks for nice 19, which always makes progress: it
+  // checks the slots and the stats, not the thread policy (test_cell_loader).
+  d.prefetch_priority = BLVD_PREFETCH_LOW;
   Runtime r;
   ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
   ASSERT_EQ(blvd_set_route(r.rt, dr.cells.data(), dr.cells.size()), BLVD_OK) << blvd_last_error(r.rt);
@@ -98,12 +103,12 @@ TEST(RuntimeStream, DriveStaysWithinItsSlotsAndTheStatsAddUp) {
   EXPECT_EQ(s.misses, degraded);
   EXPECT_EQ(s.triangles, tris);
   EXPECT_EQ(s.load_errors, 0u);
-  // Every cell drawn whole was loaded, and with three slots most loads made
-  // another cell give way. (How many of the drive's cells load before the
-  // drive passes them depends on the CPU left to the loader: predictions
-  // decode under SCHED_IDLE, which a loaded test machine starves.)
+  // Every cell drawn whole was loaded, at least half the drive's cells were
+  // loaded before it passed them, and with three slots most loads made
+  // another cell give way.
   EXPECT_GE(drawn.size(), 1u);
   EXPECT_GE(s.loads, drawn.size());
+  EXPECT_GE(s.loads, dr.cells.size() / 2);
   EXPECT_GE(s.evictions + 3, s.loads);
   EXPECT_GT(s.decode.high_water_bytes, 0u);
   RecordProperty("degraded_frames", std::to_string(degraded));
