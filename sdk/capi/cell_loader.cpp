@@ -288,6 +288,15 @@ bool CellLoader::decode(Staging& s) {
   }
   if (s.arena.used > staging_high_water_) staging_high_water_ = s.arena.used;
   std::lock_guard<std::mutex> lock(mu_);
+  // promote() may have started the urgent copy after the last mesh's check:
+  // the copy delivers the cell, this one is not a load (both would be
+  // counted, and the runtime would discard the second).
+  if (s.abandon.load(std::memory_order_relaxed)) {
+    s.state = Staging::Free;
+    s.cell = 0xffffffffu;
+    s.abandon = false;
+    return false;
+  }
   s.state = Staging::Ready;
   return true;
 }
