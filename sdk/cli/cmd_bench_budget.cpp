@@ -72,6 +72,8 @@ struct Frame {
   float scale;     // render scale the frame was drawn at
   double upload_ms;  // GL uploads inside the frame (prefetched cells)
   float aim_ms;      // what the budget aimed for (its tail margin; 0 without a target)
+  uint64_t block_tris;  // triangles of the chosen block levels
+  uint64_t budget;      // the polygon budget set for the next frame
 };
 
 // One run of the benchmark: a runtime, its kept frames and images.
@@ -105,7 +107,8 @@ void drawPose(Run& r, const Pose& p, bool keep, bool image, int w, int h) {
   blvd_stats st{};
   st.struct_size = sizeof st;
   check(blvd_runtime_stats(rt, &st), rt, "stats");
-  r.frames.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale, st.upload_ms, st.frame_aim_ms});
+  r.frames.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale, st.upload_ms, st.frame_aim_ms,
+                      st.block_triangles, st.polygon_budget});
   if (image && r.want_images) {
     r.images.emplace_back(size_t(w) * h * 4);
     check(blvd_read_pixels(rt, r.images.back().data(), r.images.back().size()), rt, "pixels");
@@ -248,17 +251,18 @@ int runBudget(const BudgetOpts& o) {
   std::printf("%s\n", text.c_str());
   writeText(o.json_path, text);
   if (!o.csv_path.empty()) {
-    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms\n";
+    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget\n";
     const std::pair<const char*, const std::vector<Frame>*> runs[] = {
         {"local_lod0", &local.frames}, {"floor", &coarsest.frames}, {"unbudgeted", &unbudgeted.frames},
         {"budgeted", &budgeted.frames}};
     for (const auto& [name, frames] : runs)
       for (size_t i = 0; i < frames->size(); ++i) {
         const Frame& f = (*frames)[i];
-        char row[160];
-        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u,%.4f\n", name, i, f.ms, f.upload_ms,
-                      static_cast<unsigned long long>(f.tris), double(f.scale), int(f.boundary), f.cell,
-                      double(f.aim_ms));
+        char row[200];
+        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u,%.4f,%llu,%llu\n", name, i, f.ms,
+                      f.upload_ms, static_cast<unsigned long long>(f.tris), double(f.scale), int(f.boundary), f.cell,
+                      double(f.aim_ms), static_cast<unsigned long long>(f.block_tris),
+                      static_cast<unsigned long long>(f.budget));
         csv += row;
       }
     writeText(o.csv_path, csv);

@@ -1,5 +1,6 @@
 #include "stream/city.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <glm/geometric.hpp>
@@ -50,6 +51,7 @@ core::Status City::open(const std::string& path, std::string& err) {
   }
   const auto& h = reader_.header();
   frame_ = geo::LocalFrame(h.origin_lat, h.origin_lon, h.origin_h);
+  grid_.build(graph_);
   return core::Status::Ok;
 }
 
@@ -65,7 +67,7 @@ uint64_t City::tableBytes() const {
   uint64_t n = bytesOf(graph_.vertices) + bytesOf(graph_.halfedges) + bytesOf(graph_.faces) +
                bytesOf(graph_.points) + bytesOf(graph_.successors) + bytesOf(graph_.predecessors) +
                bytesOf(graph_.local_blocks) + bytesOf(blocks_) + bytesOf(tables_.visibility) +
-               bytesOf(tables_.impostors);
+               bytesOf(tables_.impostors) + grid_.bytes();
   for (const auto& v : tables_.visibility) n += bytesOf(v.blocks) + bytesOf(v.ach);
   for (const auto& c : tables_.impostors) {
     n += bytesOf(c.layered) + bytesOf(c.single);
@@ -132,26 +134,44 @@ uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m) cons
   const glm::dvec2 dir(std::sin(glm::radians(heading_deg)), std::cos(glm::radians(heading_deg)));
   double best = 1e300;
   uint32_t best_h = graph::kNone;
-  for (uint32_t h = 0; h < graph_.halfedges.size(); ++h) {
+  // Distance plus a penalty for facing the wrong way, so of two twin
+  // half-edges the one going our way wins. The grid lists one half-edge of
+  // each pair; its twin runs the same segment backwards.
+  auto consider = [&](uint32_t h, uint32_t point) {
     const auto& e = graph_.halfedges[h];
-    double along = 0;
-    for (uint32_t i = 0; i + 1 < e.pts_count; ++i) {
-      const glm::dvec2 a = graph_.points[e.pts_begin + i], b = graph_.points[e.pts_begin + i + 1];
-      const glm::dvec2 d = b - a;
-      const double len = glm::length(d);
-      if (len < 1e-9) continue;
-      const double t = glm::clamp(glm::dot(p - a, d) / (len * len), 0.0, 1.0);
-      const double dist = glm::length(a + d * t - p);
-      // Distance plus a penalty for facing the wrong way, so of two twin
-      // half-edges the one going our way wins.
-      const double cost = dist + 5.0 * (1.0 - glm::dot(d / len, dir));
-      if (cost < best) {
-        best = cost;
-        best_h = h;
-        if (arc_m) *arc_m = along + t * len;
-      }
-      along += len;
+    const glm::dvec2 a = graph_.points[point], b = graph_.points[point + 1];
+    const glm::dvec2 d = b - a;
+    const double len = glm::length(d);
+    if (len < 1e-9) return;
+    const double t = glm::clamp(glm::dot(p - a, d) / (len * len), 0.0, 1.0);
+    const double dist = glm::length(a + d * t - p);
+    double before = 0, total = 0;  // metres of h's polyline before this segment, and in all
+    for (uint32_t i = e.pts_begin; i + 1 < e.pts_begin + e.pts_count; ++i) {
+      const double l = glm::length(graph_.points[i + 1] - graph_.points[i]);
+      if (i < point) before += l;
+      total += l;
     }
+    const double along = before + t * len;
+    const double cos_fwd = glm::dot(d / len, dir);
+    const uint32_t twin = e.twin;
+    for (int back = 0; back < 2; ++back) {
+      const uint32_t c = back ? twin : h;
+      if (c == graph::kNone) continue;
+      const double cost = dist + 5.0 * (1.0 - (back ? -cos_fwd : cos_fwd));
+      if (cost < best || (cost == best && c < best_h)) {
+        best = cost;
+        best_h = c;
+        if (arc_m) *arc_m = back ? total - along : along;
+      }
+    }
+  };
+  // Growing squares: a segment farther than r cannot beat a cost <= r (the
+  // heading penalty is never negative). Past the grid's extent, every
+  // segment has been seen.
+  const double extent = grid_.cellSize() * std::max(grid_.columns(), grid_.rows());
+  for (double r = grid_.cellSize(); grid_.entryCount() > 0; r *= 2) {
+    grid_.query(p.x, p.y, r, [&](const graph::SegmentGrid::Entry& en) { consider(en.halfedge, en.point); });
+    if (best <= r || r > 2 * extent + glm::length(p)) break;
   }
   return best_h;
 }

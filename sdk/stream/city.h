@@ -12,6 +12,7 @@
 #include "geo/mesh.h"
 #include "graph/block_table.h"
 #include "graph/cell_tables.h"
+#include "graph/segment_grid.h"
 #include "graph/street_graph.h"
 #include "package/reader.h"
 
@@ -50,7 +51,9 @@ class City {
 
   // The cell nearest to local point p whose direction best matches heading_deg
   // (clockwise from north); kNone for an empty graph. Also returns the arc
-  // length along the cell of the closest point.
+  // length along the cell of the closest point. Searches the segment grid in
+  // growing squares, so a frame's cost does not grow with the city; no
+  // allocation.
   uint32_t nearestCell(glm::dvec2 p, double heading_deg, double* arc_m = nullptr) const;
 
  private:
@@ -58,6 +61,7 @@ class City {
   graph::StreetGraph graph_;
   std::vector<graph::BlockRecord> blocks_;
   graph::CellTables tables_;
+  graph::SegmentGrid grid_;  // one half-edge per twin pair
   geo::LocalFrame frame_{0, 0, 0};
 };
 

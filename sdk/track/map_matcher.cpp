@@ -131,7 +131,7 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
   size_t touched = 0;
   const double px = obs.e, py = obs.n;
   const auto& pts = g_.points;
-  grid_.query(px, py, r, [&](const SegmentGrid::Entry& en) {
+  grid_.query(px, py, r, [&](const graph::SegmentGrid::Entry& en) {
     const glm::dvec2 a = pts[en.point], b = pts[en.point + 1];
     const double dx = b.x - a.x, dy = b.y - a.y;
     const double len2 = dx * dx + dy * dy;

@@ -3,7 +3,7 @@
 // Noise and Sparseness", ACM GIS '09), solved with a fixed-lag Viterbi.
 //
 // - States: candidate half-edges near the observation (N&K §4.1), from a
-//   uniform grid over the segments (spatial_index.h), at most K per step, the
+//   uniform grid over the segments (graph/segment_grid.h), at most K per step, the
 //   K most likely by emission.
 // - Emission (N&K §4.2, eq. 1): Gaussian in the distance from the observation to
 //   the half-edge, sigma = sqrt(sigma_obs^2 + road_sigma^2); times a von Mises
@@ -35,7 +35,7 @@
 #include <vector>
 
 #include "graph/street_graph.h"
-#include "track/spatial_index.h"
+#include "graph/segment_grid.h"
 
 namespace blvd::track {
 
@@ -135,7 +135,7 @@ class MapMatcher {
 
   const MatcherDesc& desc() const { return d_; }
   const MatchStats& stats() const { return stats_; }
-  const SegmentGrid& grid() const { return grid_; }
+  const graph::SegmentGrid& grid() const { return grid_; }
   size_t bytes() const;
 
  private:
@@ -164,7 +164,7 @@ class MapMatcher {
 
   const graph::StreetGraph& g_;
   MatcherDesc d_;
-  SegmentGrid grid_;
+  graph::SegmentGrid grid_;
   std::vector<Column> cols_;
   std::vector<Candidate> cand_store_;
   std::vector<double> delta_store_, alpha_store_, dist_store_;

@@ -18,7 +18,7 @@ done
   --html "$work/budget_html" --csv "$work/budget.csv" > /dev/null
 # The page draws the frame times (with the target and the budget's aim) and the knobs.
 [ "$(grep -o '<svg' "$work/budget_html/index.html" | wc -l)" -ge 2 ] || { echo "FAIL: bench budget --html lacks its plots"; exit 1; }
-head -1 "$work/budget.csv" | grep -q '^run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms$' || { echo "FAIL: bench budget --csv header"; exit 1; }
+head -1 "$work/budget.csv" | grep -q '^run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget$' || { echo "FAIL: bench budget --csv header"; exit 1; }
 python3 - "$work/memory.json" "$work/budget.json" <<'PY'
 import json, math, sys
 m, b = (json.load(open(p)) for p in sys.argv[1:3])

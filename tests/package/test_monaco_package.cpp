@@ -8,6 +8,9 @@
 #include <cmath>
 #include <vector>
 
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
 #include "common/monaco_city.h"
 
 namespace blvd {
@@ -133,6 +136,66 @@ TEST(MonacoPackage, HeaderPoolSizingEqualsABruteForceScan) {
   for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].value, want[i].value) << got[i].name;
   EXPECT_GT(h.max_cell_impostor_layers, 0u);
   EXPECT_GE(h.max_block_triangles, h.max_block_lod0_triangles);
+}
+
+// The runtime's nearest cell (for a pose the host sets) searches the segment
+// grid in growing squares; a scan of every half-edge's every segment with the
+// same cost (distance + 5 m × (1 − cos) of the heading difference) must give
+// the same cell and arc length, near the streets, between them and far
+// outside the city.
+TEST(MonacoPackage, NearestCellEqualsAScanOfEverySegment) {
+  const graph::StreetGraph& g = city().graph();
+  glm::dvec2 lo(1e30), hi(-1e30);
+  for (const glm::dvec2& q : g.points) lo = glm::min(lo, q), hi = glm::max(hi, q);
+  uint64_t state = 12345;
+  auto uniform = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) / double(1ull << 53);
+  };
+  int far = 0;
+  for (int k = 0; k < 600; ++k) {
+    // Two in three inside the graph's box, the rest up to a box-size outside.
+    const double m = k % 3 == 2 ? 1.0 : 0.0;
+    const glm::dvec2 size = hi - lo;
+    const glm::dvec2 p(lo.x - m * size.x + uniform() * (1 + 2 * m) * size.x,
+                       lo.y - m * size.y + uniform() * (1 + 2 * m) * size.y);
+    far += p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y;
+    const double heading = uniform() * 360.0;
+    const glm::dvec2 dir(std::sin(heading * M_PI / 180.0), std::cos(heading * M_PI / 180.0));
+    double best = 1e300, best_arc = 0;
+    uint32_t best_h = graph::kNone;
+    for (uint32_t h = 0; h < g.halfedges.size(); ++h) {
+      const auto& e = g.halfedges[h];
+      double along = 0;
+      for (uint32_t i = 0; i + 1 < e.pts_count; ++i) {
+        const glm::dvec2 a = g.points[e.pts_begin + i], d = g.points[e.pts_begin + i + 1] - a;
+        const double len = glm::length(d);
+        if (len < 1e-9) continue;
+        const double t = std::clamp(glm::dot(p - a, d) / (len * len), 0.0, 1.0);
+        const double cost = glm::length(a + d * t - p) + 5.0 * (1.0 - glm::dot(d / len, dir));
+        if (cost < best) best = cost, best_h = h, best_arc = along + t * len;
+        along += len;
+      }
+    }
+    double arc = -1;
+    const uint32_t got = city().nearestCell(p, heading, &arc);
+    // Equal costs (a point level with two segments' ends) may pick either.
+    if (got != best_h) {
+      double got_cost = 1e300;
+      const auto& e = g.halfedges[got];
+      for (uint32_t i = 0; i + 1 < e.pts_count; ++i) {
+        const glm::dvec2 a = g.points[e.pts_begin + i], d = g.points[e.pts_begin + i + 1] - a;
+        const double len = glm::length(d);
+        if (len < 1e-9) continue;
+        const double t = std::clamp(glm::dot(p - a, d) / (len * len), 0.0, 1.0);
+        got_cost = std::min(got_cost, glm::length(a + d * t - p) + 5.0 * (1.0 - glm::dot(d / len, dir)));
+      }
+      EXPECT_NEAR(got_cost, best, 1e-9) << "point " << k << " (" << p.x << ", " << p.y << ")";
+      continue;
+    }
+    EXPECT_NEAR(arc, best_arc, 1e-6) << "point " << k;
+  }
+  EXPECT_GT(far, 100);
 }
 
 }  // namespace

@@ -11,7 +11,7 @@
 
 #include "fault/alloc_counter.h"
 #include "track/map_matcher.h"
-#include "track/spatial_index.h"
+#include "graph/segment_grid.h"
 #include "track_test_util.h"
 
 namespace blvd::track {
@@ -182,13 +182,13 @@ TEST(MapMatcher, FollowTakesTheNearerStreetAtATurn) {
 
 TEST(MapMatcher, GridFindsEverySegmentInReach) {
   const auto g = blvd_test::makeGrid(6, 80);
-  SegmentGrid grid;
+  graph::SegmentGrid grid;
   grid.build(g, 50);
   EXPECT_GT(grid.entryCount(), 0u);
   // Brute force: every segment within r of p must be reported.
   const double px = 123, py = 201, r = 45;
   std::set<uint32_t> listed, brute;
-  grid.query(px, py, r, [&](const SegmentGrid::Entry& e) { listed.insert(e.halfedge); });
+  grid.query(px, py, r, [&](const graph::SegmentGrid::Entry& e) { listed.insert(e.halfedge); });
   for (uint32_t h = 0; h < g.halfedges.size(); h += 2) {
     const auto& he = g.halfedges[h];
     const glm::dvec2 a = g.points[he.pts_begin], b = g.points[he.pts_begin + 1];

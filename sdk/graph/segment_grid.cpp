@@ -1,11 +1,11 @@
-#include "track/spatial_index.h"
+#include "graph/segment_grid.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace blvd::track {
+namespace blvd::graph {
 
-void SegmentGrid::build(const graph::StreetGraph& g, double cell_m) {
+void SegmentGrid::build(const StreetGraph& g, double cell_m) {
   cell_ = cell_m > 0 ? cell_m : 50.0;
   inv_ = 1.0 / cell_;
   offsets_.clear();
@@ -14,7 +14,7 @@ void SegmentGrid::build(const graph::StreetGraph& g, double cell_m) {
   double minx = 1e300, miny = 1e300, maxx = -1e300, maxy = -1e300;
   auto listed = [&](uint32_t h) {
     const auto& e = g.halfedges[h];
-    return e.pts_count >= 2 && (e.twin == graph::kNone || e.twin > h || e.twin >= g.halfedges.size());
+    return e.pts_count >= 2 && (e.twin == kNone || e.twin > h || e.twin >= g.halfedges.size());
   };
   for (uint32_t h = 0; h < g.halfedges.size(); ++h) {
     if (!listed(h)) continue;
@@ -61,4 +61,4 @@ void SegmentGrid::build(const graph::StreetGraph& g, double cell_m) {
   }
 }
 
-}  // namespace blvd::track
+}  // namespace blvd::graph

@@ -1,5 +1,6 @@
 // A uniform grid over the street graph's polyline segments, built once, for
-// the candidate search of the map matcher: "which streets pass within r of p".
+// the candidate search of the map matcher (track) and the runtime's nearest
+// cell (stream): "which streets pass within r of p".
 //
 // One entry per segment of one half-edge of each twin pair (the twin's
 // polyline is the same points reversed, so the matcher derives it), stored
@@ -16,7 +17,7 @@
 
 #include "graph/street_graph.h"
 
-namespace blvd::track {
+namespace blvd::graph {
 
 class SegmentGrid {
  public:
@@ -26,7 +27,7 @@ class SegmentGrid {
   };
 
   // cell_m <= 0 picks 50 m. The graph must outlive the grid.
-  void build(const graph::StreetGraph& g, double cell_m = 0);
+  void build(const StreetGraph& g, double cell_m = 0);
 
   // Calls fn(const Entry&) for each entry in the grid cells overlapping the
   // square of half-size r around (x, y).
@@ -59,4 +60,4 @@ class SegmentGrid {
   std::vector<Entry> entries_;
 };
 
-}  // namespace blvd::track
+}  // namespace blvd::graph
