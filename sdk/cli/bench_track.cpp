@@ -246,7 +246,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
   if (tf)
     std::fprintf(tf, "drive,t,fix,true_cell,true_arc,true_len,cell,arc,conf,err_m,sigma_m,true_e,true_n,e,n,heading,"
                      "true_heading,est_arc_on_true,est_dist_on_true,map_aids,true_dist_on_est,est_cell_heading,yaw_bias_dps,"
-                     "odo_scale,true_h0,true_h1\n");
+                     "odo_scale,true_h0,true_h1,fix_e,fix_n,nees\n");
   const graph::StreetGraph& g = ms.city->graph();
   for (uint32_t r = 0; r < ms.routes; ++r) {
     sim::FeedDesc fd;
@@ -326,13 +326,22 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
         const track::CellPoint q = tr.matcher()->project(s.cell, p.e, p.n);
         const track::CellPoint qe = tr.matcher()->project(p.cell, s.e, s.n);  // the truth on the pose's cell
         const glm::dvec2 d0 = graph::cellDirection(g, s.cell, false), d1 = graph::cellDirection(g, s.cell, true);
-        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f,%llu,%.2f,%.1f,%.3f,%.5f,%.1f,%.1f\n", r,
+        // The raw fix of this epoch's HMM step (empty without one), and the normalised estimation
+        // error of the filter, err^T P^-1 err over east and north (chi-square with 2 dof, mean 2,
+        // for a consistent filter; Bar-Shalom, Li & Kirubarajan 2001, §5.4.2).
+        const track::MatchObservation& ob = tr.matcher()->lastObservation();
+        char fix_en[64] = ",";
+        if (s.fix && ob.fix_sigma_m > 0 && std::fabs(ob.t - s.t) < 1e-6) std::snprintf(fix_en, sizeof fix_en, "%.2f,%.2f", ob.fix_e, ob.fix_n);
+        const double pee = tr.filter().cov(0, 0), pnn = tr.filter().cov(1, 1), pen = tr.filter().cov(0, 1);
+        const double det = pee * pnn - pen * pen, ee = p.e - s.e, en = p.n - s.n;
+        const double nees = det > 0 ? (ee * ee * pnn - 2 * ee * en * pen + en * en * pee) / det : -1.0;
+        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f,%llu,%.2f,%.1f,%.3f,%.5f,%.1f,%.1f,%s,%.2f\n", r,
                      s.t - feed.start_unix, s.fix ? 1 : 0, s.cell, s.arc_m, g.halfedges[s.cell].length, p.cell, p.arc_m,
                      p.confidence, std::hypot(p.e - s.e, p.n - s.n), p.pos_sigma_m, s.e, s.n, p.e, p.n, p.heading_deg,
                      s.heading_deg, q.arc_m, q.dist_m, static_cast<unsigned long long>(tr.stats().map_aids),
                      qe.cell == track::kNoCell ? -1.0 : qe.dist_m, qe.heading_rad * 57.29577951308232,
                      tr.filter().bias() * 57.29577951308232, tr.filter().odometryScale(),
-                     std::atan2(d0.x, d0.y) * 57.29577951308232, std::atan2(d1.x, d1.y) * 57.29577951308232);
+                     std::atan2(d0.x, d0.y) * 57.29577951308232, std::atan2(d1.x, d1.y) * 57.29577951308232, fix_en, nees);
       }
       res.on_cell += ok;
       if (s.fix) ++res.fix_epochs, res.fix_on_cell += ok;
