@@ -7,7 +7,14 @@ namespace blvd::stream {
 namespace {
 constexpr double kForget = 0.9;   // history weight kept per frame (~10 frames)
 constexpr double kMaxStep = 2.0;  // the budget changes by at most ×2 or ÷2 a frame
-constexpr double kMaxScaleStep = 0.0625;  // the render scale moves by at most 1/16 a frame
+// The render scale rises by at most 1/16 a frame (no shimmer while it
+// climbs back) but may fall by up to 1/4: a frame far over the aim is a late
+// frame on screen, and at 1/16 a frame, going from 1 to 0.69 took five frames
+// over the target in a row, three of them by more than 1.25 times (blvd bench
+// budget, docs/decisions/0008 §8). Dynamic
+// resolution in games does the same: drop fast, recover slowly.
+constexpr double kMaxScaleStep = 0.0625;
+constexpr double kMaxScaleDrop = 0.25;
 // Robust fit: once the line has history, a sample is taken as at most kClip
 // times (or 1/kClip of) what the line predicts (Huber's M-estimation, the
 // residual clipped: Huber 1964). A frame delayed by something other than its
@@ -21,7 +28,27 @@ constexpr double kRobustAfter = 4.0;  // weighted samples before clipping starts
 void CostLine::add(double x, double y) {
   if (fitted_ && sw_ >= kRobustAfter) {  // not against the proportional guess
     const double predicted = a_ + b_ * x;
-    if (predicted > 0) y = std::clamp(y, predicted / kClip, predicted * kClip);
+    if (predicted > 0) {
+      // A second sample in a row past the clip on the same side is not
+      // noise but a change of level (another process took or gave back the
+      // CPU): every cost is taken as r times what the history says, r the
+      // two samples' geometric mean ratio to the line, so slope and
+      // intercept scale together and the fit keeps its spread.
+      const double ratio = y / predicted;
+      const int side = ratio > kClip ? 1 : ratio < 1 / kClip ? -1 : 0;
+      if (side != 0 && side == outlier_side_) {
+        const double r = std::sqrt(ratio * outlier_ratio_);
+        sy_ *= r;
+        sxy_ *= r;
+        a_ *= r;
+        b_ *= r;
+        outlier_side_ = 0;
+      } else {
+        outlier_side_ = side;
+        outlier_ratio_ = ratio;
+        y = std::clamp(y, predicted / kClip, predicted * kClip);
+      }
+    }
   }
   sw_ = sw_ * kForget + 1;
   sx_ = sx_ * kForget + x;
@@ -60,11 +87,19 @@ uint64_t PolygonBudget::next(double frame_ms, uint64_t triangles) {
   double want = double(p_);
   if (per_tri_ms_ > 0) want = (target_ms_ - fixed_ms_) / per_tri_ms_;
   else if (frame_ms < target_ms_) want = double(p_) * 2;
-  unreachable_ = fixed_ms_ + per_tri_ms_ * double(min_) > target_ms_;
+  // The fewest triangles a frame can draw: min_, or more where the frame
+  // drew more than its budget (every visible block at its coarsest level).
+  const uint64_t least = triangles > p_ ? triangles : min_;
+  unreachable_ = fixed_ms_ + per_tri_ms_ * double(least) > target_ms_;
   // Damped: at most a factor kMaxStep per frame, so one noisy frame cannot
-  // swing the picture.
+  // swing the picture. Upwards also at most kMaxStep times what the frame
+  // drew: the line was fitted on the triangle counts drawn, and far beyond
+  // them it is an extrapolation. A budget the scene did not use (a cell with
+  // little geometry) would otherwise climb unchecked, and the next cell, whose
+  // triangles may cost more each (nearer, larger on screen), would take all
+  // of it in its first frame (docs/decisions/0008 §8).
   const double lo = double(std::max<uint64_t>(p_, 1)) / kMaxStep, hi = double(std::max<uint64_t>(p_, 1)) * kMaxStep;
-  want = std::clamp(want, lo, hi);
+  want = std::min(std::clamp(want, lo, hi), double(std::max<uint64_t>(triangles, 1)) * kMaxStep);
   p_ = static_cast<uint64_t>(std::clamp(want, double(min_), double(max_)));
   return p_;
 }
@@ -81,7 +116,7 @@ double RenderScale::next(double frame_ms, uint64_t pixels, uint64_t full_pixels)
   if (per_px > 0) want = std::sqrt(std::max(0.0, (target_ms_ - fixed) / per_px) / full);
   else if (frame_ms < target_ms_) want = scale_ + kMaxScaleStep;
   unreachable_ = fixed + per_px * full * min_ * min_ > target_ms_;
-  want = std::clamp(want, scale_ - kMaxScaleStep, scale_ + kMaxScaleStep);
+  want = std::clamp(want, scale_ - kMaxScaleDrop, scale_ + kMaxScaleStep);
   want = std::round(want * 64.0) / 64.0;
   scale_ = std::clamp(want, min_, 1.0);
   return scale_;

@@ -21,7 +21,9 @@ namespace blvd::stream {
 // and sky cost is the `fixed` part, which no polygon budget can remove).
 // Exponentially weighted least-squares line y ≈ a + b·x over recent samples.
 // Until the history has spread in x (or when it finds y falling with x) it
-// assumes y proportional to x, the safe guess for a cost.
+// assumes y proportional to x, the safe guess for a cost. A lone sample far
+// from the line is clipped (noise); two in a row on the same side rescale the
+// history (a change of level).
 class CostLine {
  public:
   void add(double x, double y);
@@ -34,6 +36,8 @@ class CostLine {
   double sw_ = 0, sx_ = 0, sy_ = 0, sxx_ = 0, sxy_ = 0;
   double a_ = 0, b_ = 0;
   bool fitted_ = false;  // a_, b_ come from the regression, not the proportional guess
+  int outlier_side_ = 0;      // the last sample was clipped: +1 from above, -1 from below
+  double outlier_ratio_ = 1;  // and its ratio to the line
 };
 
 class PolygonBudget {

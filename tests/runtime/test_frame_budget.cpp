@@ -74,6 +74,31 @@ TEST(PolygonBudget, SaysWhenTheFixedCostAloneMissesTheTarget) {
   EXPECT_EQ(p, 1000u);  // it gives all it can
 }
 
+TEST(PolygonBudget, ABudgetTheSceneDidNotUseStaysNearWhatWasDrawn) {
+  // A cell with little geometry (2-6k triangles offered) on a machine where
+  // the target would allow 60k, then a cell with 400k whose triangles cost
+  // four times as much each (nearer, larger on screen): the line fitted in
+  // the first cell says 60k; only what was drawn has been measured.
+  Machine m{1.0, 5e-5};
+  PolygonBudget b(4.0, 1000, 400000);
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<uint64_t> offer(2000, 6000);
+  uint64_t p = b.budget();
+  for (int f = 0; f < 100; ++f) {
+    const uint64_t drawn = std::min(p, offer(rng));
+    p = b.next(m.frame(drawn), drawn);
+  }
+  EXPECT_LE(p, 2u * 6000u);
+  m.per_tri_ms = 2e-4;
+  std::vector<double> first;
+  for (int f = 0; f < 5; ++f) {
+    const double ms = m.frame(p);
+    first.push_back(ms);
+    p = b.next(ms, p);
+  }
+  for (double ms : first) EXPECT_LE(ms, 1.25 * 4.0);
+}
+
 TEST(PolygonBudget, IgnoresBadMeasurements) {
   PolygonBudget b(4.0, 10, 100);
   EXPECT_EQ(b.next(std::nan(""), 100), 100u);
@@ -147,6 +172,29 @@ TEST(FrameBudget, GoesBackToPolygonsWhenTheMachineFreesUp) {
   EXPECT_EQ(b.scale(), 1.0);
   EXPECT_EQ(b.polygonBudget(), 20000u);  // every block at full detail again
   EXPECT_LT(percentile(t, 50), 5.0);
+}
+
+TEST(FrameBudget, ASuddenFillCostIsShedWithinTwoFrames) {
+  // Fill-bound and settled near scale 0.71, then every pixel costs twice as
+  // much (another process takes half the cores): the scale falls by up to
+  // 1/4 a frame, so at most two frames are late (at 1/16 a frame, twelve were).
+  FillMachine m{1.0, 1e-7, 8.0 / double(kFull), 20000, 2000};
+  FrameBudget b(5.0, 20000, 0.25);
+  run(b, m, 300, 300);
+  ASSERT_TRUE(b.fillMode());
+  m.per_px_ms = 16.0 / double(kFull);
+  const std::vector<double> t = run(b, m, 40, 0);
+  int late = 0;
+  for (double ms : t) late += ms > 1.25 * 5.0;
+  EXPECT_LE(late, 2);
+  // ... and it climbs back by at most 1/16 a frame once the cost is gone.
+  m.per_px_ms = 8.0 / double(kFull);
+  double last = b.scale();
+  for (int f = 0; f < 20; ++f) {
+    run(b, m, 1, 0);
+    EXPECT_LE(b.scale(), last + 1.0 / 16 + 1e-9);
+    last = b.scale();
+  }
 }
 
 TEST(FrameBudget, SaysWhenEvenTheSmallestScaleMisses) {
