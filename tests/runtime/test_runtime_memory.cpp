@@ -72,16 +72,18 @@ TEST(RuntimeStream, DriveStaysWithinItsSlotsAndTheStatsAddUp) {
   ASSERT_GE(dr.cells.size(), 10u);
   blvd_runtime_desc d = baseDesc();
   d.max_resident_cells = 3;
-  // The drive passes 30 cells in well under a second. Predictions under
-  // SCHED_IDLE (the default) get no CPU while other tests keep the cores
-  // busy, so this test asks for nice 19, which always makes progress: it
-  // checks the slots and the stats, not the thread policy (test_cell_loader).
+  // The drive passes 30 cells in well under a second, faster than a loaded
+  // CI machine decodes them (predictions run at nice 19 or SCHED_IDLE), so a
+  // degraded frame waits for its cell: every cell the drive enters is then
+  // loaded, by prediction or on demand. This test checks the slots and the
+  // stats; prefetch has its own tests (TheNextCellOnTheRouteIsPrefetched,
+  // test_cell_loader).
   d.prefetch_priority = BLVD_PREFETCH_LOW;
   Runtime r;
   ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
   ASSERT_EQ(blvd_set_route(r.rt, dr.cells.data(), dr.cells.size()), BLVD_OK) << blvd_last_error(r.rt);
   uint64_t degraded = 0, frames = 0, tris = 0;
-  std::vector<uint32_t> drawn;  // cells drawn whole: each was loaded
+  std::vector<uint32_t> drawn, entered;  // cells drawn whole; cells current in some frame
   for (const auto& p : dr.poses) {
     ASSERT_EQ(blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f), BLVD_OK);
     blvd_frame_stats fs{};
@@ -91,6 +93,10 @@ TEST(RuntimeStream, DriveStaysWithinItsSlotsAndTheStatsAddUp) {
     degraded += (fs.flags & BLVD_FRAME_DEGRADED) ? 1 : 0;
     if (!(fs.flags & BLVD_FRAME_DEGRADED) && std::find(drawn.begin(), drawn.end(), fs.cell) == drawn.end())
       drawn.push_back(fs.cell);
+    if (std::find(entered.begin(), entered.end(), fs.cell) == entered.end()) entered.push_back(fs.cell);
+    if (fs.flags & BLVD_FRAME_DEGRADED) {
+      ASSERT_EQ(blvd_wait_resident(r.rt, 30000), BLVD_OK) << blvd_last_error(r.rt);
+    }
     tris = fs.triangles;
     const blvd_stats s = statsOf(r.rt);
     ASSERT_LE(s.resident_cells, 3u);
@@ -103,13 +109,13 @@ TEST(RuntimeStream, DriveStaysWithinItsSlotsAndTheStatsAddUp) {
   EXPECT_EQ(s.misses, degraded);
   EXPECT_EQ(s.triangles, tris);
   EXPECT_EQ(s.load_errors, 0u);
-  // Every cell drawn whole was loaded, at least half the drive's cells were
-  // loaded before it passed them, and with three slots most loads made
-  // another cell give way.
+  // Every cell the drive entered was loaded, and with three slots all but
+  // the first three loads made another cell give way.
   EXPECT_GE(drawn.size(), 1u);
-  EXPECT_GE(s.loads, drawn.size());
-  EXPECT_GE(s.loads, dr.cells.size() / 2);
+  EXPECT_GE(entered.size(), dr.cells.size() / 2);
+  EXPECT_GE(s.loads, entered.size());
   EXPECT_GE(s.evictions + 3, s.loads);
+  EXPECT_GE(s.evictions + 3, entered.size());
   EXPECT_GT(s.decode.high_water_bytes, 0u);
   RecordProperty("degraded_frames", std::to_string(degraded));
 
