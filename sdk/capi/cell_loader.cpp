@@ -63,8 +63,6 @@ CellLoader::~CellLoader() {
     cv_.wait(lock, [&] { return tasks_out_ == 0; });
   }
   cv_.notify_all();
-  wake_[0].notify_all();
-  wake_[1].notify_all();
   if (thread_.joinable()) thread_.join();
   if (background_.joinable()) background_.join();
   for (Staging& s : slots_) {
@@ -92,7 +90,7 @@ bool CellLoader::request(uint32_t cell, uint32_t target, bool urgent) {
     if (executor_.submit) ++tasks_out_;
   }
   if (executor_.submit) executor_.submit(&CellLoader::runTask, this, executor_.user);
-  else wake_[urgent ? 0 : 1].notify_one();  // the thread of its kind only
+  else cv_.notify_all();  // the thread of its kind
   return true;
 }
 
@@ -161,7 +159,7 @@ void CellLoader::promote(uint32_t cell) {
           break;
         }
   }
-  wake_[0].notify_one();  // the urgent thread (a queued job made urgent, or the copy)
+  cv_.notify_all();
 }
 
 void CellLoader::cancelQueued() {
@@ -213,13 +211,12 @@ void CellLoader::run(bool background) {
     {
       std::unique_lock<std::mutex> lock(mu_);
       auto mine = [&](const Staging& s) { return s.state == Staging::Queued && s.urgent != background; };
-      auto ready = [&] {
+      cv_.wait(lock, [&] {
         if (stop_) return true;
         for (Staging& s : slots_)
           if (mine(s)) return true;
         return false;
-      };
-      wake_[background ? 1 : 0].wait(lock, ready);
+      });
       if (stop_) return;
       uint64_t best_seq = ~uint64_t(0);
       for (uint32_t i = 0; i < kStagingSlots; ++i)

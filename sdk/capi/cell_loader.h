@@ -123,8 +123,7 @@ class CellLoader {
   uint64_t seq_ = 0;
   uint64_t carved_ = 0;
   mutable std::mutex mu_;
-  std::condition_variable cv_;       // host tasks done (the destructor waits)
-  std::condition_variable wake_[2];  // the urgent thread, the prediction thread
+  std::condition_variable cv_;
   bool stop_ = false;
   std::thread thread_, background_;  // urgent jobs; predictions
   blvd_executor executor_{};
