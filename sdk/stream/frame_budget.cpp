@@ -10,9 +10,9 @@ constexpr double kMaxStep = 2.0;  // the budget changes by at most ×2 or ÷2 a 
 // The render scale rises by at most 1/16 a frame (no shimmer while it
 // climbs back) but may fall by up to 1/4: a frame far over the aim is a late
 // frame on screen, and at 1/16 a frame, going from 1 to 0.69 took five frames
-// over the target in a row, three of them by more than 1.25 times (blvd bench
-// budget, docs/decisions/0008 §8). Dynamic
-// resolution in games does the same: drop fast, recover slowly.
+// over the target in a row, three of them by more than 1.25 times (blvd
+// bench budget, docs/decisions/0008 §8). Dynamic resolution in games does the
+// same: drop fast, recover slowly.
 constexpr double kMaxScaleStep = 0.0625;
 constexpr double kMaxScaleDrop = 0.25;
 // Robust fit: once the line has history, a sample is taken as at most kClip
