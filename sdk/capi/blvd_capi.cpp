@@ -90,6 +90,11 @@ blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* in) {
   return d;
 }
 
+namespace {
+// A blvd_render_mode value a C host may pass (create and blvd_set_render_mode).
+bool knownMode(int32_t m) { return m >= BLVD_MODE_BLVD && m <= BLVD_MODE_SINGLE; }
+}  // namespace
+
 blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** out) {
   if (!out) return misuse(nullptr, "blvd_runtime_create: out is NULL");
   *out = nullptr;
@@ -134,7 +139,7 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
     t_create_error = "blvd_runtime_create: allocator needs both alloc and free, or neither";
     return BLVD_ERR_INVALID_ARG;
   }
-  if (blvd::capi::rawEnum(d.mode) < 0 || blvd::capi::rawEnum(d.mode) > BLVD_MODE_SINGLE) {
+  if (!knownMode(blvd::capi::rawEnum(d.mode))) {
     t_create_error = "blvd_runtime_create: unknown render mode";
     return BLVD_ERR_INVALID_ARG;
   }
@@ -207,7 +212,7 @@ blvd_status blvd_set_pose_local(blvd_runtime* rt, double x, double y, float head
 blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mode, float radius_m) {
   if (!rt) return misuse(nullptr, "blvd_set_render_mode: rt is NULL");
   const int32_t m = blvd::capi::rawEnum(mode);
-  if (m < BLVD_MODE_BLVD || m > BLVD_MODE_SINGLE) {
+  if (!knownMode(m)) {
     rt->impl->last_error = "blvd_set_render_mode: unknown render mode " + std::to_string(m);
     return BLVD_ERR_INVALID_ARG;
   }

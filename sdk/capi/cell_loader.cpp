@@ -239,13 +239,16 @@ bool CellLoader::decode(Staging& s) {
     s.state = Staging::Failed;
     return true;
   };
-  // An urgent copy took over (promote): give the slot back.
-  auto abandoned = [&] {
-    if (!s.abandon.load(std::memory_order_relaxed)) return false;
-    std::lock_guard<std::mutex> lock(mu_);
+  // An urgent copy took over (promote): give the slot back. Under mu_.
+  auto give_back = [&] {
     s.state = Staging::Free;
     s.cell = 0xffffffffu;
     s.abandon = false;
+  };
+  auto abandoned = [&] {
+    if (!s.abandon.load(std::memory_order_relaxed)) return false;
+    std::lock_guard<std::mutex> lock(mu_);
+    give_back();
     return true;
   };
   auto stage = [&](MeshKind kind, uint32_t item, uint32_t level) {
@@ -292,9 +295,7 @@ bool CellLoader::decode(Staging& s) {
   // the copy delivers the cell, this one is not a load (both would be
   // counted, and the runtime would discard the second).
   if (s.abandon.load(std::memory_order_relaxed)) {
-    s.state = Staging::Free;
-    s.cell = 0xffffffffu;
-    s.abandon = false;
+    give_back();
     return false;
   }
   s.state = Staging::Ready;

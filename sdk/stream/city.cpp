@@ -145,24 +145,24 @@ uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m) cons
     if (len < 1e-9) return;
     const double t = glm::clamp(glm::dot(p - a, d) / (len * len), 0.0, 1.0);
     const double dist = glm::length(a + d * t - p);
-    double before = 0, total = 0;  // metres of h's polyline before this segment, and in all
-    for (uint32_t i = e.pts_begin; i + 1 < e.pts_begin + e.pts_count; ++i) {
-      const double l = glm::length(graph_.points[i + 1] - graph_.points[i]);
-      if (i < point) before += l;
-      total += l;
-    }
-    const double along = before + t * len;
     const double cos_fwd = glm::dot(d / len, dir);
-    const uint32_t twin = e.twin;
     for (int back = 0; back < 2; ++back) {
-      const uint32_t c = back ? twin : h;
+      const uint32_t c = back ? e.twin : h;
       if (c == graph::kNone) continue;
       const double cost = dist + 5.0 * (1.0 - (back ? -cos_fwd : cos_fwd));
-      if (cost < best || (cost == best && c < best_h)) {
-        best = cost;
-        best_h = c;
-        if (arc_m) *arc_m = back ? total - along : along;
+      if (!(cost < best || (cost == best && c < best_h))) continue;
+      best = cost;
+      best_h = c;
+      if (!arc_m) continue;
+      // Metres of h's polyline before this segment, and in all (only for a
+      // new best: most segments the grid offers are not).
+      double before = 0, total = 0;
+      for (uint32_t i = e.pts_begin; i + 1 < e.pts_begin + e.pts_count; ++i) {
+        const double l = glm::length(graph_.points[i + 1] - graph_.points[i]);
+        if (i < point) before += l;
+        total += l;
       }
+      *arc_m = back ? total - (before + t * len) : before + t * len;
     }
   };
   // Growing squares: a segment farther than r cannot beat a cost <= r (the

@@ -38,10 +38,8 @@ void CostLine::add(double x, double y) {
       const int side = ratio > kClip ? 1 : ratio < 1 / kClip ? -1 : 0;
       if (side != 0 && side == outlier_side_) {
         const double r = std::sqrt(ratio * outlier_ratio_);
-        sy_ *= r;
+        sy_ *= r;  // the line below is refitted from these
         sxy_ *= r;
-        a_ *= r;
-        b_ *= r;
         outlier_side_ = 0;
       } else {
         outlier_side_ = side;
