@@ -146,7 +146,11 @@ void Tracker::matchStep(const double* fix_en, double fix_sigma) {
       }
     }
     confidence_ = matcher_->confidence();
-    if (d_.map_aid_sigma_m > 0 && confidence_ >= d_.map_aid_min_confidence && street_agrees_ && !ambiguous()) {
+    const bool aid = d_.map_aid_sigma_m > 0;
+    if (aid && confidence_ < d_.map_aid_min_confidence) ++st_.map_aid_low_confidence;
+    else if (aid && !street_agrees_) ++st_.map_aid_disagreeing;
+    else if (aid && ambiguous()) ++st_.map_aid_ambiguous;
+    else if (aid) {
       // Where the vehicle is expected across the street: its lane, shifted to
       // the inside while it turns through a corner (cornerShift). Right of a
       // bearing h is (cos h, -sin h).

@@ -98,6 +98,9 @@ struct TrackerStats {
   uint64_t filter_resets = 0;    // position resets after a run of rejected fixes
   uint64_t map_aids = 0, map_aids_rejected = 0;  // street constraints applied / gated out
   uint64_t map_aid_suspensions = 0;  // times the fixes stopped agreeing with the matched street
+  // HMM steps without a map aid, by the first reason: head below the confidence
+  // floor, fixes not (yet) agreeing with the street, another street alongside.
+  uint64_t map_aid_low_confidence = 0, map_aid_disagreeing = 0, map_aid_ambiguous = 0;
   MatchStats match;
 };
 
