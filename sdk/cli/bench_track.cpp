@@ -23,6 +23,7 @@
 #include "replay/replayer.h"
 #include "sim/sim_feed.h"
 #include "stream/city.h"
+#include "track/lane.h"
 #include "track/map_matcher.h"
 #include "vehicle/dbc.h"
 #include "vehicle/profile.h"
@@ -246,7 +247,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
   if (tf)
     std::fprintf(tf, "drive,t,fix,true_cell,true_arc,true_len,cell,arc,conf,err_m,sigma_m,true_e,true_n,e,n,heading,"
                      "true_heading,est_arc_on_true,est_dist_on_true,map_aids,true_dist_on_est,est_cell_heading,yaw_bias_dps,"
-                     "odo_scale,true_h0,true_h1,fix_e,fix_n,nees\n");
+                     "odo_scale,true_h0,true_h1,fix_e,fix_n,nees,sigma_along,aid_suspensions,head_cell,true_lat,est_lat,lane_m,kappa,aid_lowconf,aid_disagree,aid_ambiguous\n");
   const graph::StreetGraph& g = ms.city->graph();
   for (uint32_t r = 0; r < ms.routes; ++r) {
     sim::FeedDesc fd;
@@ -325,6 +326,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
       if (tf) {
         const track::CellPoint q = tr.matcher()->project(s.cell, p.e, p.n);
         const track::CellPoint qe = tr.matcher()->project(p.cell, s.e, s.n);  // the truth on the pose's cell
+        const track::CellPoint qt = tr.matcher()->project(s.cell, s.e, s.n);  // the truth on its own cell
         const glm::dvec2 d0 = graph::cellDirection(g, s.cell, false), d1 = graph::cellDirection(g, s.cell, true);
         // The raw fix of this epoch's HMM step (empty without one), and the normalised estimation
         // error of the filter, err^T P^-1 err over east and north (chi-square with 2 dof, mean 2,
@@ -335,13 +337,22 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
         const double pee = tr.filter().cov(0, 0), pnn = tr.filter().cov(1, 1), pen = tr.filter().cov(0, 1);
         const double det = pee * pnn - pen * pen, ee = p.e - s.e, en = p.n - s.n;
         const double nees = det > 0 ? (ee * ee * pnn - 2 * ee * en * pen + en * en * pee) / det : -1.0;
-        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f,%llu,%.2f,%.1f,%.3f,%.5f,%.1f,%.1f,%s,%.2f\n", r,
+        // The filter's sigma along the true heading (its claimed along-track uncertainty).
+        const double th = s.heading_deg * 0.017453292519943295, ue = std::sin(th), un = std::cos(th);
+        const double sigma_along = std::sqrt(std::max(0.0, ue * ue * pee + 2 * ue * un * pen + un * un * pnn));
+        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f,%llu,%.2f,%.1f,%.3f,%.5f,%.1f,%.1f,%s,%.2f,%.3f,%llu,%d,%.3f,%.3f,%.2f,%.5f,%llu,%llu,%llu\n", r,
                      s.t - feed.start_unix, s.fix ? 1 : 0, s.cell, s.arc_m, g.halfedges[s.cell].length, p.cell, p.arc_m,
                      p.confidence, std::hypot(p.e - s.e, p.n - s.n), p.pos_sigma_m, s.e, s.n, p.e, p.n, p.heading_deg,
                      s.heading_deg, q.arc_m, q.dist_m, static_cast<unsigned long long>(tr.stats().map_aids),
                      qe.cell == track::kNoCell ? -1.0 : qe.dist_m, qe.heading_rad * 57.29577951308232,
                      tr.filter().bias() * 57.29577951308232, tr.filter().odometryScale(),
-                     std::atan2(d0.x, d0.y) * 57.29577951308232, std::atan2(d1.x, d1.y) * 57.29577951308232, fix_en, nees);
+                     std::atan2(d0.x, d0.y) * 57.29577951308232, std::atan2(d1.x, d1.y) * 57.29577951308232, fix_en, nees, sigma_along,
+                     static_cast<unsigned long long>(tr.stats().map_aid_suspensions),
+                     tr.matcher()->head().cell == track::kNoCell ? -1 : static_cast<int>(tr.matcher()->head().cell), qt.lateral_m, q.lateral_m, track::laneOffset(g.halfedges[s.cell], 1.75),
+                     std::fabs(tr.filter().speed()) > 1 ? tr.filter().turnRate() / tr.filter().speed() : 0.0,
+                     static_cast<unsigned long long>(tr.stats().map_aid_low_confidence),
+                     static_cast<unsigned long long>(tr.stats().map_aid_disagreeing),
+                     static_cast<unsigned long long>(tr.stats().map_aid_ambiguous));
       }
       res.on_cell += ok;
       if (s.fix) ++res.fix_epochs, res.fix_on_cell += ok;

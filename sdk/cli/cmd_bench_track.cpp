@@ -88,6 +88,8 @@ void addBenchTrack(CLI::App& bench, Runner& run) {
   t->add_option("--lane-offset", c->bench.tracker.lane_offset_m);
   t->add_option("--q-pos", c->bench.tracker.ekf.q_pos);
   t->add_option("--q-speed", c->bench.tracker.ekf.q_speed);
+  t->add_option("--q-scale", c->bench.tracker.ekf.q_scale);
+  t->add_option("--init-scale-sigma", c->bench.tracker.ekf.init_scale_sigma);
   t->add_option("--odo-speed-sigma", c->bench.tracker.ekf.odo_speed_sigma);
   t->add_option("--gnss-speed-sigma", c->bench.tracker.ekf.gnss_speed_sigma);
   t->add_option("--lag", c->bench.tracker.matcher.lag);

@@ -91,7 +91,7 @@ void Tracker::reset() {
   pose_ = Pose{};
   cur_ = CellPoint{};
   confidence_ = 0;
-  lateral_mean_ = 0;
+  lateral_mean_ = lateral_mean_var_ = 0;
   agreement_fixes_ = 0;
   street_agrees_ = false;
   last_step_t_ = last_fix_t_ = last_fix_event_t_ = last_gyro_t_ = last_odo_speed_t_ = -1e300;
@@ -146,7 +146,11 @@ void Tracker::matchStep(const double* fix_en, double fix_sigma) {
       }
     }
     confidence_ = matcher_->confidence();
-    if (d_.map_aid_sigma_m > 0 && confidence_ >= d_.map_aid_min_confidence && street_agrees_ && !ambiguous()) {
+    const bool aid = d_.map_aid_sigma_m > 0;
+    if (aid && confidence_ < d_.map_aid_min_confidence) ++st_.map_aid_low_confidence;
+    else if (aid && !street_agrees_) ++st_.map_aid_disagreeing;
+    else if (aid && ambiguous()) ++st_.map_aid_ambiguous;
+    else if (aid) {
       // Where the vehicle is expected across the street: its lane, shifted to
       // the inside while it turns through a corner (cornerShift). Right of a
       // bearing h is (cos h, -sin h).
@@ -192,12 +196,23 @@ void Tracker::cornerShift(double& offset, double& sigma) const {
 }
 
 bool Tracker::ambiguous() const {
-  // Another street running the same way within reach of the fixes' noise: the
-  // fixes cannot tell the two apart yet, so the map aid would only pick one.
+  // Another street running the same way that the fixes cannot yet tell from
+  // the matched one: the map aid would only pick one of the two. The test is
+  // the agreement check's own statistic (checkStreetAgreement): the mean of the
+  // fixes' offsets from the matched street's lane, with its variance. Were the
+  // vehicle in the other street's lane, that mean would be `delta` (the two
+  // streets' separation plus the difference of their lanes); the streets are
+  // told apart once the mean lies more than ambiguity_sigmas of its standard
+  // deviation from `delta` (a gate on the averaged fixes, like the validation
+  // gate of Bar-Shalom, Li & Kirubarajan 2001, §5.4.2: n fixes of sigma s tell
+  // apart streets a few s / sqrt(n) apart).
+  // A fixed reach of ambiguity_sigmas single-fix sigmas held the aid off beside
+  // every street within 12.5 m at sigma 5 m however many fixes had
+  // told them apart (a fifth of all HMM steps on the Monaco drives).
   const graph::StreetGraph& g = *graph_;
   const uint32_t head = cur_.cell;
   const uint32_t twin = g.halfedges[head].twin;
-  const double reach = d_.ambiguity_sigmas * last_fix_sigma_;
+  const double reach = d_.ambiguity_sigmas * std::sqrt(std::max(0.0, lateral_mean_var_));
   for (uint32_t i = 0; i < matcher_->candidateCount(); ++i) {
     const CellPoint& c = matcher_->candidate(i);
     if (c.cell == head || c.cell == twin) continue;
@@ -206,7 +221,10 @@ bool Tracker::ambiguous() const {
     if (g.halfedges[c.cell].origin == g.halfedges[head].origin || g.endVertex(c.cell) == g.endVertex(head) ||
         g.halfedges[c.cell].origin == g.endVertex(head) || g.endVertex(c.cell) == g.halfedges[head].origin)
       continue;
-    if (std::fabs(c.lateral_m - cur_.lateral_m) < reach) return true;
+    // Offsets are measured to the right of each street's own direction; the two
+    // run the same way (above), so they subtract.
+    const double delta = (cur_.lateral_m - c.lateral_m) + expectedOffset(c.cell) - expectedOffset(head);
+    if (std::fabs(lateral_mean_ - delta) < reach) return true;
   }
   return false;
 }
@@ -225,7 +243,12 @@ void Tracker::checkStreetAgreement(double e, double n, double sigma) {
   const CellPoint q = matcher_->follow(cur_, e, n, ekf_.heading(), 0.0);
   const double r = q.lateral_m - expectedOffset(q.cell);
   ++agreement_fixes_;
-  lateral_mean_ += (r - lateral_mean_) * std::max(kAlpha, 1.0 / agreement_fixes_);
+  const double w = std::max(kAlpha, 1.0 / agreement_fixes_);
+  lateral_mean_ += (r - lateral_mean_) * w;
+  // Its variance for independent offsets of variance sigma^2 + aid sigma^2 (the
+  // lane wander), r_var: (1 - w)^2 var + w^2 r_var, which is r_var / n for the
+  // running mean and r_var a / (2 - a) in the exponential's steady state.
+  lateral_mean_var_ = (1 - w) * (1 - w) * lateral_mean_var_ + w * w * (sigma * sigma + d_.map_aid_sigma_m * d_.map_aid_sigma_m);
   const double s = std::sqrt((sigma * sigma + d_.map_aid_sigma_m * d_.map_aid_sigma_m) * kAlpha / (2 - kAlpha));
   const bool was = street_agrees_;
   if (agreement_fixes_ < kMinFixes || std::fabs(lateral_mean_) > 3 * s) street_agrees_ = false;

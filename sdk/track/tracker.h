@@ -63,9 +63,9 @@ struct TrackerDesc {
   // Map aiding: after an HMM step whose head has at least this posterior, the
   // filter is told the vehicle is on that street (a cross-track measurement of
   // sigma map_aid_sigma_m about the lane), provided the last fixes agree with
-  // that street (their mean lateral offset) and no parallel street is within
-  // ambiguity_sigmas fix sigmas; a lock onto the wrong street would otherwise
-  // feed itself. Default 0.9 and 0.5 m; map_aid_sigma_m < 0 turns it off.
+  // that street (their mean lateral offset) and that mean cannot also be the
+  // lane of a parallel street alongside (ambiguity_sigmas); a lock onto the
+  // wrong street would otherwise feed itself. Default 0.9 and 0.5 m; map_aid_sigma_m < 0 turns it off.
   // The sigma: vehicles keep within their lane with a lateral standard deviation
   // (SDLP) of 0.2-0.3 m, correlated over a few seconds of driving; applied once
   // per HMM step (1 Hz) as if independent, the constraint is counted about
@@ -78,8 +78,10 @@ struct TrackerDesc {
   // (the map aid's expected offset; one-way streets: the centre). Default 1.75 m.
   double lane_offset_m = 0;
   bool left_hand_traffic = false;  // the offset is to the left
-  // No map aid while another street runs alongside within this many fix sigmas
-  // (the fixes cannot yet tell which one the vehicle is on); default 2.5.
+  // No map aid while the fixes' mean offset (the agreement check's) lies within
+  // this many of its sigmas of where it would be in the lane of another street
+  // running alongside (the fixes cannot yet tell which one the vehicle is on);
+  // default 2.5.
   double ambiguity_sigmas = 0;
   EkfDesc ekf;
   MatcherDesc matcher;
@@ -98,6 +100,9 @@ struct TrackerStats {
   uint64_t filter_resets = 0;    // position resets after a run of rejected fixes
   uint64_t map_aids = 0, map_aids_rejected = 0;  // street constraints applied / gated out
   uint64_t map_aid_suspensions = 0;  // times the fixes stopped agreeing with the matched street
+  // HMM steps without a map aid, by the first reason: head below the confidence
+  // floor, fixes not (yet) agreeing with the street, another street alongside.
+  uint64_t map_aid_low_confidence = 0, map_aid_disagreeing = 0, map_aid_ambiguous = 0;
   MatchStats match;
 };
 
@@ -169,6 +174,7 @@ class Tracker {
   CellPoint cur_;            // the match, followed between HMM steps
   double confidence_ = 0;
   double lateral_mean_ = 0;     // mean of the fixes' offset from the expected lane
+  double lateral_mean_var_ = 0; // its variance
   uint32_t agreement_fixes_ = 0;
   bool street_agrees_ = false;  // the map aid is on
   double last_fix_sigma_ = 5;
