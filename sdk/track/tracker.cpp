@@ -248,8 +248,9 @@ void Tracker::checkStreetAgreement(double e, double n, double sigma) {
   // Its variance for independent offsets of variance sigma^2 + aid sigma^2 (the
   // lane wander), r_var: (1 - w)^2 var + w^2 r_var, which is r_var / n for the
   // running mean and r_var a / (2 - a) in the exponential's steady state.
-  lateral_mean_var_ = (1 - w) * (1 - w) * lateral_mean_var_ + w * w * (sigma * sigma + d_.map_aid_sigma_m * d_.map_aid_sigma_m);
-  const double s = std::sqrt((sigma * sigma + d_.map_aid_sigma_m * d_.map_aid_sigma_m) * kAlpha / (2 - kAlpha));
+  const double r_var = sigma * sigma + d_.map_aid_sigma_m * d_.map_aid_sigma_m;
+  lateral_mean_var_ = (1 - w) * (1 - w) * lateral_mean_var_ + w * w * r_var;
+  const double s = std::sqrt(r_var * kAlpha / (2 - kAlpha));
   const bool was = street_agrees_;
   if (agreement_fixes_ < kMinFixes || std::fabs(lateral_mean_) > 3 * s) street_agrees_ = false;
   else if (std::fabs(lateral_mean_) < 2 * s) street_agrees_ = true;
@@ -273,8 +274,7 @@ void Tracker::processGnss(const GnssFix& f, double t) {
   double sigma = 0;  // unknown: the filter estimates it
   if ((f.flags & kGnssHasHAcc) && f.h_acc_m > 0 && finite(f.h_acc_m)) sigma = f.h_acc_m * kSqrtHalf;
   else if ((f.flags & kGnssHasHdop) && f.hdop > 0 && finite(f.hdop)) sigma = f.hdop * d_.ekf.uere_m * kSqrtHalf;
-  last_fix_sigma_ = sigma > 0 ? sigma : ekf_.adaptiveSigma();
-  checkStreetAgreement(p.e, p.n, last_fix_sigma_);
+  checkStreetAgreement(p.e, p.n, sigma > 0 ? sigma : ekf_.adaptiveSigma());
   if (ekf_.updatePosition(t, p.e, p.n, sigma)) {
     ++st_.gnss_used;
     last_fix_t_ = t;

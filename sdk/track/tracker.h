@@ -177,7 +177,6 @@ class Tracker {
   double lateral_mean_var_ = 0; // its variance
   uint32_t agreement_fixes_ = 0;
   bool street_agrees_ = false;  // the map aid is on
-  double last_fix_sigma_ = 5;
   double last_step_t_ = -1e300, last_fix_t_ = -1e300, last_fix_event_t_ = -1e300;
   double last_gyro_t_ = -1e300, last_odo_speed_t_ = -1e300;
   TrackerStats st_;
