@@ -123,7 +123,12 @@ typedef enum blvd_prefetch_priority {
   BLVD_PREFETCH_IDLE = 0,
   /* nice 19 (SCHED_OTHER): predictions take a small share of a saturated CPU, and a waking decoder
    * may delay a frame. For hosts that keep every core busy. */
-  BLVD_PREFETCH_LOW = 1
+  BLVD_PREFETCH_LOW = 1,
+  /* SCHED_IDLE, but started without regard to the frames. By default (IDLE) a host that leaves
+   * gaps between its frames (drawing at a display's refresh) gets each predicted mesh started in
+   * such a gap, when its measured cost fits before the next frame of any runtime in the process;
+   * a host that draws back to back is not affected. This value turns that off. */
+  BLVD_PREFETCH_IDLE_ANYTIME = 2
 } blvd_prefetch_priority;
 
 typedef struct blvd_runtime_desc {
@@ -265,6 +270,8 @@ typedef struct blvd_stats {
   float frame_aim_ms;            /* with target_frame_ms: the frame time the budget aims for now; below the
                                   * target (down to 0.92x) while frames scatter enough that their p95
                                   * would pass 1.25x the target; else 0 */
+  uint64_t prefetch_gap_waits;   /* predicted meshes whose decode waited for a gap between frames */
+  double prefetch_gap_wait_ms;   /* their waits in all */
 } blvd_stats;
 
 /* Fills *stats. Render thread. */

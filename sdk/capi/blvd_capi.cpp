@@ -131,8 +131,10 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
     t_create_error = "blvd_runtime_create: min_render_scale must be within 0.25..1 (0 means 1)";
     return BLVD_ERR_INVALID_ARG;
   }
-  if (d.prefetch_priority != BLVD_PREFETCH_IDLE && d.prefetch_priority != BLVD_PREFETCH_LOW) {
-    t_create_error = "blvd_runtime_create: prefetch_priority must be BLVD_PREFETCH_IDLE or BLVD_PREFETCH_LOW";
+  if (d.prefetch_priority != BLVD_PREFETCH_IDLE && d.prefetch_priority != BLVD_PREFETCH_LOW &&
+      d.prefetch_priority != BLVD_PREFETCH_IDLE_ANYTIME) {
+    t_create_error = "blvd_runtime_create: prefetch_priority must be BLVD_PREFETCH_IDLE, BLVD_PREFETCH_LOW or "
+                     "BLVD_PREFETCH_IDLE_ANYTIME";
     return BLVD_ERR_INVALID_ARG;
   }
   if (!d.allocator.alloc != !d.allocator.free) {

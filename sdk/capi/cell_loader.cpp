@@ -11,11 +11,23 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include "capi/frame_clock.h"
 #include "core/status.h"
 
 namespace blvd::capi {
 namespace {
 constexpr int kBackgroundNice = 19;
+// The longest a background mesh waits for a gap: a bound, so that a host whose
+// frames are irregular still gets its predictions (≈ 6 frames at 60 Hz).
+constexpr int64_t kMaxGapWaitNs = 100000000;
+// Estimates get this margin over the measured rate.
+constexpr double kCostMargin = 1.25;
+
+int64_t threadCpuNs() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return int64_t(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
 }  // namespace
 
 void* Allocator::allocate(size_t size) const {
@@ -30,8 +42,8 @@ void Allocator::release(void* p) const {
 }
 
 CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes,
-                       const blvd_executor& executor, bool low_prefetch)
-    : city_(city), alloc_(alloc), executor_(executor), low_prefetch_(low_prefetch) {
+                       const blvd_executor& executor, bool low_prefetch, bool pace_to_frames)
+    : city_(city), alloc_(alloc), executor_(executor), low_prefetch_(low_prefetch), pace_to_frames_(pace_to_frames) {
   for (Staging& s : slots_) {
     void* arena = alloc_.allocate(arena_bytes);
     void* table = arena ? alloc_.allocate(sizeof(StagedMesh) * meshes) : nullptr;
@@ -227,6 +239,23 @@ void CellLoader::run(bool background) {
   }
 }
 
+void CellLoader::waitForGap(Staging& s, bool impostor, double units) {
+  if (!pace_to_frames_ || s.urgent || executor_.submit) return;
+  const int64_t cost = int64_t(rate_ns_[impostor] * units * kCostMargin);
+  auto cancel = [](void* p) { return static_cast<Staging*>(p)->abandon.load(std::memory_order_relaxed); };
+  const int64_t waited = FrameClocks::waitForGap(cost, kMaxGapWaitNs, cancel, &s);
+  if (waited > 200000) {  // more than the check itself
+    gap_waits_.fetch_add(1, std::memory_order_relaxed);
+    gap_wait_ns_.fetch_add(uint64_t(waited), std::memory_order_relaxed);
+  }
+}
+
+void CellLoader::learnCost(bool impostor, double units, int64_t cpu_ns) {
+  if (units <= 0) return;
+  const double r = double(cpu_ns) / units;
+  rate_ns_[impostor] = rate_ns_[impostor] > 0 ? 0.8 * rate_ns_[impostor] + 0.2 * r : r;
+}
+
 bool CellLoader::decode(Staging& s) {
   s.arena.reset();
   s.mesh_count = 0;
@@ -272,20 +301,30 @@ bool CellLoader::decode(Staging& s) {
   const graph::StreetGraph& g = city_.graph();
   for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b)
     for (uint32_t k = 0; k < city_.blocks()[*b].lod_count; ++k) {
+      const graph::BlockRecord& rec = city_.blocks()[*b];
+      const double units = double(rec.triangles[k]) + double(rec.vertices[k]);
+      waitForGap(s, false, units);
       if (abandoned()) return false;
+      const int64_t cpu0 = threadCpuNs();
       const core::Status st = city_.decodeBlock(*b, k, s.scratch, err);
       if (st != core::Status::Ok) return fail(err);
       if (!stage(MeshKind::Block, *b, k)) return true;
+      learnCost(false, units, threadCpuNs() - cpu0);
     }
   if (s.cell < city_.cellTables().impostors.size()) {
     const graph::CellImpostors& ci = city_.cellTables().impostors[s.cell];
     for (int single = 0; single < 2; ++single) {
       const auto& list = single ? ci.single : ci.layered;
       for (uint32_t i = 0; i < list.size(); ++i) {
+        const double units = double(list[i].texture_width) * list[i].texture_height + list[i].triangles +
+                             list[i].vertices;
+        waitForGap(s, true, units);
         if (abandoned()) return false;
+        const int64_t cpu0 = threadCpuNs();
         const core::Status st = city_.decodeImpostor(list[i], s.scratch, err);
         if (st != core::Status::Ok) return fail(err);
         if (!stage(single ? MeshKind::Single : MeshKind::Layered, i, 0)) return true;
+        learnCost(true, units, threadCpuNs() - cpu0);
       }
     }
   }

@@ -68,8 +68,10 @@ class CellLoader {
   // task handed to the host.
   // `low_prefetch`: predictions at nice 19 instead of SCHED_IDLE
   // (BLVD_PREFETCH_LOW).
+  // `pace_to_frames`: the background thread starts each mesh in a gap
+  // between the process's frames (FrameClocks, decision 0008 §11).
   CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes,
-             const blvd_executor& executor = blvd_executor{}, bool low_prefetch = false);
+             const blvd_executor& executor = blvd_executor{}, bool low_prefetch = false, bool pace_to_frames = false);
   ~CellLoader();
   CellLoader(const CellLoader&) = delete;
   CellLoader& operator=(const CellLoader&) = delete;
@@ -107,11 +109,19 @@ class CellLoader {
   uint64_t decodeHighWater() const { return decode_high_water_; }
   uint64_t stagingHighWater() const { return staging_high_water_; }
   uint64_t carvedBytes() const { return carved_; }
+  // Background meshes that waited for a gap between frames, and how long.
+  uint64_t gapWaits() const { return gap_waits_; }
+  double gapWaitMs() const { return double(gap_wait_ns_) * 1e-6; }
 
  private:
   void run(bool background);
   // False when the job was abandoned (its slot is then free again).
   bool decode(Staging& s);
+  // Background jobs: waits for a gap between frames to fit a unit of `units`
+  // (block: triangles + vertices; impostor: texels + triangles + vertices)
+  // at the rate measured so far for its kind.
+  void waitForGap(Staging& s, bool impostor, double units);
+  void learnCost(bool impostor, double units, int64_t cpu_ns);
   // Host-executor path: decodes the oldest queued slot, if any.
   static void runTask(void* self);
   void runOne();
@@ -128,6 +138,10 @@ class CellLoader {
   std::thread thread_, background_;  // urgent jobs; predictions
   blvd_executor executor_{};
   bool low_prefetch_ = false;
+  bool pace_to_frames_ = false;
+  // Background thread only: decode CPU nanoseconds per unit, by kind (0 until measured).
+  double rate_ns_[2] = {0, 0};
+  std::atomic<uint64_t> gap_waits_{0}, gap_wait_ns_{0};
   uint32_t tasks_out_ = 0;  // submitted to the host and not yet run
   std::atomic<uint64_t> loads_{0};
   std::atomic<uint64_t> decode_high_water_{0}, staging_high_water_{0};

@@ -29,7 +29,9 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   alloc.user = desc.allocator.user;
   if (!alloc.alloc != !alloc.free) throw Error(Status::InvalidArg, "allocator needs both alloc and free, or neither");
   loader_ = std::make_unique<CellLoader>(city_, alloc, plan_.staging_arena_bytes, plan_.staging_meshes, desc.executor,
-                                         desc.prefetch_priority == BLVD_PREFETCH_LOW);
+                                         desc.prefetch_priority == BLVD_PREFETCH_LOW,
+                                         desc.prefetch_priority == BLVD_PREFETCH_IDLE);
+  clock_ = FrameClocks::acquire();  // none left: this runtime's frames are not waited for
 
   ctx_ = render::createContext(static_cast<render::Backend>(desc.backend), err);
   if (!ctx_) throw Error(Status::Backend, err);
@@ -86,6 +88,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
 
 Runtime::~Runtime() {
   loader_.reset();  // joins the loader thread before the city goes
+  FrameClocks::release(clock_);
   if (renderer_ && ctx_ && ctx_->makeCurrent()) {
     for (render::MeshHandle h : reference_blocks_) renderer_->release(h);
     for (CellSlot& slot : slots_) renderer_->resetSlab(slot.slab);
@@ -448,6 +451,7 @@ void Runtime::waitResident(double timeout_ms) {
 void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n) {
   if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
   const auto t_frame = std::chrono::steady_clock::now();
+  if (clock_) clock_->begin(monoNs());
   ++frame_;
   double arc_m, speed;
   const uint32_t cell = currentCell(arc_m, speed);
@@ -499,6 +503,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
     renderer_->setReadSize(int(W), int(H));
   }
   rendered_ = true;
+  if (clock_) clock_->end(monoNs());
   if (budget_ && !(mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS)) {
     // The whole call counts against the target: streaming and uploads too.
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_frame).count();
@@ -546,6 +551,8 @@ void Runtime::stats(blvd_stats* out) const {
   s.table_bytes = city_.tableBytes();
   s.tracking_bytes = tracker_->bytes();
   s.loads = loader_->loads();
+  s.prefetch_gap_waits = loader_->gapWaits();
+  s.prefetch_gap_wait_ms = loader_->gapWaitMs();
   std::memcpy(out, &s, std::min<size_t>(s.struct_size, sizeof s));
 }
 

@@ -11,6 +11,7 @@
 #include "render/context.h"
 #include "render/renderer.h"
 #include "capi/cell_loader.h"
+#include "capi/frame_clock.h"
 #include "capi/memory_plan.h"
 #include "stream/frame_budget.h"
 #include "stream/residency.h"
@@ -92,6 +93,7 @@ class Runtime {
   std::vector<render::MeshHandle> reference_blocks_;
   std::vector<render::MeshHandle> draw_;  // this frame's list, reserved at create
   uint64_t frame_ = 0;
+  FrameClock* clock_ = nullptr;  // this runtime's frames, for the loaders' gap scheduling
   blvd_render_mode mode_ = BLVD_MODE_BLVD;
   float radius_m_ = 250.f;
   uint32_t impostors_drawn_ = 0, blocks_drawn_ = 0;

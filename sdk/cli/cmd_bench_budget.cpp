@@ -17,8 +17,11 @@
 // that enter a new cell over p99 of the others) and what the budget costs in
 // SSIM against run 2's image of the same pose.
 #include <sys/stat.h>
+#include <time.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -43,6 +46,39 @@ struct BudgetOpts {
   double auto_fraction = 0.5;  // of the way from the floor's p50 to unbudgeted blvd's p50
   double min_scale = 0.5;      // the budget's lowest render scale (1: polygons only)
   uint32_t resident_cells = 0; // cell slots (0: the runtime's default)
+  double fps = 0;              // display refresh the frames are paced to (0: back to back)
+  double speed_kmh = 0;        // with fps: the vehicle's speed, giving the step (0: --step)
+  std::string prefetch = "idle";  // blvd_runtime_desc.prefetch_priority: idle, low or anytime
+};
+
+// A display's refresh, as a host drawing at vsync sees it: a frame starts on
+// a tick of the period, and one that overruns waits for the tick after it
+// ends (the frame missed is the one a driver would see as a stutter, and its
+// time is kept as measured). With period 0 the frames run back to back.
+class Pacer {
+ public:
+  explicit Pacer(double fps) : period_ns_(fps > 0 ? int64_t(1e9 / fps) : 0) {}
+  void waitTick() {
+    if (period_ns_ == 0) return;
+    const int64_t now = nowNs();
+    if (origin_ns_ == 0) origin_ns_ = now;
+    const int64_t k = (now - origin_ns_ + period_ns_ - 1) / period_ns_;
+    const int64_t tick = origin_ns_ + k * period_ns_;
+    timespec ts{time_t(tick / 1000000000), long(tick % 1000000000)};
+    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+    ++ticks_;
+  }
+  uint64_t ticks() const { return ticks_; }
+
+ private:
+  static int64_t nowNs() {
+    timespec ts{};
+    ::clock_gettime(CLOCK_MONOTONIC, &ts);
+    return int64_t(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+  }
+  int64_t period_ns_, origin_ns_ = 0;
+  uint64_t ticks_ = 0;
 };
 
 using Runtime = std::unique_ptr<blvd_runtime, void (*)(blvd_runtime*)>;
@@ -59,6 +95,9 @@ Runtime create(const BudgetOpts& o, int w, int h, blvd_render_mode mode, float t
   d.lod_error_px = lod_error_px;
   d.min_render_scale = min_scale;
   d.max_resident_cells = o.resident_cells;
+  d.prefetch_priority = o.prefetch == "low"       ? BLVD_PREFETCH_LOW
+                        : o.prefetch == "anytime" ? BLVD_PREFETCH_IDLE_ANYTIME
+                                                  : BLVD_PREFETCH_IDLE;
   blvd_runtime* rt = nullptr;
   check(blvd_runtime_create(&d, &rt), nullptr, "create runtime");
   return Runtime(rt, blvd_runtime_destroy);
@@ -90,8 +129,9 @@ struct Run {
 // Draws pose p with run r. A frame whose cell is not resident yet is waited
 // for and drawn again; the kept time is the second one (residency is `bench
 // memory`'s subject, not this one's).
-void drawPose(Run& r, const Pose& p, bool keep, bool image, int w, int h) {
+void drawPose(Run& r, Pacer& pace, const Pose& p, bool keep, bool image, int w, int h) {
   blvd_runtime* rt = r.rt.get();
+  pace.waitTick();
   check(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), rt, "pose");
   blvd_frame_stats fs{};
   fs.struct_size = sizeof fs;
@@ -100,6 +140,7 @@ void drawPose(Run& r, const Pose& p, bool keep, bool image, int w, int h) {
   const bool degraded = (fs.flags & BLVD_FRAME_DEGRADED) != 0;
   if (degraded) {
     check(blvd_wait_resident(rt, 60000), rt, "wait");
+    pace.waitTick();
     t0 = std::chrono::steady_clock::now();
     check(blvd_render(rt, &fs), rt, "render");
   }
@@ -126,14 +167,14 @@ void drawPose(Run& r, const Pose& p, bool keep, bool image, int w, int h) {
 // compare different machines), while each still draws its poses in order
 // with its caches warm. A run that takes its turn first redraws its last pose
 // unmeasured (its GL context was just made current again).
-void lap(const std::vector<Run*>& runs, const std::vector<Pose>& poses, bool keep, size_t image_every, int w,
-         int h) {
+void lap(const std::vector<Run*>& runs, Pacer& pace, const std::vector<Pose>& poses, bool keep, size_t image_every,
+         int w, int h) {
   constexpr size_t kSegment = 64;
   for (size_t s = 0; s < poses.size(); s += kSegment)
     for (Run* r : runs) {
-      if (s > 0 && runs.size() > 1) drawPose(*r, poses[s - 1], false, false, w, h);
+      if (s > 0 && runs.size() > 1) drawPose(*r, pace, poses[s - 1], false, false, w, h);
       for (size_t i = s; i < std::min(poses.size(), s + kSegment); ++i)
-        drawPose(*r, poses[i], keep, i % image_every == 0, w, h);
+        drawPose(*r, pace, poses[i], keep, i % image_every == 0, w, h);
     }
 }
 
@@ -148,6 +189,11 @@ int runBudget(const BudgetOpts& o) {
   int w = 0, h = 0;
   parseSize(o.size, w, h);
   const unsigned n = parseAutoRoute(o.route);
+  if (o.speed_kmh > 0 && !(o.fps > 0))
+    throw core::Error(core::Status::InvalidArg, "--speed-kmh needs --fps: the step is the distance driven in one frame");
+  const double step = o.speed_kmh > 0 ? o.speed_kmh / 3.6 / o.fps : o.step;
+  if (!(step > 0.01)) throw core::Error(core::Status::InvalidArg, "the step between frames must exceed 1 cm");
+  Pacer pace(o.fps);
   std::vector<uint32_t> route;
   std::vector<Pose> poses;
   {
@@ -158,7 +204,7 @@ int runBudget(const BudgetOpts& o) {
     if (!city.hasImpostors())
       throw core::Error(core::Status::Unsupported, o.package + " has no impostors: bake it with --impostor both");
     route = autoRoute(city.graph(), n, o.seed);
-    poses = samplePoses(city.graph(), route, o.step);
+    poses = samplePoses(city.graph(), route, step);
   }
   const size_t image_every = std::max<size_t>(1, poses.size() / 40);
 
@@ -175,7 +221,7 @@ int runBudget(const BudgetOpts& o) {
   const std::vector<Run*> reference = {&local, &coarsest, &unbudgeted};
   for (Run* r : reference) check(blvd_set_route(r->rt.get(), route.data(), route.size()), r->rt.get(), "route");
   // Warm-up laps; the last one also calibrates the auto target.
-  for (int l = 0; l + 1 < o.laps; ++l) lap(reference, poses, l + 2 == o.laps, image_every, w, h);
+  for (int l = 0; l + 1 < o.laps; ++l) lap(reference, pace, poses, l + 2 == o.laps, image_every, w, h);
   const double cal_floor = pct(times(coarsest.frames, -1), 50), cal_free = pct(times(unbudgeted.frames, -1), 50);
   for (Run* r : reference) r->frames.clear(), r->images.clear();
   double target = 0;
@@ -199,8 +245,8 @@ int runBudget(const BudgetOpts& o) {
   std::fprintf(stderr, "bench budget: blvd with a %.2f ms target ...\n", target);
   budgeted.rt = create(o, w, h, BLVD_MODE_BLVD, float(target), 0.f, float(o.min_scale));
   check(blvd_set_route(budgeted.rt.get(), route.data(), route.size()), budgeted.rt.get(), "route");
-  for (int l = 0; l + 1 < o.laps; ++l) lap({&budgeted}, poses, false, image_every, w, h);
-  lap({&local, &coarsest, &unbudgeted, &budgeted}, poses, true, image_every, w, h);
+  for (int l = 0; l + 1 < o.laps; ++l) lap({&budgeted}, pace, poses, false, image_every, w, h);
+  lap({&local, &coarsest, &unbudgeted, &budgeted}, pace, poses, true, image_every, w, h);
   blvd_stats bs{};
   bs.struct_size = sizeof bs;
   check(blvd_runtime_stats(budgeted.rt.get(), &bs), budgeted.rt.get(), "stats");
@@ -248,6 +294,13 @@ int runBudget(const BudgetOpts& o) {
   j["ssim_vs_unbudgeted_p5"] = pct(ssim, 5);
   j["budget_unreachable_at_end"] = bs.budget_unreachable != 0;
   j["frames"] = budgeted.frames.size();
+  // The pacing: frames on a display's ticks (a host at vsync) or back to back.
+  j["fps"] = o.fps;
+  j["step_m"] = step;
+  j["speed_kmh"] = o.fps > 0 ? step * o.fps * 3.6 : 0.0;
+  j["prefetch"] = o.prefetch;
+  j["prefetch_gap_waits"] = bs.prefetch_gap_waits;
+  j["prefetch_gap_wait_ms"] = bs.prefetch_gap_wait_ms;
   // Frames that found their cell not resident (each waited for and drawn
   // again, the second time kept): a prefetch that falls behind shows here.
   j["degraded_frames"] = budgeted.degraded;
@@ -325,6 +378,14 @@ void addBenchBudget(CLI::App& bench, Runner& run) {
   b->add_option("--auto-fraction", o->auto_fraction, "auto target: this far from the floor's p50 to unbudgeted blvd's p50")->capture_default_str()->check(CLI::Range(0.0, 1.0));
   b->add_option("--min-scale", o->min_scale, "lowest render scale the budget may use (1: polygons only)")
       ->capture_default_str()->check(CLI::Range(0.25, 1.0));
+  b->add_option("--fps", o->fps, "pace the frames to a display refresh of this rate, as a host at vsync (0: back to back)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1000.0));
+  b->add_option("--speed-kmh", o->speed_kmh, "with --fps: the vehicle's speed, which sets the step (0: --step)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1000.0));
+  b->add_option("--prefetch", o->prefetch,
+                "predictions: idle (SCHED_IDLE, in the gaps between paced frames), anytime (SCHED_IDLE only), low "
+                "(nice 19)")
+      ->capture_default_str()->check(CLI::IsMember({"idle", "anytime", "low"}));
   b->add_option("--size", o->size)->capture_default_str();
   b->add_option("--resident-cells", o->resident_cells, "cell slots (0: the runtime's default)")->capture_default_str();
   b->add_option("--json", o->json_path, "write the JSON here too");

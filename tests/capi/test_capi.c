@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   desc.backend = (blvd_backend)-3;
   EXPECT(blvd_runtime_create(&desc, &rt) == BLVD_ERR_INVALID_ARG);
   desc.backend = BLVD_BACKEND_AUTO;
-  desc.prefetch_priority = 2;
+  desc.prefetch_priority = 3; /* past BLVD_PREFETCH_IDLE_ANYTIME */
   EXPECT(blvd_runtime_create(&desc, &rt) == BLVD_ERR_INVALID_ARG);
   EXPECT(rt == NULL);
 

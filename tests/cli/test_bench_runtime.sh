@@ -16,13 +16,30 @@ done
   --json "$work/memory.json" > /dev/null
 "$blvd" bench budget "$pkg" --route auto:6 --seed 7 --laps 2 --size 320x192 --json "$work/budget.json" \
   --html "$work/budget_html" --csv "$work/budget.csv" > /dev/null
+# Paced like a host at vsync (120 Hz, 216 km/h: 0.5 m a frame); --speed-kmh needs --fps.
+"$blvd" bench budget "$pkg" --route auto:2 --seed 7 --laps 2 --size 320x192 --fps 120 --speed-kmh 216 \
+  --json "$work/paced.json" --csv "$work/paced.csv" > /dev/null
+if "$blvd" bench budget "$pkg" --route auto:2 --speed-kmh 50 > /dev/null 2> "$work/nofps.err"; then
+  echo "FAIL: --speed-kmh without --fps accepted"; exit 1
+fi
+grep -q -- "--speed-kmh needs --fps" "$work/nofps.err" || { echo "FAIL: --speed-kmh without --fps: $(cat "$work/nofps.err")"; exit 1; }
 # The page draws the frame times (with the target and the budget's aim) and the knobs.
 [ "$(grep -o '<svg' "$work/budget_html/index.html" | wc -l)" -ge 2 ] || { echo "FAIL: bench budget --html lacks its plots"; exit 1; }
 head -1 "$work/budget.csv" | grep -q '^run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s$' || { echo "FAIL: bench budget --csv header"; exit 1; }
-python3 - "$work/memory.json" "$work/budget.json" "$work/budget.csv" <<'PY'
+python3 - "$work/memory.json" "$work/budget.json" "$work/budget.csv" "$work/paced.json" "$work/paced.csv" <<'PY'
 import csv, json, math, sys
 m, b = (json.load(open(p)) for p in sys.argv[1:3])
 rows = list(csv.DictReader(open(sys.argv[3])))
+pj = json.load(open(sys.argv[4]))
+assert pj["fps"] == 120 and abs(pj["step_m"] - 0.5) < 1e-9 and abs(pj["speed_kmh"] - 216) < 1e-6, pj
+assert pj["prefetch"] == "idle" and isinstance(pj["prefetch_gap_waits"], int), pj
+assert b["fps"] == 0 and b["step_m"] == 2, b  # the default: back to back, 2 m apart
+# Paced frames start on the display's ticks: typically one period apart, never near back to back
+# (a timer wakes up late by a millisecond or more on a loaded VM, so no tighter bound).
+for run in ("floor", "budgeted"):
+    t = [float(r["start_mono_s"]) for r in csv.DictReader(open(sys.argv[5])) if r["run"] == run]
+    gaps = sorted(c - a for a, c in zip(t, t[1:]))
+    assert len(gaps) > 20 and gaps[0] > 0.5 / 120 and 0.95 / 120 < gaps[len(gaps) // 2] < 1.5 / 120, (run, gaps[0], gaps[len(gaps) // 2])
 for run in {r["run"] for r in rows}:  # frames of one run in order on the monotonic clock (tools/frame_sched.py)
     t = [float(r["start_mono_s"]) for r in rows if r["run"] == run]
     assert all(a < c for a, c in zip(t, t[1:])), run

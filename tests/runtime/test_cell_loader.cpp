@@ -19,6 +19,7 @@
 
 #include "blvd/blvd.h"
 #include "capi/cell_loader.h"
+#include "capi/frame_clock.h"
 #include "capi/memory_plan.h"
 #include "stream/city.h"
 
@@ -31,7 +32,7 @@ struct Loader {
   stream::City city;
   capi::MemoryPlan plan;
   std::unique_ptr<capi::CellLoader> loader;
-  explicit Loader(bool low_prefetch = false) {
+  explicit Loader(bool low_prefetch = false, bool pace_to_frames = false) {
     std::string err;
     EXPECT_EQ(city.open(BLVD_TEST_PACKAGE, err), core::Status::Ok) << err;
     blvd_runtime_desc d{};
@@ -39,7 +40,7 @@ struct Loader {
     d.max_resident_cells = 4;
     plan = capi::planMemory(d, city);
     loader = std::make_unique<capi::CellLoader>(city, capi::Allocator{}, plan.staging_arena_bytes, plan.staging_meshes,
-                                                blvd_executor{}, low_prefetch);
+                                                blvd_executor{}, low_prefetch, pace_to_frames);
   }
   // Waits up to `s` seconds for a finished slot of `cell`; releases others.
   capi::Staging* waitFinished(uint32_t cell, double s) {
@@ -121,6 +122,42 @@ TEST(CellLoader, PromotedWhileDecodingInBackgroundFinishesOnBusyCores) {
   // Both slots are free again.
   EXPECT_TRUE(l.loader->request(cell, 0, true));
   EXPECT_TRUE(l.loader->request(cell == 0 ? 1 : 0, 1, true));
+}
+
+// Gap scheduling (docs/decisions/0008 §11): with a host drawing 8 ms frames
+// at 60 Hz, a prediction's meshes wait for the gaps between frames and the
+// cell still arrives; a loader told not to pace never waits.
+TEST(CellLoader, PacedPredictionWaitsForGapsAndStillFinishes) {
+  for (bool pace : {true, false}) {
+    Loader l(false, pace);
+    capi::FrameClock* clock = capi::FrameClocks::acquire();
+    ASSERT_NE(clock, nullptr);
+    std::atomic<bool> stop{false};
+    std::thread host([&] {
+      const int64_t period = 16666667, draw = 8000000;
+      int64_t tick = capi::monoNs();
+      while (!stop.load()) {
+        clock->begin(capi::monoNs());
+        std::this_thread::sleep_for(std::chrono::nanoseconds(draw));
+        clock->end(capi::monoNs());
+        tick += period;
+        std::this_thread::sleep_for(std::chrono::nanoseconds(std::max<int64_t>(0, tick - capi::monoNs())));
+      }
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(400));  // the clock learns the period
+    const uint32_t cell = l.plan.largest_cell;
+    ASSERT_TRUE(l.loader->request(cell, 0, false));
+    capi::Staging* st = l.waitFinished(cell, 120);
+    stop = true;
+    host.join();
+    capi::FrameClocks::release(clock);
+    ASSERT_NE(st, nullptr) << "pace " << pace;
+    EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+    EXPECT_GT(st->mesh_count, 1u);
+    l.loader->release(st);
+    if (pace) EXPECT_GT(l.loader->gapWaits(), 0u) << "no mesh of " << st->mesh_count << " waited for a gap";
+    else EXPECT_EQ(l.loader->gapWaits(), 0u);
+  }
 }
 
 // The thread named blvd-prefetch in this process (0 if none).
