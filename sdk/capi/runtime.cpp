@@ -424,8 +424,51 @@ uint32_t Runtime::currentCell(double& arc_m, double& speed) {
       if (p.flags & track::kPoseMatched) cell = p.cell, arc_m = p.arc_m;
     }
   }
-  if (cell == graph::kNone) cell = city_.nearestCell({cam_.eye_enu.x, cam_.eye_enu.y}, cam_.heading_deg, &arc_m);
+  if (cell == graph::kNone) {
+    const glm::dvec2 p(cam_.eye_enu.x, cam_.eye_enu.y);
+    double cost = 0;
+    cell = city_.nearestCell(p, cam_.heading_deg, &arc_m, &cost);
+    if (cell != graph::kNone) cell = continuedCell(cell, cost, p, cam_.heading_deg, arc_m);
+    last_cell_ = cell;
+  } else {
+    last_cell_ = graph::kNone;
+  }
   return cell;
+}
+
+// At a junction a pose is about as near the cross street's cells as the one
+// it drives along, and the nearest cell alone flickers to a neighbour for a
+// frame or two: a cell that is not resident (the frame is degraded, and the
+// cell is fetched for nothing) and a false boundary. A host-set pose has no
+// map matcher to keep it on its street (the tracker's HMM does that for fed
+// poses), so the last cell is kept while the pose lies along it, and at its
+// end the route's next cell or a successor takes over, each while it costs
+// within kStickM of the nearest. A pose moved far away (a jump) goes by the
+// nearest cell.
+uint32_t Runtime::continuedCell(uint32_t cell, double cost, glm::dvec2 p, double heading_deg, double& arc_m) const {
+  constexpr double kStickM = 3.0;
+  if (last_cell_ == graph::kNone || last_cell_ >= city_.graph().cellCount() || cell == last_cell_) return cell;
+  double arc = 0;
+  bool at_end = false;
+  if (city_.cellCost(last_cell_, p, heading_deg, &arc, &at_end) <= cost + kStickM && !at_end) {
+    arc_m = arc;
+    return last_cell_;
+  }
+  uint32_t pick = graph::kNone;
+  double pick_cost = cost + kStickM, pick_arc = 0;
+  auto consider = [&](uint32_t c) {
+    double a = 0;
+    const double k = city_.cellCost(c, p, heading_deg, &a, nullptr);
+    if (k <= pick_cost) pick = c, pick_cost = k, pick_arc = a;
+  };
+  const uint32_t next = residency_->nextOnRoute(last_cell_);
+  if (next != graph::kNone) consider(next);
+  const graph::StreetGraph& g = city_.graph();
+  if (pick == graph::kNone)
+    for (const uint32_t* s = g.successors.begin(last_cell_); s != g.successors.end(last_cell_); ++s) consider(*s);
+  if (pick == graph::kNone) return cell;
+  arc_m = pick_arc;
+  return pick;
 }
 
 void Runtime::waitResident(double timeout_ms) {

@@ -65,6 +65,10 @@ class Runtime {
   };
   // The camera from the tracker when it drives, then the current cell.
   uint32_t currentCell(double& arc_m, double& speed_mps);
+  // A pose set by the host: the cell the last frame had while the pose still
+  // lies along it, else the next on the route or a successor, when these
+  // cost within kStickM of the nearest cell (`cell`, `cost`); else `cell`.
+  uint32_t continuedCell(uint32_t cell, double cost, glm::dvec2 p, double heading_deg, double& arc_m) const;
   // Residency for this frame: requests, then uploads within upload_budget_ms.
   void stream(uint32_t cell, double arc_m, double speed_mps, double upload_budget_ms);
   void uploadStaged(double budget_ms);
@@ -93,6 +97,7 @@ class Runtime {
   std::vector<render::MeshHandle> reference_blocks_;
   std::vector<render::MeshHandle> draw_;  // this frame's list, reserved at create
   uint64_t frame_ = 0;
+  uint32_t last_cell_ = 0xffffffffu;  // the cell of the last frame with a host-set pose
   FrameClock* clock_ = nullptr;  // this runtime's frames, for the loaders' gap scheduling
   blvd_render_mode mode_ = BLVD_MODE_BLVD;
   float radius_m_ = 250.f;

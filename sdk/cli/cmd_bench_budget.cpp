@@ -294,6 +294,7 @@ int runBudget(const BudgetOpts& o) {
   j["ssim_vs_unbudgeted_p5"] = pct(ssim, 5);
   j["budget_unreachable_at_end"] = bs.budget_unreachable != 0;
   j["frames"] = budgeted.frames.size();
+  j["route"] = route;  // the cells in driving order, to compare with the CSV's cells
   // The pacing: frames on a display's ticks (a host at vsync) or back to back.
   j["fps"] = o.fps;
   j["step_m"] = step;

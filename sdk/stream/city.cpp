@@ -130,7 +130,25 @@ core::Status City::decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshDa
   return st;
 }
 
-uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m) const {
+double City::cellCost(uint32_t cell, glm::dvec2 p, double heading_deg, double* arc_m, bool* at_end) const {
+  const glm::dvec2 dir(std::sin(glm::radians(heading_deg)), std::cos(glm::radians(heading_deg)));
+  const auto& e = graph_.halfedges[cell];
+  double best = 1e300, before = 0, best_arc = 0;
+  for (uint32_t i = e.pts_begin; i + 1 < e.pts_begin + e.pts_count; ++i) {
+    const glm::dvec2 a = graph_.points[i], d = graph_.points[i + 1] - a;
+    const double len = glm::length(d);
+    if (len < 1e-9) continue;
+    const double t = glm::clamp(glm::dot(p - a, d) / (len * len), 0.0, 1.0);
+    const double cost = glm::length(a + d * t - p) + 5.0 * (1.0 - glm::dot(d / len, dir));
+    if (cost < best) best = cost, best_arc = before + t * len;
+    before += len;
+  }
+  if (arc_m) *arc_m = best_arc;
+  if (at_end) *at_end = best_arc >= before - 1e-6;  // `before` is now the whole length
+  return best;
+}
+
+uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m, double* cost_out) const {
   const glm::dvec2 dir(std::sin(glm::radians(heading_deg)), std::cos(glm::radians(heading_deg)));
   double best = 1e300;
   uint32_t best_h = graph::kNone;
@@ -173,6 +191,7 @@ uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m) cons
     grid_.query(p.x, p.y, r, [&](const graph::SegmentGrid::Entry& en) { consider(en.halfedge, en.point); });
     if (best <= r || r > 2 * extent + glm::length(p)) break;
   }
+  if (cost_out) *cost_out = best;
   return best_h;
 }
 

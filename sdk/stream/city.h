@@ -54,7 +54,13 @@ class City {
   // length along the cell of the closest point. Searches the segment grid in
   // growing squares, so a frame's cost does not grow with the city; no
   // allocation.
-  uint32_t nearestCell(glm::dvec2 p, double heading_deg, double* arc_m = nullptr) const;
+  // `cost_out` (optional) receives the winner's cost: metres from p plus the
+  // heading penalty, 5 m × (1 − cos of the angle to the cell's direction).
+  uint32_t nearestCell(glm::dvec2 p, double heading_deg, double* arc_m = nullptr, double* cost_out = nullptr) const;
+  // The same cost for one given cell (its nearest segment), the arc length of
+  // the closest point and whether that point is the cell's end (p lies past
+  // it). No allocation.
+  double cellCost(uint32_t cell, glm::dvec2 p, double heading_deg, double* arc_m, bool* at_end) const;
 
  private:
   package::PackageReader reader_;

@@ -99,6 +99,12 @@ void Residency::update(const Motion& m) {
   }
 }
 
+uint32_t Residency::nextOnRoute(uint32_t cell) const {
+  for (size_t i = 0; i + 1 < route_n_; ++i)
+    if (route_[i] == cell) return route_[i + 1];
+  return graph::kNone;
+}
+
 uint32_t Residency::rank(uint32_t cell) const {
   for (size_t i = 0; i < wanted_n_; ++i)
     if (wanted_[i] == cell) return static_cast<uint32_t>(i);

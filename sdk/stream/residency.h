@@ -38,6 +38,8 @@ class Residency {
   // heap allocation.
   void update(const Motion& m);
   const uint32_t* wanted() const { return wanted_.data(); }
+  // The cell after `cell` on the route (its first visit), or kNone.
+  uint32_t nextOnRoute(uint32_t cell) const;
   size_t wantedCount() const { return wanted_n_; }
   // Rank of `cell` in wanted() or kNone.
   uint32_t rank(uint32_t cell) const;
