@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <new>
 
 #include <time.h>
 
@@ -35,6 +34,12 @@ int64_t monoNs() {
   return int64_t(ts.tv_sec) * 1000000000 + ts.tv_nsec;
 }
 
+void FrameClock::reset() {
+  drawing_ = false;
+  last_begin_ = last_end_ = period_ = duration_ = 0;
+  count_ = 0;
+}
+
 void FrameClock::begin(int64_t now_ns) {
   const int64_t prev = last_begin_.load(std::memory_order_relaxed);
   if (prev != 0) intervals_[count_ % kWindow] = now_ns - prev;
@@ -57,10 +62,8 @@ FrameClock* FrameClocks::acquire() {
   for (int i = 0; i < kMaxClocks; ++i) {
     bool expected = false;
     if (!g_used[i].compare_exchange_strong(expected, true)) continue;
-    FrameClock& c = g_clocks[i];
-    c.~FrameClock();
-    new (&c) FrameClock();
-    return &c;
+    g_clocks[i].reset();
+    return &g_clocks[i];
   }
   return nullptr;
 }

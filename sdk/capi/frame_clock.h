@@ -19,14 +19,22 @@
 // runtime that finds the table full simply is not waited for.
 #pragma once
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 
 namespace blvd::capi {
 
 int64_t monoNs();  // CLOCK_MONOTONIC in nanoseconds
+// A steady_clock time in the same nanoseconds (libstdc++'s steady_clock is
+// CLOCK_MONOTONIC), so a caller that already read the clock need not again.
+inline int64_t monoNs(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+}
 
 class FrameClock {
  public:
+  // Forgets every frame (a slot handed to a new runtime).
+  void reset();
   // Render thread.
   void begin(int64_t now_ns);
   void end(int64_t now_ns);

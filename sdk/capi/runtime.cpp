@@ -494,7 +494,7 @@ void Runtime::waitResident(double timeout_ms) {
 void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n) {
   if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
   const auto t_frame = std::chrono::steady_clock::now();
-  if (clock_) clock_->begin(monoNs());
+  if (clock_) clock_->begin(monoNs(t_frame));
   ++frame_;
   double arc_m, speed;
   const uint32_t cell = currentCell(arc_m, speed);
@@ -546,10 +546,11 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
     renderer_->setReadSize(int(W), int(H));
   }
   rendered_ = true;
-  if (clock_) clock_->end(monoNs());
+  const auto t_drawn = std::chrono::steady_clock::now();
+  if (clock_) clock_->end(monoNs(t_drawn));
   if (budget_ && !(mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS)) {
     // The whole call counts against the target: streaming and uploads too.
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_frame).count();
+    const double ms = std::chrono::duration<double, std::milli>(t_drawn - t_frame).count();
     budget_->next(ms, block_tris_, floor_tris_, fs.pixels, full_pixels);
     stats_.polygon_budget = budget_->polygonBudget();
     stats_.frame_aim_ms = float(budget_->aim());

@@ -17,14 +17,13 @@
 // that enter a new cell over p99 of the others) and what the budget costs in
 // SSIM against run 2's image of the same pose.
 #include <sys/stat.h>
-#include <time.h>
 
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -57,28 +56,19 @@ struct BudgetOpts {
 // time is kept as measured). With period 0 the frames run back to back.
 class Pacer {
  public:
-  explicit Pacer(double fps) : period_ns_(fps > 0 ? int64_t(1e9 / fps) : 0) {}
+  using Clock = std::chrono::steady_clock;
+  explicit Pacer(double fps) : period_(fps > 0 ? Clock::duration(int64_t(1e9 / fps)) : Clock::duration::zero()) {}
   void waitTick() {
-    if (period_ns_ == 0) return;
-    const int64_t now = nowNs();
-    if (origin_ns_ == 0) origin_ns_ = now;
-    const int64_t k = (now - origin_ns_ + period_ns_ - 1) / period_ns_;
-    const int64_t tick = origin_ns_ + k * period_ns_;
-    timespec ts{time_t(tick / 1000000000), long(tick % 1000000000)};
-    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    }
-    ++ticks_;
+    if (period_ == Clock::duration::zero()) return;
+    const Clock::time_point now = Clock::now();
+    if (origin_ == Clock::time_point()) origin_ = now;
+    const auto k = (now - origin_ + period_ - Clock::duration(1)) / period_;
+    std::this_thread::sleep_until(origin_ + k * period_);
   }
-  uint64_t ticks() const { return ticks_; }
 
  private:
-  static int64_t nowNs() {
-    timespec ts{};
-    ::clock_gettime(CLOCK_MONOTONIC, &ts);
-    return int64_t(ts.tv_sec) * 1000000000 + ts.tv_nsec;
-  }
-  int64_t period_ns_, origin_ns_ = 0;
-  uint64_t ticks_ = 0;
+  Clock::duration period_;
+  Clock::time_point origin_{};
 };
 
 using Runtime = std::unique_ptr<blvd_runtime, void (*)(blvd_runtime*)>;

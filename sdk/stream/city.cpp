@@ -130,8 +130,20 @@ core::Status City::decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshDa
   return st;
 }
 
+namespace {
+// The cost of being on a half-edge's directed segment a→a+d: metres from p
+// to the segment plus a penalty for facing the wrong way, 5 m × (1 − cos),
+// with `cos_fwd` the cosine between d and the heading. Shared by
+// nearestCell and cellCost so the two compare like with like.
+constexpr double kHeadingPenaltyM = 5.0;
+double headingPenalty(double cos_fwd) { return kHeadingPenaltyM * (1.0 - cos_fwd); }
+glm::dvec2 headingDir(double heading_deg) {
+  return {std::sin(glm::radians(heading_deg)), std::cos(glm::radians(heading_deg))};
+}
+}  // namespace
+
 double City::cellCost(uint32_t cell, glm::dvec2 p, double heading_deg, double* arc_m, bool* at_end) const {
-  const glm::dvec2 dir(std::sin(glm::radians(heading_deg)), std::cos(glm::radians(heading_deg)));
+  const glm::dvec2 dir = headingDir(heading_deg);
   const auto& e = graph_.halfedges[cell];
   double best = 1e300, before = 0, best_arc = 0;
   for (uint32_t i = e.pts_begin; i + 1 < e.pts_begin + e.pts_count; ++i) {
@@ -139,7 +151,7 @@ double City::cellCost(uint32_t cell, glm::dvec2 p, double heading_deg, double* a
     const double len = glm::length(d);
     if (len < 1e-9) continue;
     const double t = glm::clamp(glm::dot(p - a, d) / (len * len), 0.0, 1.0);
-    const double cost = glm::length(a + d * t - p) + 5.0 * (1.0 - glm::dot(d / len, dir));
+    const double cost = glm::length(a + d * t - p) + headingPenalty(glm::dot(d / len, dir));
     if (cost < best) best = cost, best_arc = before + t * len;
     before += len;
   }
@@ -149,7 +161,7 @@ double City::cellCost(uint32_t cell, glm::dvec2 p, double heading_deg, double* a
 }
 
 uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m, double* cost_out) const {
-  const glm::dvec2 dir(std::sin(glm::radians(heading_deg)), std::cos(glm::radians(heading_deg)));
+  const glm::dvec2 dir = headingDir(heading_deg);
   double best = 1e300;
   uint32_t best_h = graph::kNone;
   // Distance plus a penalty for facing the wrong way, so of two twin
@@ -167,7 +179,7 @@ uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m, doub
     for (int back = 0; back < 2; ++back) {
       const uint32_t c = back ? e.twin : h;
       if (c == graph::kNone) continue;
-      const double cost = dist + 5.0 * (1.0 - (back ? -cos_fwd : cos_fwd));
+      const double cost = dist + headingPenalty(back ? -cos_fwd : cos_fwd);
       if (!(cost < best || (cost == best && c < best_h))) continue;
       best = cost;
       best_h = c;

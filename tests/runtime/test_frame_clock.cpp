@@ -3,6 +3,7 @@
 // except in the waitForGap cases.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdint>
 
 #include "capi/frame_clock.h"
@@ -28,6 +29,14 @@ struct Held {
   FrameClock* c = FrameClocks::acquire();
   ~Held() { FrameClocks::release(c); }
 };
+
+// The render thread stamps frames from its steady_clock reads: the same clock.
+TEST(FrameClock, SteadyClockIsMonotonicNs) {
+  const int64_t a = blvd::capi::monoNs(std::chrono::steady_clock::now());
+  const int64_t b = blvd::capi::monoNs();
+  EXPECT_LE(a, b);
+  EXPECT_LT(b - a, 50 * kMs);
+}
 
 TEST(FrameClock, MediansNeedAFullWindow) {
   Held h;
