@@ -172,6 +172,16 @@ typedef struct blvd_runtime_desc {
    * normal priority, and takes over a prediction that becomes current). With a host executor the
    * host decides. */
   uint32_t prefetch_priority; /* a blvd_prefetch_priority; 0 means BLVD_PREFETCH_IDLE */
+
+  /* CPUs of blvd's prediction thread (bit i: CPU i). 0 means: every CPU the creating thread may use
+   * except the one the render thread runs on, followed each frame (a runnable prediction on the
+   * render thread's CPU keeps it from idling while the render thread waits for the GPU or a CPU
+   * rasterizer's threads, and only an idle CPU pulls a thread queued on another one;
+   * blvd_stats.prefetch_kept_off_cpu says which). Non-zero pins the thread to these CPUs, within the
+   * creating thread's, and nothing moves it: for hosts that place their own threads. No effect with a
+   * host executor. A mask naming none of the creating thread's CPUs fails create with
+   * BLVD_ERR_INVALID_ARG. */
+  uint64_t prefetch_cpu_mask;
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */
@@ -272,6 +282,10 @@ typedef struct blvd_stats {
                                   * would pass 1.25x the target; else 0 */
   uint64_t prefetch_gap_waits;   /* predicted meshes whose decode waited for a gap between frames */
   double prefetch_gap_wait_ms;   /* their waits in all */
+  int32_t prefetch_kept_off_cpu; /* the render thread's CPU, which blvd's prediction thread is kept off
+                                  * (within the CPUs it inherited at create) so that the CPU idles when
+                                  * the render thread waits; -1 when not applied (one CPU allowed, a host
+                                  * executor, or the affinity call refused) */
 } blvd_stats;
 
 /* Fills *stats. Render thread. */

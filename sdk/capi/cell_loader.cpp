@@ -42,8 +42,25 @@ void Allocator::release(void* p) const {
 }
 
 CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes,
-                       const blvd_executor& executor, bool low_prefetch, bool pace_to_frames)
+                       const blvd_executor& executor, bool low_prefetch, bool pace_to_frames, uint64_t cpu_mask)
     : city_(city), alloc_(alloc), executor_(executor), low_prefetch_(low_prefetch), pace_to_frames_(pace_to_frames) {
+  // The threads inherit the constructing thread's CPUs; keepOffCpu() only
+  // ever narrows that set. Checked before anything is carved.
+  CPU_ZERO(&allowed_);
+  if (::pthread_getaffinity_np(pthread_self(), sizeof allowed_, &allowed_) != 0) CPU_ZERO(&allowed_);
+  cpu_set_t pin;
+  CPU_ZERO(&pin);
+  if (cpu_mask && !executor_.submit) {
+    for (int c = 0; c < 64; ++c)
+      if ((cpu_mask >> c & 1) && CPU_ISSET(c, &allowed_)) CPU_SET(c, &pin);
+    if (CPU_COUNT(&pin) == 0) {
+      char hex[32];
+      std::snprintf(hex, sizeof hex, "0x%llx", static_cast<unsigned long long>(cpu_mask));
+      throw core::Error(core::Status::InvalidArg, std::string("prefetch_cpu_mask ") + hex +
+                                                      " names none of the CPUs the creating thread may use");
+    }
+    pinned_ = true;
+  }
   for (Staging& s : slots_) {
     void* arena = alloc_.allocate(arena_bytes);
     void* table = arena ? alloc_.allocate(sizeof(StagedMesh) * meshes) : nullptr;
@@ -64,6 +81,7 @@ CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_
   if (!executor_.submit) {
     thread_ = std::thread([this] { run(false); });
     background_ = std::thread([this] { run(true); });
+    if (pinned_) (void)::pthread_setaffinity_np(background_.native_handle(), sizeof pin, &pin);
   }
 }
 
@@ -178,6 +196,23 @@ void CellLoader::cancelQueued() {
   std::lock_guard<std::mutex> lock(mu_);
   for (Staging& s : slots_)
     if (s.state == Staging::Queued) s.state = Staging::Free, s.cell = 0xffffffffu;
+}
+
+void CellLoader::keepOffCpu(int cpu) {
+  if (cpu == render_cpu_) return;  // the common case: one compare a frame
+  render_cpu_ = cpu;
+  if (pinned_ || !background_.joinable() || cpu < 0 || cpu >= CPU_SETSIZE) return;
+  cpu_set_t set = allowed_;
+  const bool restrict_ = CPU_ISSET(cpu, &set) && CPU_COUNT(&set) > 1;
+  if (restrict_) CPU_CLR(cpu, &set);
+  if (!restrict_ && kept_off_ < 0) return;  // nothing to narrow, nothing to undo
+  // EINVAL/EPERM (a cpuset changed under the host): predictions simply keep
+  // the CPUs they have.
+  if (::pthread_setaffinity_np(background_.native_handle(), sizeof set, &set) != 0) {
+    kept_off_ = -1;
+    return;
+  }
+  kept_off_ = restrict_ ? cpu : -1;
 }
 
 void CellLoader::runTask(void* self) { static_cast<CellLoader*>(self)->runOne(); }

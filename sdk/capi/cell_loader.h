@@ -8,13 +8,16 @@
 // grows on this thread only, is capped by the largest mesh the package
 // declares, and its high-water mark is reported.
 // Threads: request()/ready()/release() on the render thread; they take a
-// mutex for a few instructions and never allocate.
+// mutex for a few instructions and never allocate. keepOffCpu() moves the
+// prediction thread off the render thread's CPU (decision 0008 §12).
 #pragma once
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
 #include <thread>
+
+#include <sched.h>
 
 #include "blvd/blvd.h"
 #include "render/prepared_mesh.h"
@@ -70,8 +73,12 @@ class CellLoader {
   // (BLVD_PREFETCH_LOW).
   // `pace_to_frames`: the background thread starts each mesh in a gap
   // between the process's frames (FrameClocks, decision 0008 §11).
+  // `cpu_mask` (blvd_runtime_desc.prefetch_cpu_mask): non-zero pins the
+  // background thread to those CPUs (within the constructing thread's;
+  // core::Error(InvalidArg) when none is left) and turns keepOffCpu() off.
   CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes,
-             const blvd_executor& executor = blvd_executor{}, bool low_prefetch = false, bool pace_to_frames = false);
+             const blvd_executor& executor = blvd_executor{}, bool low_prefetch = false, bool pace_to_frames = false,
+             uint64_t cpu_mask = 0);
   ~CellLoader();
   CellLoader(const CellLoader&) = delete;
   CellLoader& operator=(const CellLoader&) = delete;
@@ -103,6 +110,16 @@ class CellLoader {
   void promote(uint32_t cell);
   // Drops queued (not yet started) requests.
   void cancelQueued();
+  // Render thread, every frame: the CPU it runs on now (sched_getcpu()). The
+  // prediction thread is kept off that CPU, within the CPUs it was allowed at
+  // construction (decision 0008 §12): a runnable prediction on the render
+  // thread's CPU keeps that CPU from going idle when the render thread waits
+  // for the GPU or the rasterizer threads, and only an idle CPU pulls a thread
+  // that waits on the other one's run queue. A syscall only when the CPU
+  // changes; nothing when only one CPU is allowed or with a host executor.
+  void keepOffCpu(int cpu);
+  // The CPU the prediction thread is kept off now, or -1 (not applied).
+  int keptOffCpu() const { return kept_off_; }
 
   uint64_t loads() const { return loads_; }
   uint64_t stagingUsed() const;  // arena bytes held by busy slots
@@ -143,6 +160,10 @@ class CellLoader {
   double rate_ns_[2] = {0, 0};
   std::atomic<uint64_t> gap_waits_{0}, gap_wait_ns_{0};
   uint32_t tasks_out_ = 0;  // submitted to the host and not yet run
+  cpu_set_t allowed_{};     // the prediction thread's CPUs as inherited at construction
+  bool pinned_ = false;     // cpu_mask given: keepOffCpu() does nothing
+  int render_cpu_ = -1;     // render thread only: the CPU keepOffCpu() last saw
+  int kept_off_ = -1;
   std::atomic<uint64_t> loads_{0};
   std::atomic<uint64_t> decode_high_water_{0}, staging_high_water_{0};
 };

@@ -1,6 +1,8 @@
 #include "capi/runtime.h"
 #include "capi/track_convert.h"
 
+#include <sched.h>
+
 #include <algorithm>
 #include <chrono>
 #include <thread>
@@ -30,7 +32,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   if (!alloc.alloc != !alloc.free) throw Error(Status::InvalidArg, "allocator needs both alloc and free, or neither");
   loader_ = std::make_unique<CellLoader>(city_, alloc, plan_.staging_arena_bytes, plan_.staging_meshes, desc.executor,
                                          desc.prefetch_priority == BLVD_PREFETCH_LOW,
-                                         desc.prefetch_priority == BLVD_PREFETCH_IDLE);
+                                         desc.prefetch_priority == BLVD_PREFETCH_IDLE, desc.prefetch_cpu_mask);
   clock_ = FrameClocks::acquire();  // none left: this runtime's frames are not waited for
 
   ctx_ = render::createContext(static_cast<render::Backend>(desc.backend), err);
@@ -495,6 +497,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
   const auto t_frame = std::chrono::steady_clock::now();
   if (clock_) clock_->begin(monoNs(t_frame));
+  loader_->keepOffCpu(::sched_getcpu());
   ++frame_;
   double arc_m, speed;
   const uint32_t cell = currentCell(arc_m, speed);
@@ -597,6 +600,7 @@ void Runtime::stats(blvd_stats* out) const {
   s.loads = loader_->loads();
   s.prefetch_gap_waits = loader_->gapWaits();
   s.prefetch_gap_wait_ms = loader_->gapWaitMs();
+  s.prefetch_kept_off_cpu = loader_->keptOffCpu();
   std::memcpy(out, &s, std::min<size_t>(s.struct_size, sizeof s));
 }
 

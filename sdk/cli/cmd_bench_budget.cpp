@@ -48,6 +48,7 @@ struct BudgetOpts {
   double fps = 0;              // display refresh the frames are paced to (0: back to back)
   double speed_kmh = 0;        // with fps: the vehicle's speed, giving the step (0: --step)
   std::string prefetch = "idle";  // blvd_runtime_desc.prefetch_priority: idle, low or anytime
+  uint64_t prefetch_cpus = 0;     // blvd_runtime_desc.prefetch_cpu_mask (0: off the render thread's CPU)
 };
 
 // A display's refresh, as a host drawing at vsync sees it: a frame starts on
@@ -88,6 +89,7 @@ Runtime create(const BudgetOpts& o, int w, int h, blvd_render_mode mode, float t
   d.prefetch_priority = o.prefetch == "low"       ? BLVD_PREFETCH_LOW
                         : o.prefetch == "anytime" ? BLVD_PREFETCH_IDLE_ANYTIME
                                                   : BLVD_PREFETCH_IDLE;
+  d.prefetch_cpu_mask = o.prefetch_cpus;
   blvd_runtime* rt = nullptr;
   check(blvd_runtime_create(&d, &rt), nullptr, "create runtime");
   return Runtime(rt, blvd_runtime_destroy);
@@ -292,6 +294,8 @@ int runBudget(const BudgetOpts& o) {
   j["prefetch"] = o.prefetch;
   j["prefetch_gap_waits"] = bs.prefetch_gap_waits;
   j["prefetch_gap_wait_ms"] = bs.prefetch_gap_wait_ms;
+  j["prefetch_cpu_mask"] = o.prefetch_cpus;
+  j["prefetch_kept_off_cpu"] = bs.prefetch_kept_off_cpu;
   // Frames that found their cell not resident (each waited for and drawn
   // again, the second time kept): a prefetch that falls behind shows here.
   j["degraded_frames"] = budgeted.degraded;
@@ -377,6 +381,10 @@ void addBenchBudget(CLI::App& bench, Runner& run) {
                 "predictions: idle (SCHED_IDLE, in the gaps between paced frames), anytime (SCHED_IDLE only), low "
                 "(nice 19)")
       ->capture_default_str()->check(CLI::IsMember({"idle", "anytime", "low"}));
+  b->add_option("--prefetch-cpus", o->prefetch_cpus,
+                "CPU mask of the prediction threads (bit i: CPU i; 0x3 lets them share the render thread's CPU on "
+                "2 cores); 0: every CPU but the render thread's")
+      ->capture_default_str();
   b->add_option("--size", o->size)->capture_default_str();
   b->add_option("--resident-cells", o->resident_cells, "cell slots (0: the runtime's default)")->capture_default_str();
   b->add_option("--json", o->json_path, "write the JSON here too");

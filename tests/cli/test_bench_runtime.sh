@@ -33,6 +33,10 @@ rows = list(csv.DictReader(open(sys.argv[3])))
 pj = json.load(open(sys.argv[4]))
 assert pj["fps"] == 120 and abs(pj["step_m"] - 0.5) < 1e-9 and abs(pj["speed_kmh"] - 216) < 1e-6, pj
 assert pj["prefetch"] == "idle" and isinstance(pj["prefetch_gap_waits"], int), pj
+# Two or more CPUs: the prediction threads are kept off the render thread's (decision 0008 §12).
+import os
+cpus = len(os.sched_getaffinity(0))
+assert pj["prefetch_cpu_mask"] == 0 and (pj["prefetch_kept_off_cpu"] >= 0) == (cpus > 1), (pj, cpus)
 assert b["fps"] == 0 and b["step_m"] == 2, b  # the default: back to back, 2 m apart
 # Paced frames start on the display's ticks: typically one period apart, never near back to back
 # (a timer wakes up late by a millisecond or more on a loaded VM, so no tighter bound).

@@ -2,6 +2,11 @@
 // runtime destroyed at scope exit, and the stats read through the C API.
 #pragma once
 #include <gtest/gtest.h>
+#include <sys/types.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
 
 #include "blvd/blvd.h"
 
@@ -26,6 +31,17 @@ inline blvd_stats statsOf(blvd_runtime* rt) {
   s.struct_size = sizeof s;
   EXPECT_EQ(blvd_runtime_stats(rt, &s), BLVD_OK);
   return s;
+}
+
+// The thread of this process named `name` (blvd-loader, blvd-prefetch), or 0.
+inline pid_t threadNamed(const std::string& name) {
+  for (const auto& e : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream comm(e.path() / "comm");
+    std::string got;
+    std::getline(comm, got);
+    if (got == name) return pid_t(std::stol(e.path().filename().string()));
+  }
+  return 0;
 }
 
 }  // namespace blvd_test

@@ -19,6 +19,7 @@
 
 #include "blvd/blvd.h"
 #include "capi/cell_loader.h"
+#include "runtime_fixture.h"
 #include "capi/frame_clock.h"
 #include "capi/memory_plan.h"
 #include "stream/city.h"
@@ -160,16 +161,7 @@ TEST(CellLoader, PacedPredictionWaitsForGapsAndStillFinishes) {
   }
 }
 
-// The thread named blvd-prefetch in this process (0 if none).
-pid_t prefetchThread() {
-  for (const auto& e : std::filesystem::directory_iterator("/proc/self/task")) {
-    std::ifstream comm(e.path() / "comm");
-    std::string name;
-    std::getline(comm, name);
-    if (name == "blvd-prefetch") return pid_t(std::stol(e.path().filename().string()));
-  }
-  return 0;
-}
+pid_t prefetchThread() { return blvd_test::threadNamed("blvd-prefetch"); }
 
 // blvd_runtime_desc.prefetch_priority: SCHED_IDLE by default, nice 19 with
 // BLVD_PREFETCH_LOW (and where SCHED_IDLE is refused).
@@ -195,6 +187,78 @@ TEST(CellLoader, PredictionThreadPolicy) {
       EXPECT_TRUE(policy == SCHED_IDLE || nice == 19) << "policy " << policy << ", nice " << nice;
     }
   }
+}
+
+// The CPUs `tid` may run on.
+cpu_set_t affinityOf(pid_t tid) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  EXPECT_EQ(sched_getaffinity(tid, sizeof set, &set), 0);
+  return set;
+}
+
+// keepOffCpu (decision 0008 §12): the prediction thread leaves the render
+// thread's CPU free, within the CPUs it inherited, and follows the render
+// thread when it moves.
+TEST(CellLoader, PredictionThreadKeepsOffTheRenderThreadsCpu) {
+  const cpu_set_t mine = affinityOf(0);
+  std::vector<int> cpus;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &mine)) cpus.push_back(c);
+  if (cpus.size() < 2) GTEST_SKIP() << "one CPU allowed: nothing to keep off";
+  Loader l;
+  pid_t tid = 0;
+  for (int i = 0; i < 1000 && !(tid = prefetchThread()); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_NE(tid, 0);
+  EXPECT_EQ(l.loader->keptOffCpu(), -1);
+  for (int render : {cpus[0], cpus[1], cpus[0]}) {
+    l.loader->keepOffCpu(render);
+    EXPECT_EQ(l.loader->keptOffCpu(), render);
+    const cpu_set_t got = affinityOf(tid);
+    for (int c : cpus) EXPECT_EQ(CPU_ISSET(c, &got) != 0, c != render) << "render on " << render << ", cpu " << c;
+    EXPECT_EQ(CPU_COUNT(&got), int(cpus.size()) - 1);
+  }
+  // A render thread on a CPU the prediction thread was never given (a host
+  // that moved it there): the inherited set comes back whole.
+  int outside = -1;
+  for (int c = 0; c < CPU_SETSIZE && outside < 0; ++c)
+    if (!CPU_ISSET(c, &mine)) outside = c;
+  l.loader->keepOffCpu(outside);
+  EXPECT_EQ(l.loader->keptOffCpu(), -1);
+  const cpu_set_t back = affinityOf(tid);
+  EXPECT_TRUE(CPU_EQUAL(&mine, &back));
+  // Still decodes.
+  const uint32_t cell = 0;
+  ASSERT_TRUE(l.loader->request(cell, 0, false));
+  capi::Staging* st = l.waitFinished(cell, 120);
+  ASSERT_NE(st, nullptr);
+  EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+  l.loader->release(st);
+}
+
+// A loader made on a thread the host pinned to one CPU cannot leave that CPU:
+// keepOffCpu never widens what the host allowed.
+TEST(CellLoader, PinnedHostThreadLeavesThePredictionThreadWhereItIs) {
+  const cpu_set_t mine = affinityOf(0);
+  int only = -1;
+  for (int c = 0; c < CPU_SETSIZE && only < 0; ++c)
+    if (CPU_ISSET(c, &mine)) only = c;
+  ASSERT_GE(only, 0);
+  std::thread host([&] {
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(only, &one);
+    ASSERT_EQ(pthread_setaffinity_np(pthread_self(), sizeof one, &one), 0);
+    Loader l;
+    pid_t tid = 0;
+    for (int i = 0; i < 1000 && !(tid = prefetchThread()); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ASSERT_NE(tid, 0);
+    l.loader->keepOffCpu(only);
+    EXPECT_EQ(l.loader->keptOffCpu(), -1);
+    const cpu_set_t got = affinityOf(tid);
+    EXPECT_TRUE(CPU_EQUAL(&one, &got));
+  });
+  host.join();
 }
 
 }  // namespace

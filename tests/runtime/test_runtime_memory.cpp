@@ -16,6 +16,8 @@
 #include <fstream>
 
 #include <malloc.h>
+#include <pthread.h>
+#include <sched.h>
 #include <unistd.h>
 #include <string>
 
@@ -202,6 +204,76 @@ TEST(RuntimeStream, TheNextCellOnTheRouteIsPrefetched) {
   EXPECT_EQ(fs.flags & BLVD_FRAME_DEGRADED, 0u) << "cell " << fs.cell << " was not prefetched";
 }
 
+// The runtime keeps its prediction thread off the CPU the render thread runs
+// on (decision 0008 §12), and follows the render thread to another CPU.
+TEST(RuntimeStream, ThePredictionThreadKeepsOffTheRenderThreadsCpu) {
+  cpu_set_t mine;
+  ASSERT_EQ(sched_getaffinity(0, sizeof mine, &mine), 0);
+  std::vector<int> cpus;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &mine)) cpus.push_back(c);
+  if (cpus.size() < 2) GTEST_SKIP() << "one CPU allowed";
+  const blvd_test::Drive dr = drive(4, 8.0);
+  blvd_runtime_desc d = baseDesc();
+  Runtime r;
+  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_set_pose_local(r.rt, dr.poses[0].x, dr.poses[0].y, float(dr.poses[0].heading_deg), 0.f), BLVD_OK);
+  pid_t prefetch = 0;
+  for (int i = 0; i < 1000 && !(prefetch = blvd_test::threadNamed("blvd-prefetch")); ++i) usleep(1000);
+  ASSERT_NE(prefetch, 0);
+  // Pin only this (the render) thread, after create: llvmpipe's threads,
+  // made at create, keep every CPU.
+  for (int render : {cpus[1], cpus[0]}) {
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(render, &one);
+    ASSERT_EQ(pthread_setaffinity_np(pthread_self(), sizeof one, &one), 0);
+    ASSERT_EQ(blvd_render(r.rt, nullptr), BLVD_OK);
+    EXPECT_EQ(statsOf(r.rt).prefetch_kept_off_cpu, render);
+    cpu_set_t got;
+    ASSERT_EQ(sched_getaffinity(prefetch, sizeof got, &got), 0);
+    EXPECT_FALSE(CPU_ISSET(render, &got)) << "prediction thread may run on the render thread's CPU " << render;
+    for (int c : cpus) EXPECT_EQ(CPU_ISSET(c, &got) != 0, c != render) << "cpu " << c;
+  }
+  ASSERT_EQ(pthread_setaffinity_np(pthread_self(), sizeof mine, &mine), 0);
+}
+
+// blvd_runtime_desc.prefetch_cpu_mask: a host that places its own threads
+// pins the prediction thread, and nothing moves it; a mask of no usable CPU
+// fails create, naming the mask.
+TEST(RuntimeStream, AHostsPrefetchCpuMaskPinsThePredictionThread) {
+  cpu_set_t mine;
+  ASSERT_EQ(sched_getaffinity(0, sizeof mine, &mine), 0);
+  int first = -1;
+  for (int c = 0; c < 64 && first < 0; ++c)
+    if (CPU_ISSET(c, &mine)) first = c;
+  ASSERT_GE(first, 0);
+  {
+    blvd_runtime_desc d = baseDesc();
+    d.prefetch_cpu_mask = uint64_t(1) << first;
+    Runtime r;
+    ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+    ASSERT_EQ(blvd_render(r.rt, nullptr), BLVD_OK);
+    EXPECT_EQ(statsOf(r.rt).prefetch_kept_off_cpu, -1);
+    const pid_t prefetch = blvd_test::threadNamed("blvd-prefetch");
+    ASSERT_NE(prefetch, 0);
+    cpu_set_t got;
+    ASSERT_EQ(sched_getaffinity(prefetch, sizeof got, &got), 0);
+    EXPECT_EQ(CPU_COUNT(&got), 1);
+    EXPECT_TRUE(CPU_ISSET(first, &got));
+  }
+  int none = -1;  // a CPU this thread may not use
+  for (int c = 0; c < 64 && none < 0; ++c)
+    if (!CPU_ISSET(c, &mine)) none = c;
+  ASSERT_GE(none, 0);
+  blvd_runtime_desc d = baseDesc();
+  d.prefetch_cpu_mask = uint64_t(1) << none;
+  Runtime r;
+  EXPECT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_ERR_INVALID_ARG);
+  EXPECT_EQ(r.rt, nullptr);
+  EXPECT_NE(std::string(blvd_last_error(nullptr)).find("prefetch_cpu_mask"), std::string::npos) << blvd_last_error(nullptr);
+}
+
 // A host executor: one worker thread draining a queue.
 struct HostExecutor {
   std::mutex mu;
@@ -263,6 +335,7 @@ TEST(RuntimeStream, CellsDecodeOnTheHostsExecutor) {
     const blvd_stats s = statsOf(r.rt);
     EXPECT_GE(s.loads, dr.cells.size() / 2);
     EXPECT_EQ(s.load_errors, 0u);
+    EXPECT_EQ(s.prefetch_kept_off_cpu, -1);  // no prediction thread of blvd's to keep anywhere
     submitted = int(s.loads);
   }  // destroy waits for the host's outstanding tasks
   std::lock_guard<std::mutex> lock(host.mu);
