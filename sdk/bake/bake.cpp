@@ -57,6 +57,7 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   std::vector<geo::MeshData> block_meshes(g.faces.size());  // kept for the impostor captures
   package::GlbOptions glb_opt;
   glb_opt.draco = opt.draco;
+  glb_opt.compression_level = opt.draco_level;
   for (uint32_t f = 0; f < g.faces.size(); ++f) {
     geo::MeshData& mesh = block_meshes[f];
     graph::BlockRecord& rec = blocks[f];
@@ -162,6 +163,7 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
       {"default_height_m", opt.osm.default_height_m},
       {"level_height_m", opt.osm.level_height_m},
       {"draco", opt.draco},
+      {"draco_level", opt.draco_level},
       {"tile",
        {{"nx", opt.tile.nx}, {"ny", opt.tile.ny}, {"gap_m", opt.tile.gap_m},
         {"step_m", {tiles.step.x, tiles.step.y}}, {"cells_per_tile", tiles.cells},

@@ -17,6 +17,10 @@ struct BakeOptions {
   OsmReadOptions osm;
   bool quiet = false;
   bool draco = true;
+  // Draco compression level of the block levels, 0 (fastest decode, biggest)
+  // .. 10 (smallest), as draco_encoder -cl (decision 0008 §12: the block
+  // decode is most of a prediction's CPU time).
+  int draco_level = 3;
   LodOptions lod;
   TileOptions tile;  // --tile NxM: N x M disconnected copies of the city (benchmarks)
   ImpostorOptions impostor;

@@ -47,6 +47,10 @@ void addBake(CLI::App& app, Runner& run) {
       ->capture_default_str()->check(CLI::Range(1.0, 10.0));
   cmd->add_flag("--quiet", o->bake.quiet, "plain log lines, no progress bar");
   cmd->add_flag("--no-draco", o->no_draco, "store plain GLB buffers instead of Draco-compressed meshes");
+  cmd->add_option("--draco-level", o->bake.draco_level,
+                  "Draco compression of the block levels: 0 (fastest decode, biggest) .. 10 (smallest)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10));
   cmd->add_option("--lod", o->lod, "per-block levels of detail: chain (meshoptimizer, see --lod-ratios) or none")
       ->capture_default_str()->check(CLI::IsMember({"chain", "none"}));
   cmd->add_option("--lod-ratios", o->lod_ratios,

@@ -233,6 +233,7 @@ void addBench(CLI::App& app, Runner& run) {
   r->callback([o, &run] { run = [o] { return runRoute(*o); }; });
   addBenchMemory(*bench, run);
   addBenchBudget(*bench, run);
+  addBenchDecode(*bench, run);
 #ifdef BLVD_HAVE_BENCH_TRACK
   addBenchTrack(*bench, run);
 #endif

@@ -21,6 +21,8 @@ void addBench(CLI::App& app, Runner& run);
 void addBenchMemory(CLI::App& bench, Runner& run);
 // `blvd bench budget` (cmd_bench_budget.cpp).
 void addBenchBudget(CLI::App& bench, Runner& run);
+// `blvd bench decode` (cmd_bench_decode.cpp).
+void addBenchDecode(CLI::App& bench, Runner& run);
 // `blvd bench track` (cmd_bench_track.cpp), added to `bench` by addBench.
 void addBenchTrack(CLI::App& bench, Runner& run);
 // "full", "local", "radius:R", "single", "layered"/"blvd" -> mode (+ radius).

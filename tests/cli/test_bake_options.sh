@@ -19,6 +19,10 @@ bad --tile 0x3 "--tile must be NxM"
 bad --lod-ratios 0.5,abc "'abc' is not a number"
 bad --lod-ratios 0.5,0.6 "strictly decreasing"
 bad --lod-ratios 0.5,0.4,0.3,0.2 "at most 3"
+set +e  # a range CLI11 checks exits with its own code (105), before any work
+msg=$("$blvd" bake --quiet "$osm" -o "$work/bad.blvd" --draco-level 11 2>&1); rc=$?
+set -e
+[ "$rc" != 0 ] && echo "$msg" | grep -q -- "--draco-level" && [ ! -e "$work/bad.blvd" ] || fail "--draco-level 11: rc $rc: $msg"
 
 "$blvd" bake --quiet "$osm" -o "$work/none.blvd" --impostor none --lod none > /dev/null
 "$blvd" pack info "$work/none.blvd" --json > "$work/none.json"
@@ -32,4 +36,23 @@ assert p["max_block_triangles"] == p["max_block_lod0_triangles"] > 0, p
 assert p["max_cell_impostor_layers"] == 0 and p["max_impostor_texture_bytes"] == 0, p
 assert j["meta"]["lod"]["mode"] == "none", j["meta"]["lod"]
 print("bake options: ok")
+PY
+
+# --draco-level: recorded in the package's meta; level 0 (fastest decode) is
+# bigger than the default 3 and decodes to the same meshes. `blvd bench decode`
+# decodes every mesh of both side by side (its times are reported, not tested).
+"$blvd" bake --quiet "$osm" -o "$work/cl3.blvd" --impostor none --lod none > /dev/null
+"$blvd" bake --quiet "$osm" -o "$work/cl0.blvd" --impostor none --lod none --draco-level 0 > /dev/null
+"$blvd" pack info "$work/cl3.blvd" --json > "$work/cl3.json"
+"$blvd" pack info "$work/cl0.blvd" --json > "$work/cl0.json"
+"$blvd" bench decode "$work/cl3.blvd" "$work/cl0.blvd" --json "$work/decode.json" > /dev/null
+python3 - "$work/cl3.json" "$work/cl0.json" "$work/decode.json" <<'PY'
+import json, sys
+a, b, d = (json.load(open(p)) for p in sys.argv[1:4])
+assert a["meta"]["draco_level"] == 3 and b["meta"]["draco_level"] == 0, (a["meta"], b["meta"])
+assert len(d) == 2 and d[0]["bytes"] < d[1]["bytes"] and d[1]["bytes_vs_first"] > 1, d
+assert d[0]["blocks"]["meshes"] == d[1]["blocks"]["meshes"] == a["lod_levels"][0]["blocks"] > 0, (d, a["lod_levels"])
+assert d[0]["impostors"]["meshes"] == 0, d
+assert all(p["blocks"]["ms_total"] > 0 and p["blocks"]["ms_max"] >= p["blocks"]["ms_p50"] for p in d), d
+print("draco level + bench decode: ok")
 PY

@@ -1,0 +1,156 @@
+// `blvd bench decode PKG [PKG ...]`: what the loader's decode of each mesh
+// costs, per package, side by side in one run (decision 0008 §12): every
+// block level and every impostor layer is decoded (GLB, Draco, the image) and
+// prepared into the renderer's staging layout exactly as the loader does, the
+// packages taking turns mesh kind by mesh kind, and timed by the thread's CPU
+// clock (what the decode takes from the other threads on its core). Reported:
+// per package and kind the meshes, p50 / p90 / max and the total in ms, the
+// package bytes, and each package's total against the first's.
+#include <sys/stat.h>
+#include <time.h>
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/bench_util.h"
+#include "cli/commands.h"
+#include "render/prepared_mesh.h"
+#include "stream/city.h"
+
+namespace blvd::cli {
+namespace {
+
+struct DecodeOpts {
+  std::vector<std::string> packages;
+  std::string json_path;
+  int rounds = 1;  // times every mesh is decoded (the minimum is kept)
+};
+
+double threadCpuMs() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+
+struct Kind {
+  std::vector<double> ms;  // one per mesh
+};
+
+struct Package {
+  stream::City city;
+  Kind blocks, impostors;
+  uint64_t bytes = 0;
+};
+
+// Decodes and stages one mesh; returns its thread CPU ms (the least of `rounds`).
+template <typename Decode>
+double timeMesh(Decode&& decode, geo::MeshData& scratch, render::StagingArena& arena, int rounds) {
+  double best = 1e300;
+  for (int r = 0; r < rounds; ++r) {
+    std::string err;
+    arena.reset();
+    const double t0 = threadCpuMs();
+    core::Status st = decode(scratch, err);
+    render::PreparedMesh m;
+    if (st == core::Status::Ok && !scratch.empty() && !render::prepareMesh(scratch, arena, m, err))
+      st = core::Status::Internal;
+    const double ms = threadCpuMs() - t0;
+    if (st != core::Status::Ok) throw core::Error(st, err);
+    best = std::min(best, ms);
+  }
+  return best;
+}
+
+nlohmann::json summary(const Kind& k) {
+  double sum = 0;
+  for (double x : k.ms) sum += x;
+  return {{"meshes", k.ms.size()},   {"ms_p50", pct(k.ms, 50)}, {"ms_p90", pct(k.ms, 90)},
+          {"ms_max", pct(k.ms, 100)}, {"ms_total", sum}};
+}
+
+int runDecode(const DecodeOpts& o) {
+  std::vector<std::unique_ptr<Package>> pkgs;
+  size_t largest = 0;
+  for (const std::string& path : o.packages) {
+    auto p = std::make_unique<Package>();
+    std::string err;
+    const core::Status st = p->city.open(path, err);
+    if (st != core::Status::Ok) throw core::Error(st, err);
+    struct stat sb{};
+    if (::stat(path.c_str(), &sb) == 0) p->bytes = uint64_t(sb.st_size);
+    for (const graph::BlockRecord& r : p->city.blocks())
+      for (uint32_t k = 0; k < r.lod_count; ++k) largest = std::max<size_t>(largest, r.vertices[k]);
+    pkgs.push_back(std::move(p));
+  }
+  // The staging layout is at most a few dozen bytes a vertex; images are
+  // bounded by the impostor texture size (RGBA + mips < 2 MiB at 512²).
+  std::vector<uint8_t> arena_bytes(largest * 64 + (8u << 20));
+  render::StagingArena arena{arena_bytes.data(), arena_bytes.size(), 0};
+  geo::MeshData scratch;
+  std::fprintf(stderr, "bench decode: %zu packages, every block level and impostor layer ...\n", pkgs.size());
+  // Blocks: each package's block b, level k in turn.
+  size_t blocks = 0;
+  for (const auto& p : pkgs) blocks = std::max(blocks, p->city.blocks().size());
+  for (uint32_t b = 0; b < blocks; ++b)
+    for (const auto& p : pkgs) {
+      if (b >= p->city.blocks().size() || p->city.blocks()[b].blob == 0xffffffffu) continue;
+      for (uint32_t k = 0; k < p->city.blocks()[b].lod_count; ++k)
+        p->blocks.ms.push_back(timeMesh(
+            [&](geo::MeshData& m, std::string& e) { return p->city.decodeBlock(b, k, m, e); }, scratch, arena,
+            o.rounds));
+    }
+  size_t cells = 0;
+  for (const auto& p : pkgs) cells = std::max(cells, p->city.cellTables().impostors.size());
+  for (size_t c = 0; c < cells; ++c)
+    for (const auto& p : pkgs) {
+      if (c >= p->city.cellTables().impostors.size()) continue;
+      const graph::CellImpostors& ci = p->city.cellTables().impostors[c];
+      for (const auto* list : {&ci.layered, &ci.single})
+        for (const graph::ImpostorLayer& layer : *list)
+          p->impostors.ms.push_back(timeMesh(
+              [&](geo::MeshData& m, std::string& e) { return p->city.decodeImpostor(layer, m, e); }, scratch,
+              arena, o.rounds));
+    }
+  nlohmann::json out = nlohmann::json::array();
+  double first_total = 0;
+  for (size_t i = 0; i < pkgs.size(); ++i) {
+    const Package& p = *pkgs[i];
+    nlohmann::json j = {{"package", o.packages[i]}, {"bytes", p.bytes}, {"blocks", summary(p.blocks)},
+                        {"impostors", summary(p.impostors)}};
+    const double total = j["blocks"]["ms_total"].get<double>() + j["impostors"]["ms_total"].get<double>();
+    if (i == 0) first_total = total;
+    j["ms_total"] = total;
+    j["ms_total_vs_first"] = first_total > 0 ? total / first_total : NAN;
+    j["bytes_vs_first"] = pkgs[0]->bytes ? double(p.bytes) / double(pkgs[0]->bytes) : NAN;
+    out.push_back(j);
+  }
+  const std::string text = out.dump(2);
+  std::printf("%s\n", text.c_str());
+  if (!o.json_path.empty()) {
+    std::ofstream f(o.json_path);
+    f << text << "\n";
+    if (!f) throw core::Error(core::Status::Io, "cannot write " + o.json_path);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void addBenchDecode(CLI::App& bench, Runner& run) {
+  auto o = std::make_shared<DecodeOpts>();
+  auto* d = bench.add_subcommand("decode", "CPU cost of decoding every mesh of one or more packages, side by side");
+  d->add_option("packages", o->packages, "packages (the first is the reference of the ratios)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  d->add_option("--rounds", o->rounds, "decodes per mesh (the least time is kept)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 20));
+  d->add_option("--json", o->json_path, "write the JSON here too");
+  d->callback([o, &run] { run = [o] { return runDecode(*o); }; });
+}
+
+}  // namespace blvd::cli
