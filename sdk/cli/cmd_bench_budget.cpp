@@ -23,6 +23,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <random>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -170,6 +171,35 @@ void lap(const std::vector<Run*>& runs, Pacer& pace, const std::vector<Pose>& po
     }
 }
 
+// The stutter ratio's spread: p5 and p95 of p99(boundary) / p99(inside) over
+// bootstrap resamples of the two sets (with 41 boundary frames their p99 is
+// nearly their maximum, so one slow frame moves it; decision 0008 §12).
+std::pair<double, double> stutterInterval(const std::vector<double>& boundary, const std::vector<double>& inside) {
+  if (boundary.empty() || inside.empty()) return {NAN, NAN};
+  std::mt19937_64 rng(1);  // fixed: the same frames give the same interval
+  std::vector<double> ratios, b(boundary.size()), in(inside.size());
+  for (int k = 0; k < 1000; ++k) {
+    for (double& x : b) x = boundary[rng() % boundary.size()];
+    for (double& x : in) x = inside[rng() % inside.size()];
+    ratios.push_back(pct(b, 99) / pct(in, 99));
+  }
+  return {pct(ratios, 5), pct(ratios, 95)};
+}
+
+// Share of the boundary (which = 1) or inside (0) frames that take at least
+// 1.5 times the median of the five frames before them (tools/boundary_spikes.py).
+double spikeRate(const std::vector<Frame>& f, int which) {
+  size_t n = 0, spikes = 0;
+  std::vector<double> prev(5);
+  for (size_t i = 5; i < f.size(); ++i) {
+    if (int(f[i].boundary) != which) continue;
+    for (size_t k = 0; k < 5; ++k) prev[k] = f[i - 5 + k].ms;
+    ++n;
+    spikes += f[i].ms >= 1.5 * pct(prev, 50);
+  }
+  return n ? double(spikes) / double(n) : NAN;
+}
+
 std::vector<double> times(const std::vector<Frame>& f, int which /* -1 all, 0 inside, 1 boundary */) {
   std::vector<double> v;
   for (const Frame& x : f)
@@ -269,6 +299,10 @@ int runBudget(const BudgetOpts& o) {
   j["p99_boundary_ms"] = p99_boundary;
   j["p99_inside_ms"] = p99_inside;
   j["boundary_frames"] = times(budgeted.frames, 1).size();  // the stutter's p99 is over these few
+  const auto ci = stutterInterval(times(budgeted.frames, 1), times(budgeted.frames, 0));
+  j["stutter_ratio_ci90"] = {ci.first, ci.second};
+  j["boundary_spike_rate"] = spikeRate(budgeted.frames, 1);
+  j["inside_spike_rate"] = spikeRate(budgeted.frames, 0);
   j["local_lod0_ms_p50"] = local_p50;
   j["floor_ms_p50"] = floor_p50;
   j["floor_ms_p95"] = pct(times(coarsest.frames, -1), 95);

@@ -59,6 +59,19 @@ for k in ("target_ms", "frame_ms_p50", "frame_ms_p95", "stutter_ratio", "ssim_vs
           "calibration_floor_ms_p50", "calibration_unbudgeted_ms_p50", "floor_ms_p95"):
     assert isinstance(b[k], float) and math.isfinite(b[k]) and b[k] > 0, (k, b[k])
 assert b["frames"] > 0
+lo, hi = b["stutter_ratio_ci90"]  # bootstrap spread of the stutter ratio
+assert math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi, b["stutter_ratio_ci90"]
+# The spike rates, recomputed from the CSV's budgeted frames (>= 1.5 x the median of the 5 before);
+# the CSV rounds ms to 4 decimals, so a frame at the edge may go either way.
+import statistics
+bud = [r for r in rows if r["run"] == "budgeted"]
+ms = [float(r["ms"]) for r in bud]
+for k, which in (("boundary_spike_rate", "1"), ("inside_spike_rate", "0")):
+    idx = [i for i in range(5, len(bud)) if bud[i]["boundary"] == which]
+    if not idx:
+        continue
+    rate = sum(ms[i] >= 1.5 * statistics.median(ms[i - 5:i]) for i in idx) / len(idx)
+    assert 0 <= b[k] <= 1 and abs(b[k] - rate) <= 1 / len(idx) + 1e-9, (k, b[k], rate)
 print("memory: rss 1x %.1f MiB, 4x %.1f MiB (%+.2f %%), allocs/frame %d (driver %d); budget: target %.2f ms, p50 %.2f, p95 %.2f, stutter %.2f"
       % (m["rss_peak_1x"] / 2**20, m["rss_peak_4x"] / 2**20, m["rss_diff_pct"], m["allocs_per_frame_max"],
          m["driver_allocs_per_frame_max"], b["target_ms"], b["frame_ms_p50"], b["frame_ms_p95"], b["stutter_ratio"]))
