@@ -107,6 +107,7 @@ struct Frame {
   uint64_t block_tris;  // triangles of the chosen block levels
   uint64_t budget;      // the polygon budget set for the next frame
   double mono_s;        // CLOCK_MONOTONIC at the frame's start, to line frames up with `perf record -k mono`
+  bool degraded;        // its cell was not resident: waited for, and this is the redraw
 };
 
 // One run of the benchmark: a runtime, its kept frames and images.
@@ -147,7 +148,7 @@ void drawPose(Run& r, Pacer& pace, const Pose& p, bool keep, bool image, int w, 
   check(blvd_runtime_stats(rt, &st), rt, "stats");
   r.frames.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale, st.upload_ms, st.frame_aim_ms,
                       st.block_triangles, st.polygon_budget,
-                      std::chrono::duration<double>(t0.time_since_epoch()).count()});
+                      std::chrono::duration<double>(t0.time_since_epoch()).count(), degraded});
   if (image && r.want_images) {
     r.images.emplace_back(size_t(w) * h * 4);
     check(blvd_read_pixels(rt, r.images.back().data(), r.images.back().size()), rt, "pixels");
@@ -245,7 +246,7 @@ int runBudget(const BudgetOpts& o) {
   // Warm-up laps; the last one also calibrates the auto target.
   for (int l = 0; l + 1 < o.laps; ++l) lap(reference, pace, poses, l + 2 == o.laps, image_every, w, h);
   const double cal_floor = pct(times(coarsest.frames, -1), 50), cal_free = pct(times(unbudgeted.frames, -1), 50);
-  for (Run* r : reference) r->frames.clear(), r->images.clear();
+  for (Run* r : reference) r->frames.clear(), r->images.clear(), r->degraded = 0;
   double target = 0;
   std::string target_rule;
   if (o.target == "auto") {
@@ -342,7 +343,7 @@ int runBudget(const BudgetOpts& o) {
   std::printf("%s\n", text.c_str());
   writeText(o.json_path, text);
   if (!o.csv_path.empty()) {
-    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s\n";
+    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s,degraded\n";
     const std::pair<const char*, const std::vector<Frame>*> runs[] = {
         {"local_lod0", &local.frames}, {"floor", &coarsest.frames}, {"unbudgeted", &unbudgeted.frames},
         {"budgeted", &budgeted.frames}};
@@ -350,10 +351,10 @@ int runBudget(const BudgetOpts& o) {
       for (size_t i = 0; i < frames->size(); ++i) {
         const Frame& f = (*frames)[i];
         char row[200];
-        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u,%.4f,%llu,%llu,%.6f\n", name, i, f.ms,
+        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u,%.4f,%llu,%llu,%.6f,%d\n", name, i, f.ms,
                       f.upload_ms, static_cast<unsigned long long>(f.tris), double(f.scale), int(f.boundary), f.cell,
                       double(f.aim_ms), static_cast<unsigned long long>(f.block_tris),
-                      static_cast<unsigned long long>(f.budget), f.mono_s);
+                      static_cast<unsigned long long>(f.budget), f.mono_s, int(f.degraded));
         csv += row;
       }
     writeText(o.csv_path, csv);

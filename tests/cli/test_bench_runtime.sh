@@ -25,7 +25,7 @@ fi
 grep -q -- "--speed-kmh needs --fps" "$work/nofps.err" || { echo "FAIL: --speed-kmh without --fps: $(cat "$work/nofps.err")"; exit 1; }
 # The page draws the frame times (with the target and the budget's aim) and the knobs.
 [ "$(grep -o '<svg' "$work/budget_html/index.html" | wc -l)" -ge 2 ] || { echo "FAIL: bench budget --html lacks its plots"; exit 1; }
-head -1 "$work/budget.csv" | grep -q '^run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s$' || { echo "FAIL: bench budget --csv header"; exit 1; }
+head -1 "$work/budget.csv" | grep -q '^run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s,degraded$' || { echo "FAIL: bench budget --csv header"; exit 1; }
 python3 - "$work/memory.json" "$work/budget.json" "$work/budget.csv" "$work/paced.json" "$work/paced.csv" <<'PY'
 import csv, json, math, sys
 m, b = (json.load(open(p)) for p in sys.argv[1:3])
@@ -49,6 +49,8 @@ for run in {r["run"] for r in rows}:  # frames of one run in order on the monoto
     assert all(a < c for a, c in zip(t, t[1:])), run
 for k in ("degraded_frames", "degraded_frames_unbudgeted"):
     assert isinstance(b[k], int) and 0 <= b[k] <= b["frames"], (k, b[k])
+for k, run in (("degraded_frames", "budgeted"), ("degraded_frames_unbudgeted", "unbudgeted")):  # the CSV's flags add up
+    assert sum(int(r["degraded"]) for r in rows if r["run"] == run) == b[k], (k, b[k])
 for k in ("rss_peak_1x", "rss_peak_4x", "allocs_per_frame_max"):
     assert isinstance(m[k], (int, float)), k
 assert m["rss_peak_1x"] > 0 and m["rss_peak_4x"] > 0
