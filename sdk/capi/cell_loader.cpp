@@ -203,16 +203,16 @@ void CellLoader::keepOffCpu(int cpu) {
   render_cpu_ = cpu;
   if (pinned_ || !background_.joinable() || cpu < 0 || cpu >= CPU_SETSIZE) return;
   cpu_set_t set = allowed_;
-  const bool restrict_ = CPU_ISSET(cpu, &set) && CPU_COUNT(&set) > 1;
-  if (restrict_) CPU_CLR(cpu, &set);
-  if (!restrict_ && kept_off_ < 0) return;  // nothing to narrow, nothing to undo
+  const bool narrow = CPU_ISSET(cpu, &set) && CPU_COUNT(&set) > 1;
+  if (narrow) CPU_CLR(cpu, &set);
+  if (!narrow && kept_off_ < 0) return;  // nothing to narrow, nothing to undo
   // EINVAL/EPERM (a cpuset changed under the host): predictions simply keep
   // the CPUs they have.
   if (::pthread_setaffinity_np(background_.native_handle(), sizeof set, &set) != 0) {
     kept_off_ = -1;
     return;
   }
-  kept_off_ = restrict_ ? cpu : -1;
+  kept_off_ = narrow ? cpu : -1;
 }
 
 void CellLoader::runTask(void* self) { static_cast<CellLoader*>(self)->runOne(); }

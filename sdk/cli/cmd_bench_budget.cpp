@@ -117,7 +117,12 @@ struct Run {
   std::vector<std::vector<uint8_t>> images;  // every image_every-th pose, when kept
   bool want_images = false;
   uint32_t last_cell = 0xffffffffu;
-  size_t degraded = 0;  // kept frames whose cell was not resident yet (drawn again once it was)
+  // Kept frames whose cell was not resident yet (drawn again once it was).
+  size_t degraded() const {
+    size_t n = 0;
+    for (const Frame& f : frames) n += f.degraded;
+    return n;
+  }
 };
 
 // Draws pose p with run r. A frame whose cell is not resident yet is waited
@@ -142,7 +147,6 @@ void drawPose(Run& r, Pacer& pace, const Pose& p, bool keep, bool image, int w, 
   const bool boundary = fs.cell != r.last_cell;
   r.last_cell = fs.cell;
   if (!keep) return;
-  r.degraded += degraded;
   blvd_stats st{};
   st.struct_size = sizeof st;
   check(blvd_runtime_stats(rt, &st), rt, "stats");
@@ -246,7 +250,7 @@ int runBudget(const BudgetOpts& o) {
   // Warm-up laps; the last one also calibrates the auto target.
   for (int l = 0; l + 1 < o.laps; ++l) lap(reference, pace, poses, l + 2 == o.laps, image_every, w, h);
   const double cal_floor = pct(times(coarsest.frames, -1), 50), cal_free = pct(times(unbudgeted.frames, -1), 50);
-  for (Run* r : reference) r->frames.clear(), r->images.clear(), r->degraded = 0;
+  for (Run* r : reference) r->frames.clear(), r->images.clear();
   double target = 0;
   std::string target_rule;
   if (o.target == "auto") {
@@ -333,8 +337,8 @@ int runBudget(const BudgetOpts& o) {
   j["prefetch_kept_off_cpu"] = bs.prefetch_kept_off_cpu;
   // Frames that found their cell not resident (each waited for and drawn
   // again, the second time kept): a prefetch that falls behind shows here.
-  j["degraded_frames"] = budgeted.degraded;
-  j["degraded_frames_unbudgeted"] = unbudgeted.degraded;
+  j["degraded_frames"] = budgeted.degraded();
+  j["degraded_frames_unbudgeted"] = unbudgeted.degraded();
   j["checks"] = {{"local_exceeds_target", local_p50 > target},
                  {"p50_within_10pct", std::fabs(p50 - target) <= 0.1 * target},
                  {"p95_within_1_25x", p95 <= 1.25 * target},

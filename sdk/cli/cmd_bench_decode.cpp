@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "capi/memory_plan.h"
 #include "cli/bench_util.h"
 #include "cli/commands.h"
 #include "render/prepared_mesh.h"
@@ -74,7 +75,7 @@ nlohmann::json summary(const Kind& k) {
 
 int runDecode(const DecodeOpts& o) {
   std::vector<std::unique_ptr<Package>> pkgs;
-  size_t largest = 0;
+  uint64_t arena_size = 0;  // the loader's staging arena for the largest of the packages
   for (const std::string& path : o.packages) {
     auto p = std::make_unique<Package>();
     std::string err;
@@ -82,13 +83,13 @@ int runDecode(const DecodeOpts& o) {
     if (st != core::Status::Ok) throw core::Error(st, err);
     struct stat sb{};
     if (::stat(path.c_str(), &sb) == 0) p->bytes = uint64_t(sb.st_size);
-    for (const graph::BlockRecord& r : p->city.blocks())
-      for (uint32_t k = 0; k < r.lod_count; ++k) largest = std::max<size_t>(largest, r.vertices[k]);
+    blvd_runtime_desc d{};
+    d.struct_size = sizeof d;
+    arena_size = std::max(arena_size, capi::planMemory(d, p->city).staging_arena_bytes);
     pkgs.push_back(std::move(p));
   }
-  // The staging layout is at most a few dozen bytes a vertex; images are
-  // bounded by the impostor texture size (RGBA + mips < 2 MiB at 512²).
-  std::vector<uint8_t> arena_bytes(largest * 64 + (8u << 20));
+  // One arena as the loader carves it (a whole cell's meshes fit), reset per mesh.
+  std::vector<uint8_t> arena_bytes(arena_size);
   render::StagingArena arena{arena_bytes.data(), arena_bytes.size(), 0};
   geo::MeshData scratch;
   std::fprintf(stderr, "bench decode: %zu packages, every block level and impostor layer ...\n", pkgs.size());
