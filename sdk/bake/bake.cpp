@@ -56,7 +56,7 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   std::vector<graph::BlockRecord> blocks(g.faces.size());
   std::vector<geo::MeshData> block_meshes(g.faces.size());  // kept for the impostor captures
   package::GlbOptions glb_opt;
-  glb_opt.draco = opt.draco;
+  glb_opt.codec = opt.block_codec;
   glb_opt.compression_level = opt.draco_level;
   for (uint32_t f = 0; f < g.faces.size(); ++f) {
     geo::MeshData& mesh = block_meshes[f];
@@ -162,7 +162,8 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
       {"attribution", "© OpenStreetMap contributors (ODbL 1.0)"},
       {"default_height_m", opt.osm.default_height_m},
       {"level_height_m", opt.osm.level_height_m},
-      {"draco", opt.draco},
+      {"draco", opt.block_codec == package::GlbCodec::Draco},
+      {"block_codec", package::glbCodecName(opt.block_codec)},
       {"draco_level", opt.draco_level},
       {"tile",
        {{"nx", opt.tile.nx}, {"ny", opt.tile.ny}, {"gap_m", opt.tile.gap_m},

@@ -34,6 +34,7 @@ void addBake(CLI::App& app, Runner& run) {
     std::string in, out, report_dir;
     bake::BakeOptions bake;
     bool no_draco = false;
+    std::string block_codec = "meshopt";
     std::string impostor = "layered", only_route, lod = "chain", lod_ratios = "0.5,0.25,0.1", tile = "1x1";
     uint64_t seed = 1;
   };
@@ -46,9 +47,14 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->add_option("--level-height", o->bake.osm.level_height_m, "metres per building:levels level")
       ->capture_default_str()->check(CLI::Range(1.0, 10.0));
   cmd->add_flag("--quiet", o->bake.quiet, "plain log lines, no progress bar");
-  cmd->add_flag("--no-draco", o->no_draco, "store plain GLB buffers instead of Draco-compressed meshes");
+  cmd->add_option("--block-codec", o->block_codec,
+                  "how block levels are stored: meshopt (EXT_meshopt_compression, fast decode), draco (smallest) "
+                  "or plain")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"meshopt", "draco", "plain"}));
+  cmd->add_flag("--no-draco", o->no_draco, "same as --block-codec plain");
   cmd->add_option("--draco-level", o->bake.draco_level,
-                  "Draco compression of the block levels: 0 (fastest decode, biggest) .. 10 (smallest)")
+                  "Draco compression of the block levels (--block-codec draco): 0 (fastest decode, biggest) .. 10 (smallest)")
       ->capture_default_str()
       ->check(CLI::Range(0, 10));
   cmd->add_option("--lod", o->lod, "per-block levels of detail: chain (meshoptimizer, see --lod-ratios) or none")
@@ -87,7 +93,7 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->add_option("--report", o->report_dir, "write an HTML bake report (map, impostor thumbnails) to this folder");
   cmd->callback([o, &run] {
     run = [o] {
-      o->bake.draco = !o->no_draco;
+      package::parseGlbCodec(o->no_draco ? "plain" : o->block_codec, o->bake.block_codec);
       o->bake.lod.enabled = o->lod == "chain";
       o->bake.lod.ratios = parseRatios(o->lod_ratios);
       unsigned nx = 0, ny = 0;

@@ -7,6 +7,10 @@
 
 #include "package/format_detail.h"
 
+#if defined(__x86_64__)
+#include <nmmintrin.h>
+#endif
+
 namespace blvd::package {
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
@@ -63,7 +67,45 @@ std::string tagToString(uint32_t tag) {
   return buf;
 }
 
+#if defined(__x86_64__)
+// SSE4.2's CRC32 instruction computes CRC32C (the Castagnoli polynomial,
+// reflected), the same function as the tables; about 8x their speed, which
+// matters because the loader checks a blob's CRC before every decode
+// (decision 0008 §13).
+namespace {
+__attribute__((target("sse4.2"))) uint32_t crc32cSse42(const uint8_t* p, size_t size, uint32_t crc) {
+  uint64_t c = ~crc;
+  while (size >= 8) {
+    uint64_t v;
+    std::memcpy(&v, p, 8);
+    c = _mm_crc32_u64(c, v);
+    p += 8;
+    size -= 8;
+  }
+  auto c32 = static_cast<uint32_t>(c);
+  while (size--) c32 = _mm_crc32_u8(c32, *p++);
+  return ~c32;
+}
+const bool kHaveSse42 = __builtin_cpu_supports("sse4.2");
+}  // namespace
+#endif
+
+bool detail::crc32cAccelerated() {
+#if defined(__x86_64__)
+  return kHaveSse42;
+#else
+  return false;
+#endif
+}
+
 uint32_t crc32c(const void* data, size_t size, uint32_t crc) {
+#if defined(__x86_64__)
+  if (kHaveSse42) return crc32cSse42(static_cast<const uint8_t*>(data), size, crc);
+#endif
+  return detail::crc32cTables(data, size, crc);
+}
+
+uint32_t detail::crc32cTables(const void* data, size_t size, uint32_t crc) {
   const auto* p = static_cast<const uint8_t*>(data);
   crc = ~crc;
   while (size >= 8) {

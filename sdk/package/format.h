@@ -32,7 +32,7 @@ inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
 // 2.0: BLCK records carry the levels of detail, IMPO layers their vertex
 // counts, the header the pool sizing fields (docs/package-format.md).
 inline constexpr uint16_t kVersionMajor = 2;  // a reader opens only its own major
-inline constexpr uint16_t kVersionMinor = 0;  // minors add, never change (see spec)
+inline constexpr uint16_t kVersionMinor = 1;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
 inline constexpr uint32_t kSectionSpatialIndex = fourcc('S', 'I', 'D', 'X');  // graph spatial index

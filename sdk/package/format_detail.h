@@ -23,6 +23,12 @@ void put(uint8_t* p, T v) {
   std::memcpy(p, &v, sizeof v);
 }
 
+// crc32c() by slice-by-8 tables, the portable path (crc32c() takes the CPU's
+// instruction where crc32cAccelerated() says it has one); for the tests that
+// hold the two paths to the same answers.
+uint32_t crc32cTables(const void* data, size_t size, uint32_t crc = 0);
+bool crc32cAccelerated();
+
 // CRC32C over header[0, header_size) with the CRC field read as zero.
 uint32_t headerCrc(const uint8_t* header, size_t header_size);
 

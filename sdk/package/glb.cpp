@@ -1,5 +1,7 @@
 // GLB encoder/decoder. glTF 2.0 spec: registry.khronos.org/glTF/specs/2.0;
 // KHR_draco_mesh_compression: github.com/KhronosGroup/glTF/tree/main/extensions/2.0/Khronos/KHR_draco_mesh_compression
+// EXT_meshopt_compression: github.com/KhronosGroup/glTF/tree/main/extensions/2.0/Vendor/EXT_meshopt_compression
+// KHR_mesh_quantization: github.com/KhronosGroup/glTF/tree/main/extensions/2.0/Khronos/KHR_mesh_quantization
 //
 // Why not tinygltf here: tinygltf 2.7.0 (Debian 12) is unsafe on untrusted
 // input exactly where we need it. With TINYGLTF_ENABLE_DRACO its
@@ -18,6 +20,7 @@
 #include <draco/core/decoder_buffer.h>
 #include <draco/core/encoder_buffer.h>
 #include <draco/mesh/mesh.h>
+#include <meshoptimizer.h>
 
 #include <algorithm>
 #include <array>
@@ -28,6 +31,9 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <type_traits>
+
+#include "package/meshopt_view.h"
 
 namespace blvd::package {
 
@@ -56,6 +62,22 @@ uint8_t linearToSrgbByte(float l) {
   if (l >= 1) return 255;
   const float s = l <= 0.0031308f ? l * 12.92f : 1.055f * std::pow(l, 1 / 2.4f) - 0.055f;
   return static_cast<uint8_t>(std::lround(s * 255));
+}
+
+// linearToSrgbByte() without std::pow for the values unorm8 colours decode
+// to (k / 255.0f, the decoder's own division), which is every colour we
+// write; anything else (a float colour, a baseColorFactor) takes the formula.
+uint8_t linearToSrgbByteFast(float l) {
+  static const std::array<uint8_t, 256> lut = [] {
+    std::array<uint8_t, 256> t{};
+    for (int k = 0; k < 256; ++k) t[k] = linearToSrgbByte(static_cast<float>(k) / 255.0f);
+    return t;
+  }();
+  if (l >= 0.0f && l <= 1.0f) {
+    const auto k = static_cast<int>(l * 255.0f + 0.5f);
+    if (static_cast<float>(k) / 255.0f == l) return lut[k];
+  }
+  return linearToSrgbByte(l);
 }
 
 uint8_t unitToByte(float v) {
@@ -115,6 +137,8 @@ void validateMesh(const geo::MeshData& m, const GlbOptions& opt, const std::stri
   bits(opt.normal_bits, "normal_bits");
   bits(opt.color_bits, "color_bits");
   bits(opt.texcoord_bits, "texcoord_bits");
+  if (opt.meshopt_position_bits < 0 || opt.meshopt_position_bits > 24)
+    bad("meshopt_position_bits must be 0..24, is " + std::to_string(opt.meshopt_position_bits));
   if (opt.compression_level < 0 || opt.compression_level > 10)
     bad("compression_level must be 0..10, is " + std::to_string(opt.compression_level));
 }
@@ -185,6 +209,30 @@ std::vector<uint8_t> linearColors(const geo::MeshData& mesh) {
 struct Parts {
   std::vector<uint8_t> bin;
   json views = json::array(), accessors = json::array();
+  // EXT_meshopt_compression: the decoded views' layout in buffer 1, a
+  // fallback buffer without data (the extension's "Fallback buffers").
+  size_t fallback_bytes = 0;
+  bool quantized = false;  // a view uses KHR_mesh_quantization's types
+
+  // One compressed view: its bytes in the BIN chunk, its decoded layout
+  // (count x stride) in the fallback buffer. Vertex views state byteStride,
+  // index views must not (glTF 2.0 §5.11).
+  size_t addMeshoptView(const std::vector<uint8_t>& compressed, size_t count, size_t stride, MeshoptMode mode,
+                        MeshoptFilter filter, int target) {
+    while (bin.size() % 4) bin.push_back(0);
+    const size_t off = bin.size();
+    bin.insert(bin.end(), compressed.begin(), compressed.end());
+    fallback_bytes = (fallback_bytes + 3) / 4 * 4;
+    json ext = {{"buffer", 0}, {"byteOffset", off}, {"byteLength", compressed.size()}, {"byteStride", stride},
+                {"count", count}, {"mode", meshoptModeName(mode)}};
+    if (filter != MeshoptFilter::None) ext["filter"] = meshoptFilterName(filter);
+    json v = {{"buffer", 1}, {"byteOffset", fallback_bytes}, {"byteLength", count * stride}, {"target", target}};
+    if (mode == MeshoptMode::Attributes) v["byteStride"] = stride;
+    v["extensions"] = {{"EXT_meshopt_compression", ext}};
+    fallback_bytes += count * stride;
+    views.push_back(v);
+    return views.size() - 1;
+  }
 
   size_t addView(const void* p, size_t bytes, std::optional<int> target) {
     while (bin.size() % 4) bin.push_back(0);
@@ -362,6 +410,145 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
   counts = decodedCounts(mesh, points, back->num_faces());
   return {{"attributes", attributes}, {"indices", iacc}, {"material", 0}, {"mode", kModeTriangles},
           {"extensions", {{"KHR_draco_mesh_compression", {{"bufferView", view}, {"attributes", draco_attrs}}}}}};
+}
+
+// EXT_meshopt_compression over KHR_mesh_quantization types, as the
+// extension's "Compressing geometry data" advises: triangles in vertex-cache
+// order, vertices in the order the triangles first use them (so the codecs'
+// deltas are small), then each attribute and the indices as one compressed
+// view. Like Draco this reorders vertices and triangles, and it drops
+// vertices no triangle uses. The accessors' counts and POSITION bounds come
+// from decoding our own views, which also proves they decode.
+json addMeshoptPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& parts, GlbMeshCounts& counts) {
+  const size_t n0 = mesh.vertexCount(), ni = mesh.indices.size();
+  std::vector<uint32_t> idx(ni), remap(n0);
+  meshopt_optimizeVertexCache(idx.data(), mesh.indices.data(), ni, n0);
+  const size_t n = meshopt_optimizeVertexFetchRemap(remap.data(), idx.data(), ni, n0);
+  meshopt_remapIndexBuffer(idx.data(), idx.data(), ni, remap.data());
+  auto reordered = [&](const auto& src, size_t comps) {
+    std::remove_cv_t<std::remove_reference_t<decltype(src)>> out(n * comps);
+    if (!src.empty())
+      meshopt_remapVertexBuffer(out.data(), src.data(), n0, comps * sizeof(src[0]), remap.data());
+    return out;
+  };
+  auto ownDecode = [](const std::vector<uint8_t>& c, size_t count, size_t stride, MeshoptMode mode, MeshoptFilter f) {
+    std::vector<uint8_t> back;
+    std::string err;
+    if (decodeMeshoptView(c.data(), c.size(), {mode, f, count, stride}, back, err) != Status::Ok)
+      throw core::Error(Status::Internal, "encodeGlb: own meshopt output does not decode: " + err);
+    return back;
+  };
+  json& accessors = parts.accessors;
+  json attributes = json::object();
+
+  // POSITION: float32, exponential filter (one exponent per vertex).
+  {
+    const std::vector<float> pos = reordered(mesh.positions, 3);
+    std::vector<uint8_t> raw(n * 12);
+    MeshoptFilter f = MeshoptFilter::None;
+    if (opt.meshopt_position_bits > 0) {
+      meshopt_encodeFilterExp(raw.data(), n, 12, opt.meshopt_position_bits, pos.data());
+      f = MeshoptFilter::Exponential;
+    } else {
+      std::memcpy(raw.data(), pos.data(), raw.size());
+    }
+    const std::vector<uint8_t> c = encodeMeshoptAttributes(raw.data(), n, 12);
+    const std::vector<uint8_t> back = ownDecode(c, n, 12, MeshoptMode::Attributes, f);
+    std::array<float, 3> lo, hi;
+    minMax(reinterpret_cast<const float*>(back.data()), n, lo, hi);
+    attributes["POSITION"] = accessors.size();
+    accessors.push_back({{"bufferView", parts.addMeshoptView(c, n, 12, MeshoptMode::Attributes, f, kArrayBuffer)},
+                         {"componentType", kFloat}, {"count", n}, {"type", "VEC3"}, {"min", lo}, {"max", hi}});
+  }
+  // NORMAL: octahedral filter into snorm8 (bits <= 8) or snorm16 (4 or 8
+  // bytes per vertex, the 4th component unused), or float32.
+  if (!mesh.normals.empty()) {
+    const std::vector<float> nrm = reordered(mesh.normals, 3);
+    size_t stride = 12;
+    int ctype = kFloat;
+    MeshoptFilter f = MeshoptFilter::None;
+    std::vector<uint8_t> raw;
+    if (opt.normal_bits > 0) {
+      const int bits = std::min(opt.normal_bits, 16);
+      stride = bits <= 8 ? 4 : 8;
+      ctype = bits <= 8 ? kByte : kShort;
+      f = MeshoptFilter::Octahedral;
+      std::vector<float> v4(n * 4, 0.0f);
+      for (size_t v = 0; v < n; ++v) {
+        const float* p = &nrm[v * 3];
+        const float len = std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]);
+        if (len > 0) std::copy(p, p + 3, &v4[v * 4]);
+        else v4[v * 4 + 2] = 1.0f;  // the filter divides by the L1 length
+      }
+      raw.resize(n * stride);
+      meshopt_encodeFilterOct(raw.data(), n, stride, bits, v4.data());
+      parts.quantized = true;
+    } else {
+      raw.resize(n * 12);
+      std::memcpy(raw.data(), nrm.data(), raw.size());
+    }
+    const std::vector<uint8_t> c = encodeMeshoptAttributes(raw.data(), n, stride);
+    json acc = {{"bufferView", parts.addMeshoptView(c, n, stride, MeshoptMode::Attributes, f, kArrayBuffer)},
+                {"componentType", ctype}, {"count", n}, {"type", "VEC3"}};
+    if (ctype != kFloat) acc["normalized"] = true;
+    attributes["NORMAL"] = accessors.size();
+    accessors.push_back(acc);
+  }
+  if (!mesh.colors.empty()) {
+    const std::vector<uint8_t> lin = reordered(linearColors(mesh), 4);
+    const std::vector<uint8_t> c = encodeMeshoptAttributes(lin.data(), n, 4);
+    attributes["COLOR_0"] = accessors.size();
+    accessors.push_back({{"bufferView", parts.addMeshoptView(c, n, 4, MeshoptMode::Attributes, MeshoptFilter::None,
+                                                             kArrayBuffer)},
+                         {"componentType", kUnsignedByte}, {"normalized", true}, {"count", n}, {"type", "VEC4"}});
+  }
+  // TEXCOORD_0: unorm16 when every uv is in [0, 1] (impostor uvs are), else float32.
+  if (!mesh.texcoords.empty()) {
+    const std::vector<float> uv = reordered(mesh.texcoords, 2);
+    const bool unit = opt.texcoord_bits > 0 &&
+                      std::all_of(uv.begin(), uv.end(), [](float t) { return t >= 0.0f && t <= 1.0f; });
+    std::vector<uint8_t> raw;
+    size_t stride = 8;
+    if (unit) {
+      stride = 4;
+      std::vector<uint16_t> q(uv.size());
+      for (size_t i = 0; i < uv.size(); ++i) q[i] = static_cast<uint16_t>(meshopt_quantizeUnorm(uv[i], 16));
+      raw.resize(q.size() * 2);
+      std::memcpy(raw.data(), q.data(), raw.size());
+      parts.quantized = true;
+    } else {
+      raw.resize(uv.size() * 4);
+      std::memcpy(raw.data(), uv.data(), raw.size());
+    }
+    const std::vector<uint8_t> c = encodeMeshoptAttributes(raw.data(), n, stride);
+    json acc = {{"bufferView", parts.addMeshoptView(c, n, stride, MeshoptMode::Attributes, MeshoptFilter::None,
+                                                    kArrayBuffer)},
+                {"componentType", unit ? kUnsignedShort : kFloat}, {"count", n}, {"type", "VEC2"}};
+    if (unit) acc["normalized"] = true;
+    attributes["TEXCOORD_0"] = accessors.size();
+    accessors.push_back(acc);
+  }
+  const int ictype = componentForIndices(n);
+  const size_t isize = ictype == kUnsignedShort ? 2 : 4;
+  const std::vector<uint8_t> ic = encodeMeshoptTriangles(idx.data(), ni, n);
+  const std::vector<uint8_t> iback = ownDecode(ic, ni, isize, MeshoptMode::Triangles, MeshoptFilter::None);
+  // The index codec keeps the triangles and their winding but may rotate a
+  // triangle's corners.
+  for (size_t t = 0; t < ni; t += 3) {
+    uint32_t v[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k) std::memcpy(&v[k], &iback[(t + k) * isize], isize);
+    bool same = false;
+    for (int r = 0; r < 3 && !same; ++r)
+      same = v[r] == idx[t] && v[(r + 1) % 3] == idx[t + 1] && v[(r + 2) % 3] == idx[t + 2];
+    if (!same) throw core::Error(Status::Internal, "encodeGlb: own meshopt triangle " + std::to_string(t / 3) +
+                                                       " decodes to other corners");
+  }
+  const size_t iacc = accessors.size();
+  accessors.push_back({{"bufferView", parts.addMeshoptView(ic, ni, isize, MeshoptMode::Triangles, MeshoptFilter::None,
+                                                           kElementArrayBuffer)},
+                       {"componentType", ictype}, {"count", ni}, {"type", "SCALAR"}});
+  counts = decodedCounts(mesh, n, ni / 3);
+  return {{"attributes", attributes}, {"indices", iacc}, {"material", 0}, {"mode", kModeTriangles}};
 }
 
 // ---------------------------------------------------------------- decoder ---
@@ -594,6 +781,7 @@ class Decoder {
       // Texture and material extensions do not change geometry, which is
       // all this decoder returns.
       const bool harmless = name == "KHR_draco_mesh_compression" || name == "KHR_mesh_quantization" ||
+                            name == "EXT_meshopt_compression" ||
                             name.rfind("KHR_materials_", 0) == 0 || name.rfind("KHR_texture_", 0) == 0 ||
                             name.rfind("EXT_texture_", 0) == 0;
       if (!harmless) fail("extensionsRequired: " + name + " is not supported", Status::Unsupported);
@@ -666,22 +854,76 @@ class Decoder {
     uint32_t stride = 0;  // 0 = tightly packed
   };
 
-  View bufferView(size_t i) {
-    const std::string where = "bufferViews[" + std::to_string(i) + "]";
-    const json& v = element("bufferViews", i);
-    const size_t b = index(v, "buffer", where, count("buffers"), "buffers");
+  // The bytes an object's buffer / byteOffset / byteLength name (a
+  // bufferView, or its EXT_meshopt_compression source), bounds-checked.
+  Bytes bufferRange(const json& o, const std::string& where) {
+    const size_t b = index(o, "buffer", where, count("buffers"), "buffers");
     const Bytes buf = buffer(b);
-    const uint64_t off = unsignedMember(v, "byteOffset", where, 0);
-    const uint64_t len = unsignedMember(v, "byteLength", where);
+    const uint64_t off = unsignedMember(o, "byteOffset", where, 0);
+    const uint64_t len = unsignedMember(o, "byteLength", where);
     if (len > buf.size || off > buf.size - len)
       fail(where + ": byteOffset " + std::to_string(off) + " + byteLength " + std::to_string(len) +
            " runs past buffers[" + std::to_string(b) + "] (" + std::to_string(buf.size) + " bytes)");
+    return {buf.data + off, static_cast<size_t>(len)};
+  }
+
+  View bufferView(size_t i) {
+    const std::string where = "bufferViews[" + std::to_string(i) + "]";
+    const json& v = element("bufferViews", i);
+    if (auto ext = v.find("extensions"); ext != v.end() && ext->is_object())
+      if (auto mo = ext->find("EXT_meshopt_compression"); mo != ext->end())
+        return meshoptView(i, v, object(*mo, where + ".extensions.EXT_meshopt_compression"), where);
     View view;
-    view.bytes = {buf.data + off, static_cast<size_t>(len)};
+    view.bytes = bufferRange(v, where);
     const uint64_t stride = unsignedMember(v, "byteStride", where, 0);
     if (stride != 0 && (stride < 4 || stride > 252 || stride % 4))
       fail(where + ".byteStride: " + std::to_string(stride) + " is not in 4..252 and a multiple of 4");
     view.stride = static_cast<uint32_t>(stride);
+    return view;
+  }
+
+  // A compressed view decodes (once per decode call) into memory of its
+  // own; the parent view's buffer (normally a fallback without data) is
+  // never read. The extension's rules on the JSON are checked here, those
+  // on the bitstream's layout in decodeMeshoptView().
+  View meshoptView(size_t i, const json& v, const json& ext, const std::string& where) {
+    const std::string ewhere = where + ".extensions.EXT_meshopt_compression";
+    index(v, "buffer", where, count("buffers"), "buffers");
+    const uint64_t stride = unsignedMember(ext, "byteStride", ewhere);
+    const uint64_t n = unsignedMember(ext, "count", ewhere);
+    const uint64_t parent_len = unsignedMember(v, "byteLength", where);
+    const uint64_t parent_stride = unsignedMember(v, "byteStride", where, 0);
+    if (parent_stride != 0 && parent_stride != stride)
+      fail(where + ".byteStride: " + std::to_string(parent_stride) + " differs from the extension's " +
+           std::to_string(stride));
+    if (parent_stride != 0 && (parent_stride < 4 || parent_stride > 252 || parent_stride % 4))
+      fail(where + ".byteStride: " + std::to_string(parent_stride) + " is not in 4..252 and a multiple of 4");
+    if (n > 3 * kMaxDecodedVertices)
+      fail(ewhere + ".count: " + std::to_string(n) + " elements exceed the decoder limit", Status::Unsupported);
+    if (stride > 256 || parent_len != stride * n)
+      fail(where + ".byteLength: " + std::to_string(parent_len) + " is not the extension's byteStride " +
+           std::to_string(stride) + " x count " + std::to_string(n));
+    auto cached = views_.find(i);
+    if (cached == views_.end()) {
+      MeshoptView mv;
+      mv.count = n;
+      mv.stride = stride;
+      auto mode = ext.find("mode");
+      if (mode == ext.end() || !mode->is_string() || !parseMeshoptMode(mode->get<std::string>(), mv.mode))
+        fail(ewhere + ".mode: expected ATTRIBUTES, TRIANGLES or INDICES");
+      if (auto f = ext.find("filter"); f != ext.end())
+        if (!f->is_string() || !parseMeshoptFilter(f->get<std::string>(), mv.filter))
+          fail(ewhere + ".filter: expected NONE, OCTAHEDRAL, QUATERNION or EXPONENTIAL");
+      const Bytes src = bufferRange(ext, ewhere);
+      std::vector<uint8_t> bytes;
+      std::string err;
+      if (decodeMeshoptView(src.data, src.size, mv, bytes, err) != Status::Ok)
+        fail(ewhere + ": " + err);
+      cached = views_.emplace(i, std::move(bytes)).first;
+    }
+    View view;
+    view.bytes = {cached->second.data(), cached->second.size()};
+    view.stride = static_cast<uint32_t>(parent_stride);
     return view;
   }
 
@@ -1111,7 +1353,7 @@ class Decoder {
     auto pushColor = [&](size_t v) {
       float rgba[4] = {1, 1, 1, 1};
       if (!p.colors.empty()) std::copy(&p.colors[v * 4], &p.colors[v * 4] + 4, rgba);
-      for (int k = 0; k < 3; ++k) out.colors.push_back(linearToSrgbByte(rgba[k] * factor[k]));
+      for (int k = 0; k < 3; ++k) out.colors.push_back(linearToSrgbByteFast(rgba[k] * factor[k]));
       out.colors.push_back(unitToByte(rgba[3] * factor[3]));
     };
     // Texture coordinates are kept when every primitive so far has them.
@@ -1125,6 +1367,13 @@ class Decoder {
     if (out.vertexCount() + added_vertices > kMaxDecodedVertices || out.indices.size() + p.indices.size() > 3 * kMaxDecodedVertices)
       fail("decoded mesh exceeds " + std::to_string(kMaxDecodedVertices) + " vertices", Status::Unsupported);
     const auto base = static_cast<uint32_t>(out.vertexCount());
+    if (base == 0) {  // the usual single primitive: one allocation per array
+      out.positions.reserve(added_vertices * 3);
+      out.normals.reserve(added_vertices * 3);
+      out.colors.reserve(added_vertices * 4);
+      if (uv) out.texcoords.reserve(added_vertices * 2);
+      out.indices.reserve(p.indices.size());
+    }
     if (!flat) {
       const size_t n = p.positions.size() / 3;
       for (size_t v = 0; v < n; ++v) {
@@ -1176,6 +1425,7 @@ class Decoder {
   const uint8_t* bin_;
   size_t bin_size_;
   std::map<size_t, Stored> buffers_;
+  std::map<size_t, std::vector<uint8_t>> views_;  // decoded EXT_meshopt_compression views
   std::map<std::pair<size_t, size_t>, Primitive> cache_;
   uint32_t level_ = 0;
   size_t substituted_ = 0;  // nodes replaced by their MSFT_lod level
@@ -1250,6 +1500,24 @@ Status splitChunks(const uint8_t* data, size_t size, Chunks& c, std::string& err
 
 }  // namespace
 
+const char* glbCodecName(GlbCodec c) {
+  switch (c) {
+    case GlbCodec::Plain: return "plain";
+    case GlbCodec::Draco: return "draco";
+    case GlbCodec::Meshopt: return "meshopt";
+  }
+  return "?";
+}
+
+bool parseGlbCodec(const std::string& name, GlbCodec& out) {
+  for (GlbCodec c : {GlbCodec::Plain, GlbCodec::Draco, GlbCodec::Meshopt})
+    if (name == glbCodecName(c)) {
+      out = c;
+      return true;
+    }
+  return false;
+}
+
 std::vector<uint8_t> encodeGlb(const geo::MeshData& mesh, const GlbOptions& opt, GlbMeshCounts* counts) {
   std::vector<GlbMeshCounts> c;
   std::vector<uint8_t> glb = encodeGlbLevels({mesh}, opt, counts ? &c : nullptr);
@@ -1283,7 +1551,9 @@ std::vector<uint8_t> encodeGlbLevels(const std::vector<geo::MeshData>& levels, c
   json meshes = json::array(), nodes = json::array(), used = json::array();
   for (size_t k = 0; k < levels.size(); ++k) {
     GlbMeshCounts c;
-    json prim = opt.draco ? addDracoPrimitive(levels[k], opt, parts, c) : addPlainPrimitive(levels[k], parts, c);
+    json prim = opt.codec == GlbCodec::Draco     ? addDracoPrimitive(levels[k], opt, parts, c)
+                : opt.codec == GlbCodec::Meshopt ? addMeshoptPrimitive(levels[k], opt, parts, c)
+                                                 : addPlainPrimitive(levels[k], parts, c);
     if (counts) (*counts)[k] = c;
     meshes.push_back({{"primitives", json::array({prim})}});
     nodes.push_back({{"mesh", k}});
@@ -1294,12 +1564,19 @@ std::vector<uint8_t> encodeGlbLevels(const std::vector<geo::MeshData>& levels, c
     nodes[0]["extensions"] = {{"MSFT_lod", {{"ids", ids}}}};
   }
   addImage(levels[0], doc, parts);
-  if (opt.draco) used.push_back("KHR_draco_mesh_compression");
+  json required = json::array();
+  if (opt.codec == GlbCodec::Draco) required.push_back("KHR_draco_mesh_compression");
+  if (opt.codec == GlbCodec::Meshopt) required.push_back("EXT_meshopt_compression");
+  if (parts.quantized) required.push_back("KHR_mesh_quantization");
+  used = required;
   if (levels.size() > 1) used.push_back("MSFT_lod");
   if (!levels[0].image.empty()) used.push_back("KHR_materials_unlit");
   if (!used.empty()) doc["extensionsUsed"] = used;
-  if (opt.draco) doc["extensionsRequired"] = json::array({"KHR_draco_mesh_compression"});
+  if (!required.empty()) doc["extensionsRequired"] = required;
   doc["buffers"] = json::array({{{"byteLength", parts.bin.size()}}});
+  if (parts.fallback_bytes > 0)
+    doc["buffers"].push_back(
+        {{"byteLength", parts.fallback_bytes}, {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}});
   doc["bufferViews"] = parts.views;
   doc["accessors"] = parts.accessors;
   doc["meshes"] = meshes;

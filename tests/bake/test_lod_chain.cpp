@@ -107,9 +107,10 @@ TEST(LodChain, BadRatiosAreRefused) {
 }
 
 TEST(LodChain, BlockRecordCountsAreWhatDecodingGives) {
-  for (bool draco : {true, false}) {
+  for (package::GlbCodec codec : {package::GlbCodec::Draco, package::GlbCodec::Plain, package::GlbCodec::Meshopt}) {
     package::GlbOptions glb;
-    glb.draco = draco;
+    glb.codec = codec;
+    const char* draco = package::glbCodecName(codec);
     graph::BlockRecord rec;
     LodStats stats;
     const std::vector<uint8_t> bytes = encodeBlock(blockLike(), {}, glb, rec, stats);
@@ -120,8 +121,8 @@ TEST(LodChain, BlockRecordCountsAreWhatDecodingGives) {
       geo::MeshData out;
       std::string err;
       ASSERT_EQ(package::decodeGlbLevel(bytes.data(), bytes.size(), k, out, err), core::Status::Ok) << err;
-      EXPECT_EQ(out.triangleCount(), rec.triangles[k]) << "level " << k << " draco " << draco;
-      EXPECT_EQ(out.vertexCount(), rec.vertices[k]) << "level " << k << " draco " << draco;
+      EXPECT_EQ(out.triangleCount(), rec.triangles[k]) << "level " << k << " codec " << draco;
+      EXPECT_EQ(out.vertexCount(), rec.vertices[k]) << "level " << k << " codec " << draco;
       if (k > 0) {
         EXPECT_LT(rec.triangles[k], rec.triangles[k - 1]);
         EXPECT_GE(rec.error_m[k], rec.error_m[k - 1]);

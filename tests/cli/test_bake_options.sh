@@ -38,21 +38,37 @@ assert j["meta"]["lod"]["mode"] == "none", j["meta"]["lod"]
 print("bake options: ok")
 PY
 
-# --draco-level: recorded in the package's meta; level 0 (fastest decode) is
-# bigger than the default 3 and decodes to the same meshes. `blvd bench decode`
-# decodes every mesh of both side by side (its times are reported, not tested).
-"$blvd" bake --quiet "$osm" -o "$work/cl3.blvd" --impostor none --lod none > /dev/null
-"$blvd" bake --quiet "$osm" -o "$work/cl0.blvd" --impostor none --lod none --draco-level 0 > /dev/null
-"$blvd" pack info "$work/cl3.blvd" --json > "$work/cl3.json"
-"$blvd" pack info "$work/cl0.blvd" --json > "$work/cl0.json"
-"$blvd" bench decode "$work/cl3.blvd" "$work/cl0.blvd" --json "$work/decode.json" > /dev/null
-python3 - "$work/cl3.json" "$work/cl0.json" "$work/decode.json" <<'PY'
+# --block-codec and --draco-level: recorded in the package's meta. Draco level 0
+# (fastest Draco decode) is bigger than the default 3; meshopt (the default) is
+# bigger than Draco and plain bigger still. The four decode to the same meshes
+# (`pack verify` decodes every blob; `bench decode` every mesh, side by side;
+# its times are reported, not tested).
+"$blvd" bake --quiet "$osm" -o "$work/mo.blvd" --impostor none --lod none > /dev/null
+"$blvd" bake --quiet "$osm" -o "$work/cl3.blvd" --impostor none --lod none --block-codec draco > /dev/null
+"$blvd" bake --quiet "$osm" -o "$work/cl0.blvd" --impostor none --lod none --block-codec draco --draco-level 0 > /dev/null
+"$blvd" bake --quiet "$osm" -o "$work/plain.blvd" --impostor none --lod none --no-draco > /dev/null
+for p in mo cl3 cl0 plain; do
+  "$blvd" pack info "$work/$p.blvd" --json > "$work/$p.json"
+  "$blvd" pack verify "$work/$p.blvd" > /dev/null
+done
+"$blvd" bench decode "$work/cl3.blvd" "$work/cl0.blvd" "$work/mo.blvd" "$work/plain.blvd" --json "$work/decode.json" > /dev/null
+python3 - "$work/cl3.json" "$work/cl0.json" "$work/mo.json" "$work/plain.json" "$work/decode.json" <<'PY'
 import json, sys
-a, b, d = (json.load(open(p)) for p in sys.argv[1:4])
+a, b, m, p, d = (json.load(open(f)) for f in sys.argv[1:6])
 assert a["meta"]["draco_level"] == 3 and b["meta"]["draco_level"] == 0, (a["meta"], b["meta"])
-assert len(d) == 2 and d[0]["bytes"] < d[1]["bytes"] and d[1]["bytes_vs_first"] > 1, d
-assert d[0]["blocks"]["meshes"] == d[1]["blocks"]["meshes"] == a["lod_levels"][0]["blocks"] > 0, (d, a["lod_levels"])
+assert [x["meta"]["block_codec"] for x in (a, b, m, p)] == ["draco", "draco", "meshopt", "plain"]
+assert m["meta"]["draco"] is False and a["meta"]["draco"] is True
+assert len(d) == 4 and d[0]["bytes"] < d[1]["bytes"] and d[1]["bytes_vs_first"] > 1, d
+assert d[0]["bytes"] < d[2]["bytes"] < d[3]["bytes"], [x["bytes"] for x in d]
+# Same blocks, triangle for triangle (the records' counts are what decoding gives).
+assert all(x["lod_levels"] == a["lod_levels"] for x in (b, m, p)), [x["lod_levels"] for x in (a, b, m, p)]
+assert all(x["blocks"]["meshes"] == a["lod_levels"][0]["blocks"] > 0 for x in d), (d, a["lod_levels"])
 assert d[0]["impostors"]["meshes"] == 0, d
-assert all(p["blocks"]["ms_total"] > 0 and p["blocks"]["ms_max"] >= p["blocks"]["ms_p50"] for p in d), d
-print("draco level + bench decode: ok")
+assert all(x["blocks"]["ms_total"] > 0 and x["blocks"]["ms_max"] >= x["blocks"]["ms_p50"] for x in d), d
+print("block codec + draco level + bench decode: ok")
 PY
+set +e
+"$blvd" bake --quiet "$osm" -o "$work/x.blvd" --block-codec zip > "$work/bad_codec.txt" 2>&1; rc=$?
+set -e
+[ "$rc" != 0 ] || { echo "bake with --block-codec zip succeeded"; exit 1; }
+grep -q "block-codec" "$work/bad_codec.txt" || { cat "$work/bad_codec.txt"; exit 1; }

@@ -65,9 +65,14 @@ clen, ctype = struct.unpack_from("<I4s", b, 12)
 assert ctype == b"JSON"
 j = json.loads(b[20:20 + clen])
 assert j["asset"]["version"] == "2.0" and j["meshes"], j.keys()
-assert "KHR_draco_mesh_compression" in j.get("extensionsRequired", []), "blocks must be Draco-compressed"
 prim = j["meshes"][0]["primitives"][0]
-assert "KHR_draco_mesh_compression" in prim["extensions"], prim
+if "block" in sys.argv[1]:  # block levels: EXT_meshopt_compression (the default bake), every view compressed
+    assert j["extensionsRequired"] == ["EXT_meshopt_compression", "KHR_mesh_quantization"], j["extensionsRequired"]
+    assert all("EXT_meshopt_compression" in v["extensions"] for v in j["bufferViews"]), j["bufferViews"]
+    assert j["buffers"][1]["extensions"]["EXT_meshopt_compression"]["fallback"] is True, j["buffers"]
+else:  # a cell's merged local model: Draco, as `pack extract` writes it
+    assert "KHR_draco_mesh_compression" in j.get("extensionsRequired", []), "cells must be Draco-compressed"
+    assert "KHR_draco_mesh_compression" in prim["extensions"], prim
 if "block" in sys.argv[1]:  # a block holds its levels of detail (MSFT_lod, not required)
     assert "MSFT_lod" in j["extensionsUsed"] and "MSFT_lod" not in j["extensionsRequired"], j["extensionsUsed"]
     ids = j["nodes"][0]["extensions"]["MSFT_lod"]["ids"]

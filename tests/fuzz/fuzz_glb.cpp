@@ -38,7 +38,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   if (!dir || !*dir) return 0;
   std::filesystem::create_directories(dir);
   blvd::package::GlbOptions plain;
-  plain.draco = false;
+  plain.codec = blvd::package::GlbCodec::Plain;
   writeSeed(dir, "seed_plain.glb", blvd::package::encodeGlb(seedMesh(), plain));
   writeSeed(dir, "seed_draco.glb", blvd::package::encodeGlb(seedMesh()));
   blvd::geo::MeshData bare = seedMesh();
@@ -55,6 +55,15 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   blvd::geo::MeshData lower = seedMesh();  // a block with a level of detail (MSFT_lod)
   lower.indices.resize(3);
   writeSeed(dir, "seed_levels_draco.glb", blvd::package::encodeGlbLevels({seedMesh(), lower}));
+  blvd::package::GlbOptions meshopt;  // EXT_meshopt_compression (the default for block levels)
+  meshopt.codec = blvd::package::GlbCodec::Meshopt;
+  writeSeed(dir, "seed_meshopt.glb", blvd::package::encodeGlb(seedMesh(), meshopt));
+  writeSeed(dir, "seed_levels_meshopt.glb", blvd::package::encodeGlbLevels({seedMesh(), lower}, meshopt));
+  writeSeed(dir, "seed_textured_meshopt.glb", blvd::package::encodeGlb(textured, meshopt));
+  meshopt.normal_bits = 8;
+  meshopt.meshopt_position_bits = 0;
+  writeSeed(dir, "seed_bare_meshopt.glb", blvd::package::encodeGlb(bare, meshopt));
+  writeSeed(dir, "seed_snorm8_meshopt.glb", blvd::package::encodeGlb(seedMesh(), meshopt));
   return 0;
 }
 
@@ -76,7 +85,7 @@ void checkOne(const uint8_t* data, size_t size, uint32_t level) {
     if (i >= n) std::abort();
   // And what it returns is valid input for the encoder (finite, in range).
   blvd::package::GlbOptions plain;
-  plain.draco = false;
+  plain.codec = blvd::package::GlbCodec::Plain;
   try {
     (void)blvd::package::encodeGlb(mesh, plain);
   } catch (const std::exception& e) {

@@ -127,7 +127,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   w.addSection(kSectionBlocks, {1, 2, 3, 4, 5});
   w.addBlob(encodeGlb(m));
   GlbOptions plain;
-  plain.draco = false;
+  plain.codec = blvd::package::GlbCodec::Plain;
   w.addBlob(encodeGlb(m, plain));
   w.write((std::filesystem::path(dir) / "seed.blvd").string());
   return 0;

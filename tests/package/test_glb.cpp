@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "glb_test_util.h"
 #include "package_test_util.h"
 
 namespace blvd::package {
@@ -20,130 +21,12 @@ namespace {
 
 using core::Status;
 using geo::MeshData;
-
-// A w x h x d box with 24 vertices (flat normals per face) and per-face colours.
-MeshData box(float w = 2, float h = 1, float d = 3, float cx = 0, float cy = 0, float cz = 0) {
-  MeshData m;
-  struct Face {
-    std::array<float, 3> n, u, v;
-    std::array<uint8_t, 4> c;
-  };
-  const Face faces[6] = {
-      {{1, 0, 0}, {0, 0, -1}, {0, 1, 0}, {200, 30, 30, 255}},  {{-1, 0, 0}, {0, 0, 1}, {0, 1, 0}, {30, 200, 30, 255}},
-      {{0, 1, 0}, {1, 0, 0}, {0, 0, -1}, {30, 30, 200, 255}},  {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}, {128, 128, 128, 255}},
-      {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {10, 20, 240, 128}},   {{0, 0, -1}, {-1, 0, 0}, {0, 1, 0}, {255, 255, 0, 255}}};
-  const float half[3] = {w / 2, h / 2, d / 2};
-  const float center[3] = {cx, cy, cz};
-  for (const Face& f : faces) {
-    const auto base = static_cast<uint32_t>(m.vertexCount());
-    const float su[4] = {-1, 1, 1, -1}, sv[4] = {-1, -1, 1, 1};
-    for (int k = 0; k < 4; ++k) {
-      for (int a = 0; a < 3; ++a) {
-        m.positions.push_back(center[a] + (f.n[a] + su[k] * f.u[a] + sv[k] * f.v[a]) * half[a]);
-        m.normals.push_back(f.n[a]);
-      }
-      m.colors.insert(m.colors.end(), f.c.begin(), f.c.end());
-    }
-    m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
-  }
-  return m;
-}
-
-// 8-bit linear COLOR_0 is coarse in the darks (see glb.h): a round trip moves
-// sRGB values below 40 by up to 6 levels, the rest by at most 2.
-int colorTolerance(int srgb) { return srgb < 40 ? 6 : 2; }
-
-using Tri = std::array<std::array<float, 3>, 3>;
-
-// Triangles as position triples, each rotated to start at its smallest
-// vertex (keeping the winding), then sorted: Draco reorders faces and
-// vertices, so meshes are compared as triangle sets.
-std::vector<Tri> triangles(const MeshData& m) {
-  std::vector<Tri> out;
-  for (size_t t = 0; t < m.triangleCount(); ++t) {
-    Tri tri;
-    for (int k = 0; k < 3; ++k)
-      for (int a = 0; a < 3; ++a) tri[k][a] = m.positions[m.indices[t * 3 + k] * 3 + a];
-    const int first = static_cast<int>(std::min_element(tri.begin(), tri.end()) - tri.begin());
-    std::rotate(tri.begin(), tri.begin() + first, tri.end());
-    out.push_back(tri);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
-// Every triangle of `a` has a triangle in `b` within `tol` (same winding).
-void expectSameTriangles(const MeshData& a, const MeshData& b, float tol) {
-  ASSERT_EQ(a.triangleCount(), b.triangleCount());
-  const auto ta = triangles(a), tb = triangles(b);
-  std::vector<bool> used(tb.size(), false);
-  for (const Tri& x : ta) {
-    bool found = false;
-    for (size_t j = 0; j < tb.size() && !found; ++j) {
-      if (used[j]) continue;
-      for (int rot = 0; rot < 3 && !found; ++rot) {
-        bool same = true;
-        for (int k = 0; k < 3 && same; ++k)
-          for (int c = 0; c < 3 && same; ++c) same = std::fabs(x[k][c] - tb[j][(k + rot) % 3][c]) <= tol;
-        if (same) found = used[j] = true;
-      }
-    }
-    EXPECT_TRUE(found) << "triangle (" << x[0][0] << "," << x[0][1] << "," << x[0][2] << ") ... has no match";
-  }
-}
-
-// For each vertex of `b`, the vertex of `a` at the same position has the
-// same normal and colour (within tolerances).
-void expectSameAttributes(const MeshData& a, const MeshData& b, float pos_tol, float normal_tol) {
-  ASSERT_EQ(b.normals.size(), b.positions.size());
-  ASSERT_EQ(b.colors.size(), b.vertexCount() * 4);
-  for (size_t v = 0; v < b.vertexCount(); ++v) {
-    bool found = false;
-    for (size_t u = 0; u < a.vertexCount() && !found; ++u) {
-      bool same = true;
-      for (int c = 0; c < 3 && same; ++c) same = std::fabs(a.positions[u * 3 + c] - b.positions[v * 3 + c]) <= pos_tol;
-      for (int c = 0; c < 3 && same; ++c) same = std::fabs(a.normals[u * 3 + c] - b.normals[v * 3 + c]) <= normal_tol;
-      if (!same) continue;
-      found = true;
-      for (int c = 0; c < 4; ++c)
-        EXPECT_NEAR(int(a.colors[u * 4 + c]), int(b.colors[v * 4 + c]), c == 3 ? 0 : colorTolerance(a.colors[u * 4 + c]))
-            << "vertex " << v << " channel " << c;
-    }
-    EXPECT_TRUE(found) << "decoded vertex " << v << " matches no source vertex";
-  }
-}
-
-nlohmann::json glbJson(const std::vector<uint8_t>& glb) {
-  uint32_t len;
-  std::memcpy(&len, glb.data() + 12, 4);
-  return nlohmann::json::parse(glb.begin() + 20, glb.begin() + 20 + len);
-}
-
-// Builds a GLB from JSON text and a BIN payload (for hand-made test files).
-std::vector<uint8_t> makeGlb(std::string json, std::vector<uint8_t> bin) {
-  while (json.size() % 4) json.push_back(' ');
-  while (bin.size() % 4) bin.push_back(0);
-  std::vector<uint8_t> out;
-  auto u32 = [&](uint32_t v) { out.insert(out.end(), reinterpret_cast<uint8_t*>(&v), reinterpret_cast<uint8_t*>(&v) + 4); };
-  const uint32_t total = static_cast<uint32_t>(12 + 8 + json.size() + (bin.empty() ? 0 : 8 + bin.size()));
-  u32(0x46546C67);
-  u32(2);
-  u32(total);
-  u32(static_cast<uint32_t>(json.size()));
-  u32(0x4E4F534A);
-  out.insert(out.end(), json.begin(), json.end());
-  if (!bin.empty()) {
-    u32(static_cast<uint32_t>(bin.size()));
-    u32(0x004E4942);
-    out.insert(out.end(), bin.begin(), bin.end());
-  }
-  return out;
-}
+using namespace glbtest;
 
 TEST(Glb, RoundTripPlain) {
   const MeshData src = box();
   GlbOptions opt;
-  opt.draco = false;
+  opt.codec = GlbCodec::Plain;
   const std::vector<uint8_t> glb = encodeGlb(src, opt);
   const auto doc = glbJson(glb);
   EXPECT_FALSE(doc.contains("extensionsUsed"));
@@ -213,9 +96,9 @@ TEST(Glb, NoNormalsNoColors) {
   MeshData src = box();
   src.normals.clear();
   src.colors.clear();
-  for (bool draco : {false, true}) {
+  for (GlbCodec codec : {GlbCodec::Plain, GlbCodec::Draco, GlbCodec::Meshopt}) {
     GlbOptions opt;
-    opt.draco = draco;
+    opt.codec = codec;
     const auto glb = encodeGlb(src, opt);
     MeshData out;
     std::string err;
@@ -233,9 +116,9 @@ TEST(Glb, NoNormalsNoColors) {
 }
 
 TEST(Glb, EmptyMesh) {
-  for (bool draco : {false, true}) {
+  for (GlbCodec codec : {GlbCodec::Plain, GlbCodec::Draco, GlbCodec::Meshopt}) {
     GlbOptions opt;
-    opt.draco = draco;
+    opt.codec = codec;
     const auto glb = encodeGlb(MeshData{}, opt);
     const auto doc = glbJson(glb);
     EXPECT_EQ(doc["scenes"].size(), 1u);
@@ -257,9 +140,9 @@ TEST(Glb, LargeIndicesUseUint32) {
     m.colors.insert(m.colors.end(), {uint8_t(i), uint8_t(i >> 8), 7, 255});
   }
   for (uint32_t i = 0; i + 3 < n; i += 2) m.indices.insert(m.indices.end(), {i, i + 1, i + 3, i, i + 3, i + 2});
-  for (bool draco : {false, true}) {
+  for (GlbCodec codec : {GlbCodec::Plain, GlbCodec::Draco, GlbCodec::Meshopt}) {
     GlbOptions opt;
-    opt.draco = draco;
+    opt.codec = codec;
     const auto glb = encodeGlb(m, opt);
     const auto doc = glbJson(glb);
     EXPECT_EQ(doc["accessors"][doc["meshes"][0]["primitives"][0]["indices"].get<int>()]["componentType"], 5125);
@@ -278,9 +161,9 @@ TEST(Glb, TexcoordsAndImage) {
   for (size_t v = 0; v < src.vertexCount(); ++v) src.texcoords.insert(src.texcoords.end(), {(v % 4) * 0.25f, (v / 4) / 6.0f});
   src.image = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n', 1, 2, 3};
   src.image_mime = "image/png";
-  for (bool draco : {false, true}) {
+  for (GlbCodec codec : {GlbCodec::Plain, GlbCodec::Draco, GlbCodec::Meshopt}) {
     GlbOptions opt;
-    opt.draco = draco;
+    opt.codec = codec;
     const auto glb = encodeGlb(src, opt);
     MeshData out;
     std::string err;
@@ -288,7 +171,7 @@ TEST(Glb, TexcoordsAndImage) {
     ASSERT_EQ(out.texcoords.size(), out.vertexCount() * 2);
     EXPECT_EQ(out.image, src.image);
     EXPECT_EQ(out.image_mime, "image/png");
-    if (!draco) {
+    if (codec == GlbCodec::Plain) {
       EXPECT_EQ(out.texcoords, src.texcoords);
     }
   }
@@ -296,7 +179,7 @@ TEST(Glb, TexcoordsAndImage) {
   src.image = {'G', 'I', 'F', '8', '9', 'a'};
   src.image_mime = "image/jpeg";  // the encoder trusts the caller; the decoder checks the bytes
   GlbOptions plain;
-  plain.draco = false;
+  plain.codec = blvd::package::GlbCodec::Plain;
   auto glb = encodeGlb(src, plain);
   MeshData out;
   std::string err;
@@ -434,8 +317,8 @@ TEST(Glb, ErrorsNameWhatFailed) {
           "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
           "accessors":[{"bufferView":0,"componentType":5126,"count":1,"type":"VEC3"}]})",
        "bufferViews[0]: byteOffset 40 + byteLength 8 runs past buffers[0] (36 bytes)", Status::Corrupt},
-      {R"({"asset":{"version":"2.0"},"extensionsRequired":["EXT_meshopt_compression"]})",
-       "extensionsRequired: EXT_meshopt_compression is not supported", Status::Unsupported},
+      {R"({"asset":{"version":"2.0"},"extensionsRequired":["EXT_mesh_gpu_instancing"]})",
+       "extensionsRequired: EXT_mesh_gpu_instancing is not supported", Status::Unsupported},
       {R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":8,"uri":"../../etc/passwd"}],
           "bufferViews":[{"buffer":0,"byteLength":8}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
           "accessors":[{"bufferView":0,"componentType":5126,"count":0,"type":"VEC3"}]})",
@@ -464,8 +347,13 @@ TEST(Glb, ErrorsNameWhatFailed) {
 }
 
 TEST(Glb, EveryTruncationFails) {
-  for (const std::string& path : {std::string(BLVD_TEST_DATA_DIR "/gltf/Box_Draco.glb"), std::string("own")}) {
-    const std::vector<uint8_t> glb = path == "own" ? encodeGlb(box()) : testutil::readFile(path);
+  GlbOptions meshopt;
+  meshopt.codec = GlbCodec::Meshopt;
+  for (const std::string& path :
+       {std::string(BLVD_TEST_DATA_DIR "/gltf/Box_Draco.glb"), std::string("own"), std::string("own meshopt")}) {
+    const std::vector<uint8_t> glb = path == "own"           ? encodeGlb(box())
+                                     : path == "own meshopt" ? encodeGlb(box(), meshopt)
+                                                             : testutil::readFile(path);
     ASSERT_FALSE(glb.empty());
     for (size_t n = 0; n < glb.size(); ++n) {
       // A fresh copy of exactly n bytes, so ASan sees any read past the end.
@@ -478,10 +366,15 @@ TEST(Glb, EveryTruncationFails) {
   }
 }
 
-// The GLB length fields are fixed up after truncating the Draco bitstream
-// or the JSON, so the damage reaches Draco and the JSON reader themselves.
-TEST(Glb, DamagedPayloadsNeverCrash) {
-  const std::vector<uint8_t> glb = encodeGlb(box());
+// The GLB length fields are fixed up after truncating the Draco bitstream,
+// the meshopt views or the JSON, so the damage reaches Draco, meshoptimizer
+// and the JSON reader themselves.
+class GlbDamage : public ::testing::TestWithParam<GlbCodec> {};
+
+TEST_P(GlbDamage, DamagedPayloadsNeverCrash) {
+  GlbOptions opt;
+  opt.codec = GetParam();
+  const std::vector<uint8_t> glb = encodeGlb(box(), opt);
   uint32_t json_len;
   std::memcpy(&json_len, glb.data() + 12, 4);
   const size_t bin_start = 20 + json_len + 8;
@@ -517,6 +410,9 @@ TEST(Glb, DamagedPayloadsNeverCrash) {
   EXPECT_GT(failed, 0u);
   EXPECT_GT(ok, 0u);  // flips in harmless places (e.g. "generator") still decode
 }
+
+INSTANTIATE_TEST_SUITE_P(Codecs, GlbDamage, ::testing::Values(GlbCodec::Draco, GlbCodec::Meshopt),
+                         [](const ::testing::TestParamInfo<GlbCodec>& i) { return std::string(glbCodecName(i.param)); });
 
 TEST(Glb, GarbageNeverCrashes) {
   std::mt19937 rng(12345);

@@ -40,11 +40,11 @@ nlohmann::json jsonOf(const std::vector<uint8_t>& glb) {
   return nlohmann::json::parse(glb.begin() + 20, glb.begin() + 20 + len);
 }
 
-class GlbLevels : public ::testing::TestWithParam<bool> {};
+class GlbLevels : public ::testing::TestWithParam<GlbCodec> {};
 
 TEST_P(GlbLevels, EachLevelDecodesToItsRecordedCounts) {
   GlbOptions opt;
-  opt.draco = GetParam();
+  opt.codec = GetParam();
   const std::vector<MeshData> levels = {grid(8), grid(4), grid(2)};
   std::vector<GlbMeshCounts> counts;
   const std::vector<uint8_t> glb = encodeGlbLevels(levels, opt, &counts);
@@ -77,7 +77,8 @@ TEST_P(GlbLevels, EachLevelDecodesToItsRecordedCounts) {
   EXPECT_EQ(j.value("extensionsRequired", nlohmann::json::array()).dump().find("MSFT_lod"), std::string::npos);
 }
 
-INSTANTIATE_TEST_SUITE_P(PlainAndDraco, GlbLevels, ::testing::Bool());
+INSTANTIATE_TEST_SUITE_P(Codecs, GlbLevels, ::testing::Values(GlbCodec::Plain, GlbCodec::Draco, GlbCodec::Meshopt),
+                         [](const ::testing::TestParamInfo<GlbCodec>& i) { return std::string(glbCodecName(i.param)); });
 
 TEST(GlbLevelsCounts, MeshWithoutNormalsCountsUnweldedVertices) {
   MeshData m = grid(3);

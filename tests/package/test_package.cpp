@@ -35,6 +35,21 @@ TEST(Crc32c, KnownVectors) {
               crc32c(data.data(), data.size()));
 }
 
+// The CPU's CRC32 instruction (where there is one) and the tables agree on
+// every length and alignment, and both pass the known vectors.
+TEST(Crc32c, InstructionAndTablesAgree) {
+  EXPECT_EQ(detail::crc32cTables("123456789", 9), 0xE3069283u);
+#if defined(__x86_64__)
+  EXPECT_TRUE(detail::crc32cAccelerated()) << "x86-64 CPUs since 2008 have SSE4.2";
+#endif
+  const auto data = pattern(300, 3);
+  for (size_t off = 0; off < 9; ++off)
+    for (size_t n = 0; off + n <= data.size(); n += 7)
+      for (uint32_t seed : {0u, 0xDEADBEEFu})
+        ASSERT_EQ(crc32c(data.data() + off, n, seed), detail::crc32cTables(data.data() + off, n, seed))
+            << "offset " << off << " length " << n;
+}
+
 TEST(Format, TagsReadLeftToRight) {
   const uint32_t t = kSectionGraph;
   char c[4];
