@@ -334,6 +334,9 @@ bool CellLoader::decode(Staging& s) {
     return true;
   };
   const graph::StreetGraph& g = city_.graph();
+  // One open per block: its blob's CRC and GLB JSON once for all its levels
+  // (decision 0008 §13); the open's cost counts with level 0's.
+  stream::City::BlockBlob blob;
   for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b)
     for (uint32_t k = 0; k < city_.blocks()[*b].lod_count; ++k) {
       const graph::BlockRecord& rec = city_.blocks()[*b];
@@ -341,7 +344,12 @@ bool CellLoader::decode(Staging& s) {
       waitForGap(s, false, units);
       if (abandoned()) return false;
       const int64_t cpu0 = threadCpuNs();
-      const core::Status st = city_.decodeBlock(*b, k, s.scratch, err);
+      if (k == 0) {
+        const core::Status st = city_.openBlock(*b, blob, err);
+        if (st != core::Status::Ok) return fail(err);
+      }
+      const core::Status st = city_.decodeBlockLevel(blob, k, s.scratch, err);
+      if (k + 1 == rec.lod_count) blob.close();
       if (st != core::Status::Ok) return fail(err);
       if (!stage(MeshKind::Block, *b, k)) return true;
       learnCost(false, units, threadCpuNs() - cpu0);

@@ -1588,19 +1588,51 @@ Status decodeGlb(const uint8_t* data, size_t size, geo::MeshData& out, std::stri
   return decodeGlbLevel(data, size, 0, out, err);
 }
 
-Status decodeGlbLevel(const uint8_t* data, size_t size, uint32_t level, geo::MeshData& out, std::string& err) {
-  out.clear();
+struct GlbDocument::Impl {
+  json doc;
+  const uint8_t* bin = nullptr;
+  size_t bin_size = 0;
+};
+
+GlbDocument::GlbDocument() = default;
+GlbDocument::~GlbDocument() = default;
+GlbDocument::GlbDocument(GlbDocument&&) noexcept = default;
+GlbDocument& GlbDocument::operator=(GlbDocument&&) noexcept = default;
+
+bool GlbDocument::isOpen() const { return impl_ != nullptr; }
+
+Status GlbDocument::open(const uint8_t* data, size_t size, std::string& err) {
+  impl_.reset();
   Chunks c;
   if (const Status st = splitChunks(data, size, c, err); st != Status::Ok) return st;
-  const uint8_t *json_data = c.json_data, *bin = c.bin;
-  const size_t json_size = c.json_size, bin_size = c.bin_size;
   try {
-    const json doc = json::parse(json_data, json_data + json_size);
-    if (!doc.is_object()) {
+    auto impl = std::make_unique<Impl>();
+    impl->doc = json::parse(c.json_data, c.json_data + c.json_size);
+    if (!impl->doc.is_object()) {
       err = "GLB: JSON chunk is not an object";
       return Status::Corrupt;
     }
-    Decoder(doc, bin, bin_size, level).run(out);
+    impl->bin = c.bin;
+    impl->bin_size = c.bin_size;
+    impl_ = std::move(impl);
+    return Status::Ok;
+  } catch (const json::exception& e) {
+    err = std::string("GLB: JSON: ") + e.what();
+    return Status::Corrupt;
+  } catch (const std::bad_alloc&) {
+    err = "GLB: out of memory while parsing the JSON";
+    return Status::NoMem;
+  }
+}
+
+Status GlbDocument::decodeLevel(uint32_t level, geo::MeshData& out, std::string& err) const {
+  out.clear();
+  if (!impl_) {
+    err = "GLB: document not open";
+    return Status::Corrupt;
+  }
+  try {
+    Decoder(impl_->doc, impl_->bin, impl_->bin_size, level).run(out);
     return Status::Ok;
   } catch (const DecodeError& e) {
     err = "GLB: " + e.message;
@@ -1619,6 +1651,13 @@ Status decodeGlbLevel(const uint8_t* data, size_t size, uint32_t level, geo::Mes
     out.clear();
     return Status::Corrupt;
   }
+}
+
+Status decodeGlbLevel(const uint8_t* data, size_t size, uint32_t level, geo::MeshData& out, std::string& err) {
+  out.clear();
+  GlbDocument doc;
+  if (const Status st = doc.open(data, size, err); st != Status::Ok) return st;
+  return doc.decodeLevel(level, out, err);
 }
 
 namespace {

@@ -13,6 +13,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -115,6 +116,32 @@ core::Status decodeGlb(const uint8_t* data, size_t size, geo::MeshData& out, std
 // decodeGlb(). NotFound when the scene has no MSFT_lod node, or one has fewer
 // than `level` lower levels; Corrupt for a malformed MSFT_lod.
 core::Status decodeGlbLevel(const uint8_t* data, size_t size, uint32_t level, geo::MeshData& out, std::string& err);
+
+// A GLB whose JSON is parsed once, for decoding several of its levels one
+// after another (the loader decodes a block blob's levels of detail in
+// turn): decodeGlbLevel() parses the whole document at every call, which
+// for a small level is most of its decode (decision 0008 §13). The bytes
+// given to open() must stay valid while the document is used. Movable; one
+// thread at a time.
+class GlbDocument {
+ public:
+  GlbDocument();
+  ~GlbDocument();
+  GlbDocument(GlbDocument&&) noexcept;
+  GlbDocument& operator=(GlbDocument&&) noexcept;
+
+  // Splits the chunks and parses the JSON: the errors decodeGlb() gives for
+  // those. Never throws.
+  core::Status open(const uint8_t* data, size_t size, std::string& err);
+  bool isOpen() const;
+  // decodeGlbLevel() of the bytes given to open(); a document that is not
+  // open returns Corrupt saying so.
+  core::Status decodeLevel(uint32_t level, geo::MeshData& out, std::string& err) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // A copy of a GLB whose whole scene (LOD nodes included) is moved by `offset`
 // (glTF axes, metres): its scene roots and MSFT_lod level nodes gain the

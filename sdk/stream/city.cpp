@@ -85,9 +85,57 @@ core::Status City::decodeBlock(uint32_t b, geo::MeshData& out, std::string& err)
 
 core::Status City::decodeBlock(uint32_t b, uint32_t lod, geo::MeshData& out, std::string& err) const {
   out.clear();
+  if (b < blocks_.size() && lod >= blocks_[b].lod_count) {
+    err = "block " + std::to_string(b) + " has " + std::to_string(blocks_[b].lod_count) + " levels, level " +
+          std::to_string(lod) + " requested";
+    return core::Status::NotFound;
+  }
+  BlockBlob blob;
+  const core::Status st = openBlock(b, blob, err);
+  if (st != core::Status::Ok) return st;
+  return decodeBlockLevel(blob, lod, out, err);
+}
+
+void City::BlockBlob::close() {
+  if (reader_) reader_->dropPages(span_);  // decoded: the file's pages need not stay resident
+  reader_ = nullptr;
+  span_ = {};
+  glb_ = package::GlbDocument{};
+  block_ = 0xffffffffu;
+}
+
+core::Status City::openBlock(uint32_t b, BlockBlob& blob, std::string& err) const {
+  blob.close();
   if (b >= blocks_.size()) {
     err = "block " + std::to_string(b) + " does not exist";
     return core::Status::NotFound;
+  }
+  const graph::BlockRecord& rec = blocks_[b];
+  if (rec.lod_count == 0 || rec.blob == 0xffffffffu) {
+    err = "block " + std::to_string(b) + " is empty (no levels)";
+    return core::Status::NotFound;
+  }
+  package::Span s;
+  core::Status st = reader_.blob(rec.blob, s, err);
+  if (st != core::Status::Ok) return st;
+  blob.span_ = s;
+  blob.reader_ = &reader_;
+  st = blob.glb_.open(s.data, s.size, err);
+  if (st != core::Status::Ok) {
+    err = reader_.name() + ": block " + std::to_string(b) + " at offset " + std::to_string(s.offset) + ": " + err;
+    blob.close();
+    return st;
+  }
+  blob.block_ = b;
+  return core::Status::Ok;
+}
+
+core::Status City::decodeBlockLevel(const BlockBlob& blob, uint32_t lod, geo::MeshData& out, std::string& err) const {
+  out.clear();
+  const uint32_t b = blob.block_;
+  if (b >= blocks_.size() || !blob.glb_.isOpen()) {
+    err = "block blob not open";
+    return core::Status::Misuse;
   }
   const graph::BlockRecord& rec = blocks_[b];
   if (lod >= rec.lod_count) {
@@ -95,21 +143,19 @@ core::Status City::decodeBlock(uint32_t b, uint32_t lod, geo::MeshData& out, std
           std::to_string(lod) + " requested";
     return core::Status::NotFound;
   }
-  package::Span s;
-  core::Status st = reader_.blob(rec.blob, s, err);
-  if (st != core::Status::Ok) return st;
-  const std::string where =
-      reader_.name() + ": block " + std::to_string(b) + " level " + std::to_string(lod) + " at offset " + std::to_string(s.offset) + ": ";
-  st = package::decodeGlbLevel(s.data, s.size, lod, out, err);
-  reader_.dropPages(s);  // decoded: the file's pages need not stay resident
+  core::Status st = blob.glb_.decodeLevel(lod, out, err);
   if (st == core::Status::NotFound) st = core::Status::Corrupt;  // BLCK promised the level
+  auto where = [&] {
+    return reader_.name() + ": block " + std::to_string(b) + " level " + std::to_string(lod) + " at offset " +
+           std::to_string(blob.span_.offset) + ": ";
+  };
   if (st != core::Status::Ok) {
-    err = where + err;
+    err = where() + err;
     return st;
   }
   // Pools are sized from the record; a GLB that decodes to more would overrun them.
   if (out.vertexCount() != rec.vertices[lod] || out.triangleCount() != rec.triangles[lod]) {
-    err = where + "decodes to " + std::to_string(out.vertexCount()) + " vertices and " +
+    err = where() + "decodes to " + std::to_string(out.vertexCount()) + " vertices and " +
           std::to_string(out.triangleCount()) + " triangles, BLCK records " + std::to_string(rec.vertices[lod]) +
           " and " + std::to_string(rec.triangles[lod]);
     out.clear();

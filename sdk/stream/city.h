@@ -14,6 +14,7 @@
 #include "graph/cell_tables.h"
 #include "graph/segment_grid.h"
 #include "graph/street_graph.h"
+#include "package/glb.h"
 #include "package/reader.h"
 
 namespace blvd::stream {
@@ -48,6 +49,32 @@ class City {
   // empty block has none); Corrupt, naming the file, block and offset, when the
   // blob or GLB is bad or its level disagrees with the BLCK record.
   core::Status decodeBlock(uint32_t b, uint32_t lod, geo::MeshData& out, std::string& err) const;
+
+  // A block blob opened for decoding its levels one after another (the
+  // loader's order): the blob's CRC is checked and its GLB's JSON parsed
+  // once, not once per level, and its file pages are dropped once, when it
+  // closes (or goes away). decodeBlock(b, lod) is open + decode + close.
+  class BlockBlob {
+   public:
+    BlockBlob() = default;
+    ~BlockBlob() { close(); }
+    BlockBlob(const BlockBlob&) = delete;
+    BlockBlob& operator=(const BlockBlob&) = delete;
+    void close();
+    uint32_t block() const { return block_; }
+
+   private:
+    friend class City;
+    uint32_t block_ = 0xffffffffu;
+    package::Span span_{};
+    package::GlbDocument glb_;
+    const package::PackageReader* reader_ = nullptr;
+  };
+  // NotFound for a block that does not exist or has no levels (empty);
+  // Corrupt, naming the file, block and offset, for a bad blob or GLB.
+  core::Status openBlock(uint32_t b, BlockBlob& blob, std::string& err) const;
+  // As decodeBlock(blob.block(), lod): the same checks against the record.
+  core::Status decodeBlockLevel(const BlockBlob& blob, uint32_t lod, geo::MeshData& out, std::string& err) const;
 
   // The cell nearest to local point p whose direction best matches heading_deg
   // (clockwise from north); kNone for an empty graph. Also returns the arc

@@ -77,6 +77,38 @@ TEST_P(GlbLevels, EachLevelDecodesToItsRecordedCounts) {
   EXPECT_EQ(j.value("extensionsRequired", nlohmann::json::array()).dump().find("MSFT_lod"), std::string::npos);
 }
 
+// GlbDocument: parsed once, each level decodes to what decodeGlbLevel gives.
+TEST_P(GlbLevels, ADocumentParsedOnceDecodesEveryLevel) {
+  GlbOptions opt;
+  opt.codec = GetParam();
+  const std::vector<uint8_t> glb = encodeGlbLevels({grid(8), grid(4), grid(2)}, opt);
+  GlbDocument doc;
+  std::string err;
+  EXPECT_FALSE(doc.isOpen());
+  MeshData out;
+  EXPECT_EQ(doc.decodeLevel(0, out, err), Status::Corrupt);
+  EXPECT_NE(err.find("not open"), std::string::npos) << err;
+  ASSERT_EQ(doc.open(glb.data(), glb.size(), err), Status::Ok) << err;
+  for (uint32_t k : {2u, 0u, 1u, 1u}) {  // any order, any number of times
+    MeshData once, each;
+    ASSERT_EQ(doc.decodeLevel(k, once, err), Status::Ok) << err;
+    ASSERT_EQ(decodeGlbLevel(glb.data(), glb.size(), k, each, err), Status::Ok) << err;
+    EXPECT_EQ(once.positions, each.positions) << "level " << k;
+    EXPECT_EQ(once.indices, each.indices) << "level " << k;
+    EXPECT_EQ(once.colors, each.colors) << "level " << k;
+  }
+  EXPECT_EQ(doc.decodeLevel(3, out, err), Status::NotFound);
+  EXPECT_TRUE(out.empty());
+  // A failed open leaves the document closed; the errors are decodeGlb's.
+  std::vector<uint8_t> cut(glb.begin(), glb.begin() + 30);
+  EXPECT_EQ(doc.open(cut.data(), cut.size(), err), Status::Corrupt);
+  EXPECT_FALSE(doc.isOpen());
+  MeshData direct;
+  std::string direct_err;
+  EXPECT_EQ(decodeGlb(cut.data(), cut.size(), direct, direct_err), Status::Corrupt);
+  EXPECT_EQ(err, direct_err);
+}
+
 INSTANTIATE_TEST_SUITE_P(Codecs, GlbLevels, ::testing::Values(GlbCodec::Plain, GlbCodec::Draco, GlbCodec::Meshopt),
                          [](const ::testing::TestParamInfo<GlbCodec>& i) { return std::string(glbCodecName(i.param)); });
 

@@ -40,7 +40,26 @@ TEST(MonacoPackage, EveryBlockLevelDecodesToItsRecordedCounts) {
     geo::MeshData m;
     std::string err;
     EXPECT_EQ(city().decodeBlock(b, r.lod_count, m, err), core::Status::NotFound);
+    // Opened once, as the loader decodes: every level the same as decodeBlock's.
+    if (r.lod_count == 0 || b % 7) continue;
+    stream::City::BlockBlob blob;
+    ASSERT_EQ(city().openBlock(b, blob, err), core::Status::Ok) << err;
+    EXPECT_EQ(blob.block(), b);
+    for (uint32_t k = r.lod_count; k-- > 0;) {
+      geo::MeshData once, each;
+      ASSERT_EQ(city().decodeBlockLevel(blob, k, once, err), core::Status::Ok) << err;
+      ASSERT_EQ(city().decodeBlock(b, k, each, err), core::Status::Ok) << err;
+      ASSERT_EQ(once.positions, each.positions) << "block " << b << " level " << k;
+      ASSERT_EQ(once.indices, each.indices) << "block " << b << " level " << k;
+    }
+    EXPECT_EQ(city().decodeBlockLevel(blob, r.lod_count, m, err), core::Status::NotFound);
+    blob.close();
+    EXPECT_EQ(city().decodeBlockLevel(blob, 0, m, err), core::Status::Misuse);
   }
+  stream::City::BlockBlob none;
+  std::string err;
+  EXPECT_EQ(city().openBlock(uint32_t(blocks.size()), none, err), core::Status::NotFound);
+  EXPECT_NE(err.find("does not exist"), std::string::npos) << err;
   // The default bake makes a chain for nearly every block.
   EXPECT_GT(multi, blocks.size() * 9 / 10);
 }
