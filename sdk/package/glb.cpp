@@ -216,7 +216,7 @@ struct Parts {
 
   // One compressed view: its bytes in the BIN chunk, its decoded layout
   // (count x stride) in the fallback buffer. Vertex views state byteStride,
-  // index views must not (glTF 2.0 §5.11).
+  // index views must not (glTF 2.0: byteStride is for vertex attributes only).
   size_t addMeshoptView(const std::vector<uint8_t>& compressed, size_t count, size_t stride, MeshoptMode mode,
                         MeshoptFilter filter, int target) {
     while (bin.size() % 4) bin.push_back(0);
