@@ -38,12 +38,14 @@ import os
 cpus = len(os.sched_getaffinity(0))
 assert pj["prefetch_cpu_mask"] == 0 and (pj["prefetch_kept_off_cpu"] >= 0) == (cpus > 1), (pj, cpus)
 assert b["fps"] == 0 and b["step_m"] == 2, b  # the default: back to back, 2 m apart
-# Paced frames start on the display's ticks: typically one period apart, never near back to back
-# (a timer wakes up late by a millisecond or more on a loaded VM, so no tighter bound).
+# Paced frames start on the display's ticks: typically one period apart, and 95 % of them at
+# least half a period apart. Not all: a frame whose timer woke late (by 7 ms once, in CI with
+# qemu tests beside it) is followed by one on the next tick, a short gap after it.
 for run in ("floor", "budgeted"):
     t = [float(r["start_mono_s"]) for r in csv.DictReader(open(sys.argv[5])) if r["run"] == run]
     gaps = sorted(c - a for a, c in zip(t, t[1:]))
-    assert len(gaps) > 20 and gaps[0] > 0.5 / 120 and 0.95 / 120 < gaps[len(gaps) // 2] < 1.5 / 120, (run, gaps[0], gaps[len(gaps) // 2])
+    p5 = gaps[len(gaps) // 20]
+    assert len(gaps) > 20 and p5 > 0.5 / 120 and 0.95 / 120 < gaps[len(gaps) // 2] < 1.5 / 120, (run, p5, gaps[len(gaps) // 2])
 for run in {r["run"] for r in rows}:  # frames of one run in order on the monotonic clock (tools/frame_sched.py)
     t = [float(r["start_mono_s"]) for r in rows if r["run"] == run]
     assert all(a < c for a, c in zip(t, t[1:])), run
