@@ -440,6 +440,17 @@ json addMeshoptPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts
   };
   json& accessors = parts.accessors;
   json attributes = json::object();
+  // One vertex attribute: its raw elements compressed into a view, and its accessor.
+  auto attribute = [&](const char* name, const std::vector<uint8_t>& raw, size_t stride, MeshoptFilter f, int ctype,
+                       const char* type) {
+    const std::vector<uint8_t> c = encodeMeshoptAttributes(raw.data(), n, stride);
+    json acc = {{"bufferView", parts.addMeshoptView(c, n, stride, MeshoptMode::Attributes, f, kArrayBuffer)},
+                {"componentType", ctype}, {"count", n}, {"type", type}};
+    if (ctype != kFloat) acc["normalized"] = true;
+    attributes[name] = accessors.size();
+    accessors.push_back(acc);
+    return c;
+  };
 
   // POSITION: float32, exponential filter (one exponent per vertex).
   {
@@ -452,13 +463,12 @@ json addMeshoptPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts
     } else {
       std::memcpy(raw.data(), pos.data(), raw.size());
     }
-    const std::vector<uint8_t> c = encodeMeshoptAttributes(raw.data(), n, 12);
+    const std::vector<uint8_t> c = attribute("POSITION", raw, 12, f, kFloat, "VEC3");
     const std::vector<uint8_t> back = ownDecode(c, n, 12, MeshoptMode::Attributes, f);
     std::array<float, 3> lo, hi;
     minMax(reinterpret_cast<const float*>(back.data()), n, lo, hi);
-    attributes["POSITION"] = accessors.size();
-    accessors.push_back({{"bufferView", parts.addMeshoptView(c, n, 12, MeshoptMode::Attributes, f, kArrayBuffer)},
-                         {"componentType", kFloat}, {"count", n}, {"type", "VEC3"}, {"min", lo}, {"max", hi}});
+    accessors.back()["min"] = lo;
+    accessors.back()["max"] = hi;
   }
   // NORMAL: octahedral filter into snorm8 (bits <= 8) or snorm16 (4 or 8
   // bytes per vertex, the 4th component unused), or float32.
@@ -487,20 +497,10 @@ json addMeshoptPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts
       raw.resize(n * 12);
       std::memcpy(raw.data(), nrm.data(), raw.size());
     }
-    const std::vector<uint8_t> c = encodeMeshoptAttributes(raw.data(), n, stride);
-    json acc = {{"bufferView", parts.addMeshoptView(c, n, stride, MeshoptMode::Attributes, f, kArrayBuffer)},
-                {"componentType", ctype}, {"count", n}, {"type", "VEC3"}};
-    if (ctype != kFloat) acc["normalized"] = true;
-    attributes["NORMAL"] = accessors.size();
-    accessors.push_back(acc);
+    attribute("NORMAL", raw, stride, f, ctype, "VEC3");
   }
   if (!mesh.colors.empty()) {
-    const std::vector<uint8_t> lin = reordered(linearColors(mesh), 4);
-    const std::vector<uint8_t> c = encodeMeshoptAttributes(lin.data(), n, 4);
-    attributes["COLOR_0"] = accessors.size();
-    accessors.push_back({{"bufferView", parts.addMeshoptView(c, n, 4, MeshoptMode::Attributes, MeshoptFilter::None,
-                                                             kArrayBuffer)},
-                         {"componentType", kUnsignedByte}, {"normalized", true}, {"count", n}, {"type", "VEC4"}});
+    attribute("COLOR_0", reordered(linearColors(mesh), 4), 4, MeshoptFilter::None, kUnsignedByte, "VEC4");
   }
   // TEXCOORD_0: unorm16 when every uv is in [0, 1] (impostor uvs are), else float32.
   if (!mesh.texcoords.empty()) {
@@ -520,13 +520,7 @@ json addMeshoptPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts
       raw.resize(uv.size() * 4);
       std::memcpy(raw.data(), uv.data(), raw.size());
     }
-    const std::vector<uint8_t> c = encodeMeshoptAttributes(raw.data(), n, stride);
-    json acc = {{"bufferView", parts.addMeshoptView(c, n, stride, MeshoptMode::Attributes, MeshoptFilter::None,
-                                                    kArrayBuffer)},
-                {"componentType", unit ? kUnsignedShort : kFloat}, {"count", n}, {"type", "VEC2"}};
-    if (unit) acc["normalized"] = true;
-    attributes["TEXCOORD_0"] = accessors.size();
-    accessors.push_back(acc);
+    attribute("TEXCOORD_0", raw, stride, MeshoptFilter::None, unit ? kUnsignedShort : kFloat, "VEC2");
   }
   const int ictype = componentForIndices(n);
   const size_t isize = ictype == kUnsignedShort ? 2 : 4;
@@ -854,6 +848,14 @@ class Decoder {
     uint32_t stride = 0;  // 0 = tightly packed
   };
 
+  // A bufferView's byteStride, 0 when absent (tightly packed).
+  static uint32_t viewStride(const json& v, const std::string& where) {
+    const uint64_t stride = unsignedMember(v, "byteStride", where, 0);
+    if (stride != 0 && (stride < 4 || stride > 252 || stride % 4))
+      fail(where + ".byteStride: " + std::to_string(stride) + " is not in 4..252 and a multiple of 4");
+    return static_cast<uint32_t>(stride);
+  }
+
   // The bytes an object's buffer / byteOffset / byteLength name (a
   // bufferView, or its EXT_meshopt_compression source), bounds-checked.
   Bytes bufferRange(const json& o, const std::string& where) {
@@ -875,10 +877,7 @@ class Decoder {
         return meshoptView(i, v, object(*mo, where + ".extensions.EXT_meshopt_compression"), where);
     View view;
     view.bytes = bufferRange(v, where);
-    const uint64_t stride = unsignedMember(v, "byteStride", where, 0);
-    if (stride != 0 && (stride < 4 || stride > 252 || stride % 4))
-      fail(where + ".byteStride: " + std::to_string(stride) + " is not in 4..252 and a multiple of 4");
-    view.stride = static_cast<uint32_t>(stride);
+    view.stride = viewStride(v, where);
     return view;
   }
 
@@ -892,12 +891,10 @@ class Decoder {
     const uint64_t stride = unsignedMember(ext, "byteStride", ewhere);
     const uint64_t n = unsignedMember(ext, "count", ewhere);
     const uint64_t parent_len = unsignedMember(v, "byteLength", where);
-    const uint64_t parent_stride = unsignedMember(v, "byteStride", where, 0);
+    const uint64_t parent_stride = viewStride(v, where);
     if (parent_stride != 0 && parent_stride != stride)
       fail(where + ".byteStride: " + std::to_string(parent_stride) + " differs from the extension's " +
            std::to_string(stride));
-    if (parent_stride != 0 && (parent_stride < 4 || parent_stride > 252 || parent_stride % 4))
-      fail(where + ".byteStride: " + std::to_string(parent_stride) + " is not in 4..252 and a multiple of 4");
     if (n > 3 * kMaxDecodedVertices)
       fail(ewhere + ".count: " + std::to_string(n) + " elements exceed the decoder limit", Status::Unsupported);
     if (stride > 256 || parent_len != stride * n)

@@ -83,13 +83,16 @@ core::Status City::decodeBlock(uint32_t b, geo::MeshData& out, std::string& err)
   return decodeBlock(b, 0, out, err);
 }
 
+core::Status City::levelMissing(uint32_t b, uint32_t lod, std::string& err) const {
+  err = "block " + std::to_string(b) + " has " + std::to_string(blocks_[b].lod_count) + " levels, level " +
+        std::to_string(lod) + " requested";
+  return core::Status::NotFound;
+}
+
 core::Status City::decodeBlock(uint32_t b, uint32_t lod, geo::MeshData& out, std::string& err) const {
   out.clear();
-  if (b < blocks_.size() && lod >= blocks_[b].lod_count) {
-    err = "block " + std::to_string(b) + " has " + std::to_string(blocks_[b].lod_count) + " levels, level " +
-          std::to_string(lod) + " requested";
-    return core::Status::NotFound;
-  }
+  // Checked before the open, so a missing level costs no parse.
+  if (b < blocks_.size() && lod >= blocks_[b].lod_count) return levelMissing(b, lod, err);
   BlockBlob blob;
   const core::Status st = openBlock(b, blob, err);
   if (st != core::Status::Ok) return st;
@@ -138,11 +141,7 @@ core::Status City::decodeBlockLevel(const BlockBlob& blob, uint32_t lod, geo::Me
     return core::Status::Misuse;
   }
   const graph::BlockRecord& rec = blocks_[b];
-  if (lod >= rec.lod_count) {
-    err = "block " + std::to_string(b) + " has " + std::to_string(rec.lod_count) + " levels, level " +
-          std::to_string(lod) + " requested";
-    return core::Status::NotFound;
-  }
+  if (lod >= rec.lod_count) return levelMissing(b, lod, err);
   core::Status st = blob.glb_.decodeLevel(lod, out, err);
   if (st == core::Status::NotFound) st = core::Status::Corrupt;  // BLCK promised the level
   auto where = [&] {

@@ -90,6 +90,7 @@ class City {
   double cellCost(uint32_t cell, glm::dvec2 p, double heading_deg, double* arc_m, bool* at_end) const;
 
  private:
+  core::Status levelMissing(uint32_t b, uint32_t lod, std::string& err) const;  // NotFound, naming both
   package::PackageReader reader_;
   graph::StreetGraph graph_;
   std::vector<graph::BlockRecord> blocks_;
