@@ -136,6 +136,7 @@ Staging* CellLoader::finished() {
 
 void CellLoader::release(Staging* s) {
   std::lock_guard<std::mutex> lock(mu_);
+  unaccount(*s);
   s->state = Staging::Free;
   s->cell = 0xffffffffu;
   s->uploaded = 0;
@@ -155,12 +156,17 @@ bool CellLoader::decodingInBackground(uint32_t cell) const {
   return false;
 }
 
-uint64_t CellLoader::stagingUsed() const {
-  std::lock_guard<std::mutex> lock(mu_);
-  uint64_t n = 0;
-  for (const Staging& s : slots_)
-    if (s.state == Staging::Ready || s.state == Staging::Decoding) n += s.arena.used;
-  return n;
+void CellLoader::account(Staging& s) {
+  const uint64_t now = staging_used_.fetch_add(s.arena.used - s.accounted) + (s.arena.used - s.accounted);
+  s.accounted = s.arena.used;
+  uint64_t seen = staging_high_water_.load();
+  while (now > seen && !staging_high_water_.compare_exchange_weak(seen, now)) {
+  }
+}
+
+void CellLoader::unaccount(Staging& s) {
+  staging_used_.fetch_sub(s.accounted);
+  s.accounted = 0;
 }
 
 void CellLoader::promote(uint32_t cell) {
@@ -292,6 +298,7 @@ void CellLoader::learnCost(bool impostor, double units, int64_t cpu_ns) {
 }
 
 bool CellLoader::decode(Staging& s) {
+  unaccount(s);  // nothing is counted for a slot that was free; kept exact regardless
   s.arena.reset();
   s.mesh_count = 0;
   s.uploaded = 0;
@@ -305,6 +312,7 @@ bool CellLoader::decode(Staging& s) {
   };
   // An urgent copy took over (promote): give the slot back. Under mu_.
   auto give_back = [&] {
+    unaccount(s);
     s.state = Staging::Free;
     s.cell = 0xffffffffu;
     s.abandon = false;
@@ -324,6 +332,7 @@ bool CellLoader::decode(Staging& s) {
     m.item = item;
     m.level = level;
     ++s.mesh_count;
+    account(s);
     const uint64_t scratch_bytes = s.scratch.positions.capacity() * 4 + s.scratch.normals.capacity() * 4 +
                                    s.scratch.colors.capacity() + s.scratch.texcoords.capacity() * 4 +
                                    s.scratch.indices.capacity() * 4 + s.scratch.image.capacity();
@@ -371,7 +380,6 @@ bool CellLoader::decode(Staging& s) {
       }
     }
   }
-  if (s.arena.used > staging_high_water_) staging_high_water_ = s.arena.used;
   std::lock_guard<std::mutex> lock(mu_);
   // promote() may have started the urgent copy after the last mesh's check:
   // the copy delivers the cell, this one is not a load (both would be

@@ -53,6 +53,7 @@ struct Staging {
   StagedMesh* meshes = nullptr;
   uint32_t mesh_count = 0, mesh_capacity = 0;
   uint32_t uploaded = 0;  // render thread: meshes already copied to the slab
+  uint64_t accounted = 0; // arena bytes counted in the pool's used bytes (CellLoader::account)
   bool urgent = false;    // the current cell: decoded at normal priority
   // Set when the cell became current while a background thread decodes it:
   // an urgent copy of the request takes over and this one stops at its next
@@ -122,7 +123,9 @@ class CellLoader {
   int keptOffCpu() const { return kept_off_; }
 
   uint64_t loads() const { return loads_; }
-  uint64_t stagingUsed() const;  // arena bytes held by busy slots
+  // Arena bytes held now by every slot together (decoding, ready or failed
+  // and not yet released), and the most they ever held together.
+  uint64_t stagingUsed() const { return staging_used_; }
   uint64_t decodeHighWater() const { return decode_high_water_; }
   uint64_t stagingHighWater() const { return staging_high_water_; }
   uint64_t carvedBytes() const { return carved_; }
@@ -139,6 +142,11 @@ class CellLoader {
   // at the rate measured so far for its kind.
   void waitForGap(Staging& s, bool impostor, double units);
   void learnCost(bool impostor, double units, int64_t cpu_ns);
+  // The pool's used bytes follow each slot's arena: account() after the
+  // decoder staged a mesh (and raises the high-water mark), unaccount() when
+  // the slot is handed back.
+  void account(Staging& s);
+  void unaccount(Staging& s);
   // Host-executor path: decodes the oldest queued slot, if any.
   static void runTask(void* self);
   void runOne();
@@ -165,7 +173,7 @@ class CellLoader {
   int render_cpu_ = -1;     // render thread only: the CPU keepOffCpu() last saw
   int kept_off_ = -1;
   std::atomic<uint64_t> loads_{0};
-  std::atomic<uint64_t> decode_high_water_{0}, staging_high_water_{0};
+  std::atomic<uint64_t> decode_high_water_{0}, staging_used_{0}, staging_high_water_{0};
 };
 
 }  // namespace blvd::capi

@@ -153,6 +153,9 @@ TEST(RuntimeStream, DriveStaysWithinItsSlotsAndTheStatsAddUp) {
     ASSERT_LE(s.gpu.used_bytes, s.gpu.capacity_bytes);
     ASSERT_LE(s.gpu.high_water_bytes, s.gpu.capacity_bytes);
     ASSERT_LE(s.staging.high_water_bytes, s.staging.capacity_bytes);
+    // Pool-wide figures: both slots' bytes together, never one slot's.
+    ASSERT_LE(s.gpu.used_bytes, s.gpu.high_water_bytes);
+    ASSERT_LE(s.staging.used_bytes, s.staging.high_water_bytes);
   }
   const blvd_stats s = statsOf(r.rt);
   EXPECT_EQ(s.frames, frames);
