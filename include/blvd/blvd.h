@@ -182,6 +182,14 @@ typedef struct blvd_runtime_desc {
    * host executor. A mask naming none of the creating thread's CPUs fails create with
    * BLVD_ERR_INVALID_ARG. */
   uint64_t prefetch_cpu_mask;
+
+  /* The most of the wall time that predicted cells' decoding may take, for blvd's prediction threads
+   * of every runtime in the process together: a token bucket holding at most 0.25 ms, charged with
+   * each predicted mesh's CPU time. A host drawing back to back on a CPU renderer has no idle core,
+   * so a cell decoded at once lands in the frame that entered the cell; bounded, it is spread over
+   * the frames after. 0 means 0.1; within (0, 1], or negative for no bound. The current cell is never
+   * held back, and no mesh waits more than 100 ms. No effect with a host executor. */
+  float prefetch_share;
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */
@@ -286,6 +294,8 @@ typedef struct blvd_stats {
                                   * (within the CPUs it inherited at create) so that the CPU idles when
                                   * the render thread waits; -1 when not applied (one CPU allowed, a host
                                   * executor, or the affinity call refused) */
+  uint64_t prefetch_share_waits;  /* predicted meshes held back by blvd_runtime_desc.prefetch_share */
+  double prefetch_share_wait_ms;  /* their waits in all */
 } blvd_stats;
 
 /* Fills *stats. Render thread. */

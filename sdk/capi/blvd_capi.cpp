@@ -87,6 +87,7 @@ blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* in) {
   if (!d.route_capacity) d.route_capacity = 4096;
   if (d.lod_error_px == 0) d.lod_error_px = 1.f;
   if (d.min_render_scale == 0) d.min_render_scale = 1.f;
+  if (d.prefetch_share == 0) d.prefetch_share = 0.1f;
   return d;
 }
 
@@ -135,6 +136,10 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
       d.prefetch_priority != BLVD_PREFETCH_IDLE_ANYTIME) {
     t_create_error = "blvd_runtime_create: prefetch_priority must be BLVD_PREFETCH_IDLE, BLVD_PREFETCH_LOW or "
                      "BLVD_PREFETCH_IDLE_ANYTIME";
+    return BLVD_ERR_INVALID_ARG;
+  }
+  if (!(d.prefetch_share < 0 || (d.prefetch_share > 0 && d.prefetch_share <= 1))) {
+    t_create_error = "blvd_runtime_create: prefetch_share must be within (0, 1], or negative for no bound (0 means 0.1)";
     return BLVD_ERR_INVALID_ARG;
   }
   if (!d.allocator.alloc != !d.allocator.free) {

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "capi/frame_clock.h"
+#include "capi/prefetch_share.h"
 #include "core/status.h"
 
 namespace blvd::capi {
@@ -42,8 +43,14 @@ void Allocator::release(void* p) const {
 }
 
 CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes,
-                       const blvd_executor& executor, bool low_prefetch, bool pace_to_frames, uint64_t cpu_mask)
-    : city_(city), alloc_(alloc), executor_(executor), low_prefetch_(low_prefetch), pace_to_frames_(pace_to_frames) {
+                       const blvd_executor& executor, bool low_prefetch, bool pace_to_frames, uint64_t cpu_mask,
+                       double share)
+    : city_(city),
+      alloc_(alloc),
+      executor_(executor),
+      low_prefetch_(low_prefetch),
+      pace_to_frames_(pace_to_frames),
+      share_(share > 0 ? share : 0) {
   // The threads inherit the constructing thread's CPUs; keepOffCpu() only
   // ever narrows that set. Checked before anything is carved.
   CPU_ZERO(&allowed_);
@@ -281,14 +288,18 @@ void CellLoader::run(bool background) {
 }
 
 void CellLoader::waitForGap(Staging& s, bool impostor, double units) {
-  if (!pace_to_frames_ || s.urgent || executor_.submit) return;
+  if (s.urgent || executor_.submit) return;
   const int64_t cost = int64_t(rate_ns_[impostor] * units * kCostMargin);
   auto cancel = [](void* p) { return static_cast<Staging*>(p)->abandon.load(std::memory_order_relaxed); };
-  const int64_t waited = FrameClocks::waitForGap(cost, kMaxGapWaitNs, cancel, &s);
-  if (waited > 200000) {  // more than the check itself
-    gap_waits_.fetch_add(1, std::memory_order_relaxed);
-    gap_wait_ns_.fetch_add(uint64_t(waited), std::memory_order_relaxed);
-  }
+  auto count = [](int64_t waited, std::atomic<uint64_t>& n, std::atomic<uint64_t>& ns) {
+    if (waited <= 200000) return;  // not more than the check itself
+    n.fetch_add(1, std::memory_order_relaxed);
+    ns.fetch_add(uint64_t(waited), std::memory_order_relaxed);
+  };
+  // The share first: its tokens keep accruing while the gap is waited for,
+  // and a mesh then starts at the gap's beginning, not late into it.
+  count(prefetch_share::wait(cost, share_, kMaxGapWaitNs, cancel, &s), share_waits_, share_wait_ns_);
+  if (pace_to_frames_) count(FrameClocks::waitForGap(cost, kMaxGapWaitNs, cancel, &s), gap_waits_, gap_wait_ns_);
 }
 
 void CellLoader::learnCost(bool impostor, double units, int64_t cpu_ns) {
@@ -361,7 +372,9 @@ bool CellLoader::decode(Staging& s) {
       if (k + 1 == rec.lod_count) blob.close();
       if (st != core::Status::Ok) return fail(err);
       if (!stage(MeshKind::Block, *b, k)) return true;
-      learnCost(false, units, threadCpuNs() - cpu0);
+      const int64_t cpu = threadCpuNs() - cpu0;
+      learnCost(false, units, cpu);
+      if (!s.urgent) prefetch_share::charge(cpu, share_);
     }
   if (s.cell < city_.cellTables().impostors.size()) {
     const graph::CellImpostors& ci = city_.cellTables().impostors[s.cell];
@@ -376,7 +389,9 @@ bool CellLoader::decode(Staging& s) {
         const core::Status st = city_.decodeImpostor(list[i], s.scratch, err);
         if (st != core::Status::Ok) return fail(err);
         if (!stage(single ? MeshKind::Single : MeshKind::Layered, i, 0)) return true;
-        learnCost(true, units, threadCpuNs() - cpu0);
+        const int64_t cpu = threadCpuNs() - cpu0;
+        learnCost(true, units, cpu);
+        if (!s.urgent) prefetch_share::charge(cpu, share_);
       }
     }
   }

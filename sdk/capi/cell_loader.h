@@ -77,9 +77,11 @@ class CellLoader {
   // `cpu_mask` (blvd_runtime_desc.prefetch_cpu_mask): non-zero pins the
   // background thread to those CPUs (within the constructing thread's;
   // core::Error(InvalidArg) when none is left) and turns keepOffCpu() off.
+  // `share` (blvd_runtime_desc.prefetch_share): the background thread's
+  // meshes wait in the process-wide prefetch_share bucket (0: no bound).
   CellLoader(const stream::City& city, const Allocator& alloc, uint64_t arena_bytes, uint32_t meshes,
              const blvd_executor& executor = blvd_executor{}, bool low_prefetch = false, bool pace_to_frames = false,
-             uint64_t cpu_mask = 0);
+             uint64_t cpu_mask = 0, double share = 0);
   ~CellLoader();
   CellLoader(const CellLoader&) = delete;
   CellLoader& operator=(const CellLoader&) = delete;
@@ -132,6 +134,9 @@ class CellLoader {
   // Background meshes that waited for a gap between frames, and how long.
   uint64_t gapWaits() const { return gap_waits_; }
   double gapWaitMs() const { return double(gap_wait_ns_) * 1e-6; }
+  // Background meshes held back by the share, and how long.
+  uint64_t shareWaits() const { return share_waits_; }
+  double shareWaitMs() const { return double(share_wait_ns_) * 1e-6; }
 
  private:
   void run(bool background);
@@ -164,9 +169,10 @@ class CellLoader {
   blvd_executor executor_{};
   bool low_prefetch_ = false;
   bool pace_to_frames_ = false;
+  double share_ = 0;  // of the wall time, for the process's predictions together (0: no bound)
   // Background thread only: decode CPU nanoseconds per unit, by kind (0 until measured).
   double rate_ns_[2] = {0, 0};
-  std::atomic<uint64_t> gap_waits_{0}, gap_wait_ns_{0};
+  std::atomic<uint64_t> gap_waits_{0}, gap_wait_ns_{0}, share_waits_{0}, share_wait_ns_{0};
   uint32_t tasks_out_ = 0;  // submitted to the host and not yet run
   cpu_set_t allowed_{};     // the prediction thread's CPUs as inherited at construction
   bool pinned_ = false;     // cpu_mask given: keepOffCpu() does nothing

@@ -32,7 +32,8 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   if (!alloc.alloc != !alloc.free) throw Error(Status::InvalidArg, "allocator needs both alloc and free, or neither");
   loader_ = std::make_unique<CellLoader>(city_, alloc, plan_.staging_arena_bytes, plan_.staging_meshes, desc.executor,
                                          desc.prefetch_priority == BLVD_PREFETCH_LOW,
-                                         desc.prefetch_priority == BLVD_PREFETCH_IDLE, desc.prefetch_cpu_mask);
+                                         desc.prefetch_priority == BLVD_PREFETCH_IDLE, desc.prefetch_cpu_mask,
+                                         desc.prefetch_share > 0 ? desc.prefetch_share : 0.0);
   clock_ = FrameClocks::acquire();  // none left: this runtime's frames are not waited for
 
   ctx_ = render::createContext(static_cast<render::Backend>(desc.backend), err);
@@ -601,6 +602,8 @@ void Runtime::stats(blvd_stats* out) const {
   s.prefetch_gap_waits = loader_->gapWaits();
   s.prefetch_gap_wait_ms = loader_->gapWaitMs();
   s.prefetch_kept_off_cpu = loader_->keptOffCpu();
+  s.prefetch_share_waits = loader_->shareWaits();
+  s.prefetch_share_wait_ms = loader_->shareWaitMs();
   std::memcpy(out, &s, std::min<size_t>(s.struct_size, sizeof s));
 }
 

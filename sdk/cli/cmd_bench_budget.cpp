@@ -50,6 +50,7 @@ struct BudgetOpts {
   double speed_kmh = 0;        // with fps: the vehicle's speed, giving the step (0: --step)
   std::string prefetch = "idle";  // blvd_runtime_desc.prefetch_priority: idle, low or anytime
   uint64_t prefetch_cpus = 0;     // blvd_runtime_desc.prefetch_cpu_mask (0: off the render thread's CPU)
+  double prefetch_share = 0;      // blvd_runtime_desc.prefetch_share (0: the default 0.1; < 0: no bound)
 };
 
 // A display's refresh, as a host drawing at vsync sees it: a frame starts on
@@ -91,6 +92,7 @@ Runtime create(const BudgetOpts& o, int w, int h, blvd_render_mode mode, float t
                         : o.prefetch == "anytime" ? BLVD_PREFETCH_IDLE_ANYTIME
                                                   : BLVD_PREFETCH_IDLE;
   d.prefetch_cpu_mask = o.prefetch_cpus;
+  d.prefetch_share = float(o.prefetch_share);
   blvd_runtime* rt = nullptr;
   check(blvd_runtime_create(&d, &rt), nullptr, "create runtime");
   return Runtime(rt, blvd_runtime_destroy);
@@ -334,6 +336,9 @@ int runBudget(const BudgetOpts& o) {
   j["prefetch_gap_waits"] = bs.prefetch_gap_waits;
   j["prefetch_gap_wait_ms"] = bs.prefetch_gap_wait_ms;
   j["prefetch_cpu_mask"] = o.prefetch_cpus;
+  j["prefetch_share"] = o.prefetch_share == 0 ? 0.1 : o.prefetch_share;
+  j["prefetch_share_waits"] = bs.prefetch_share_waits;
+  j["prefetch_share_wait_ms"] = bs.prefetch_share_wait_ms;
   j["prefetch_kept_off_cpu"] = bs.prefetch_kept_off_cpu;
   // Frames that found their cell not resident (each waited for and drawn
   // again, the second time kept): a prefetch that falls behind shows here.
@@ -424,6 +429,9 @@ void addBenchBudget(CLI::App& bench, Runner& run) {
                 "CPU mask of the prediction threads (bit i: CPU i; 0x3 lets them share the render thread's CPU on "
                 "2 cores); 0: every CPU but the render thread's")
       ->capture_default_str();
+  b->add_option("--prefetch-share", o->prefetch_share,
+                "the most of the wall time the process's predictions may decode (0: the runtime's 0.1; -1: no bound)")
+      ->capture_default_str()->check(CLI::Range(-1.0, 1.0));
   b->add_option("--size", o->size)->capture_default_str();
   b->add_option("--resident-cells", o->resident_cells, "cell slots (0: the runtime's default)")->capture_default_str();
   b->add_option("--json", o->json_path, "write the JSON here too");

@@ -22,6 +22,7 @@
 #include "runtime_fixture.h"
 #include "capi/frame_clock.h"
 #include "capi/memory_plan.h"
+#include "capi/prefetch_share.h"
 #include "stream/city.h"
 
 namespace {
@@ -116,6 +117,45 @@ TEST(CellLoader, StagingUsedAndHighWaterCountBothSlots) {
   l.loader->release(second);
   EXPECT_EQ(l.loader->stagingUsed(), 0u);
   EXPECT_EQ(l.loader->stagingHighWater(), mark) << "a high-water mark never falls";
+}
+
+// blvd_runtime_desc.prefetch_share (decision 0008 §14): a prediction waits
+// for the process's tokens; the current cell's decode never does.
+TEST(CellLoader, ShareHoldsPredictionsButNeverTheCurrentCell) {
+  std::string err;
+  stream::City city;
+  ASSERT_EQ(city.open(BLVD_TEST_PACKAGE, err), core::Status::Ok) << err;
+  blvd_runtime_desc d{};
+  d.struct_size = sizeof d;
+  d.max_resident_cells = 4;
+  const capi::MemoryPlan plan = capi::planMemory(d, city);
+  const double share = 0.2;
+  capi::CellLoader loader(city, capi::Allocator{}, plan.staging_arena_bytes, plan.staging_meshes, blvd_executor{},
+                          false, false, 0, share);
+  auto finish = [&](uint32_t cell, bool urgent) {
+    const auto t0 = Clock::now();
+    EXPECT_TRUE(loader.request(cell, 0, urgent));
+    for (;;) {
+      if (capi::Staging* st = loader.finished()) {
+        EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+        loader.release(st);
+        return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      }
+      if (Clock::now() - t0 > std::chrono::seconds(120)) return 1e9;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  };
+  // 10 ms of debt (the bucket starts with its 0.25 ms burst): at 20 % the
+  // first predicted mesh waits about (10 - 0.25) / 0.2 ≈ 49 ms.
+  capi::prefetch_share::charge(10000000, share);
+  const double predicted_ms = finish(plan.largest_cell, false);
+  EXPECT_GE(predicted_ms, 30.0);
+  EXPECT_GE(loader.shareWaits(), 1u);
+  EXPECT_GE(loader.shareWaitMs(), 30.0);
+  const uint64_t waits = loader.shareWaits();
+  capi::prefetch_share::charge(10000000, share);
+  EXPECT_LT(finish(plan.largest_cell == 0 ? 1 : 0, true), 1e9);
+  EXPECT_EQ(loader.shareWaits(), waits) << "the current cell waited for tokens";
 }
 
 // The current cell stuck in a starved background decode: with every core

@@ -6,6 +6,7 @@
 // block of the host allocator left live.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <string>
 
@@ -49,6 +50,17 @@ TEST(RuntimeMemory, TooSmallABudgetFailsWithTheNumbers) {
   bad.prefetch_priority = 7;
   EXPECT_EQ(blvd_runtime_create(&bad, &none), BLVD_ERR_INVALID_ARG);
   EXPECT_NE(std::string(blvd_last_error(nullptr)).find("prefetch_priority"), std::string::npos);
+  for (float share : {1.5f, std::nanf("")}) {
+    bad = baseDesc();
+    bad.prefetch_share = share;
+    EXPECT_EQ(blvd_runtime_create(&bad, &none), BLVD_ERR_INVALID_ARG) << share;
+    EXPECT_NE(std::string(blvd_last_error(nullptr)).find("prefetch_share"), std::string::npos);
+  }
+  bad = baseDesc();
+  EXPECT_FLOAT_EQ(blvd_runtime_desc_defaults(&bad).prefetch_share, 0.1f);
+  bad.prefetch_share = -1;  // no bound: accepted
+  Runtime unbounded;
+  EXPECT_EQ(blvd_runtime_create(&bad, &unbounded.rt), BLVD_OK) << blvd_last_error(nullptr);
 }
 
 // Fails the Nth allocation; counts what is live.

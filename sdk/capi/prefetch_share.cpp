@@ -1,0 +1,68 @@
+#include "capi/prefetch_share.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <mutex>
+
+#include <time.h>
+
+#include "capi/frame_clock.h"
+
+namespace blvd::capi {
+
+void ShareBucket::accrue(int64_t now, double share, int64_t burst_ns) {
+  if (last_ == 0) tokens_ = double(burst_ns);
+  else if (now > last_) tokens_ = std::min(double(burst_ns), tokens_ + share * double(now - last_));
+  last_ = std::max(last_, now);
+}
+
+int64_t ShareBucket::decide(int64_t now, int64_t cost_ns, double share, int64_t burst_ns) {
+  if (share <= 0) return 0;
+  accrue(now, share, burst_ns);
+  const double need = double(std::min(std::max<int64_t>(cost_ns, 0), burst_ns));
+  if (tokens_ >= need) return 0;
+  return now + std::max<int64_t>(1, int64_t((need - tokens_) / share) + 1);
+}
+
+void ShareBucket::charge(int64_t now, int64_t cpu_ns, double share, int64_t burst_ns) {
+  if (share <= 0) return;
+  accrue(now, share, burst_ns);
+  tokens_ -= double(std::max<int64_t>(cpu_ns, 0));
+}
+
+namespace prefetch_share {
+namespace {
+std::mutex g_mu;
+ShareBucket g_bucket;
+constexpr int64_t kLookNs = 1000000;
+}  // namespace
+
+int64_t wait(int64_t cost_ns, double share, int64_t max_wait_ns, bool (*cancel)(void*), void* user) {
+  if (share <= 0) return 0;
+  const int64_t start = monoNs();
+  for (;;) {
+    const int64_t now = monoNs();
+    if (now - start >= max_wait_ns || (cancel && cancel(user))) break;
+    int64_t wake;
+    {
+      std::lock_guard<std::mutex> lock(g_mu);
+      wake = g_bucket.decide(now, cost_ns, share, kBurstNs);
+    }
+    if (wake == 0) break;
+    wake = std::min({wake, now + kLookNs, start + max_wait_ns});
+    const timespec ts{time_t(wake / 1000000000), long(wake % 1000000000)};
+    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+  }
+  return monoNs() - start;
+}
+
+void charge(int64_t cpu_ns, double share) {
+  if (share <= 0) return;
+  const int64_t now = monoNs();
+  std::lock_guard<std::mutex> lock(g_mu);
+  g_bucket.charge(now, cpu_ns, share, kBurstNs);
+}
+
+}  // namespace prefetch_share
+}  // namespace blvd::capi
