@@ -24,6 +24,12 @@ constexpr int64_t kMaxGapWaitNs = 100000000;
 // Estimates get this margin over the measured rate.
 constexpr double kCostMargin = 1.25;
 
+void raiseTo(std::atomic<uint64_t>& mark, uint64_t v) {
+  uint64_t seen = mark.load();
+  while (v > seen && !mark.compare_exchange_weak(seen, v)) {
+  }
+}
+
 int64_t threadCpuNs() {
   timespec ts{};
   ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
@@ -164,11 +170,9 @@ bool CellLoader::decodingInBackground(uint32_t cell) const {
 }
 
 void CellLoader::account(Staging& s) {
-  const uint64_t now = staging_used_.fetch_add(s.arena.used - s.accounted) + (s.arena.used - s.accounted);
+  const uint64_t grown = s.arena.used - s.accounted;
   s.accounted = s.arena.used;
-  uint64_t seen = staging_high_water_.load();
-  while (now > seen && !staging_high_water_.compare_exchange_weak(seen, now)) {
-  }
+  raiseTo(staging_high_water_, staging_used_.fetch_add(grown) + grown);
 }
 
 void CellLoader::unaccount(Staging& s) {
@@ -302,15 +306,15 @@ void CellLoader::waitForGap(Staging& s, bool impostor, double units) {
   if (pace_to_frames_) count(FrameClocks::waitForGap(cost, kMaxGapWaitNs, cancel, &s), gap_waits_, gap_wait_ns_);
 }
 
-void CellLoader::learnCost(bool impostor, double units, int64_t cpu_ns) {
+void CellLoader::measured(const Staging& s, bool impostor, double units, int64_t cpu_ns) {
+  if (!s.urgent) prefetch_share::charge(cpu_ns, share_);
   if (units <= 0) return;
   const double r = double(cpu_ns) / units;
   rate_ns_[impostor] = rate_ns_[impostor] > 0 ? 0.8 * rate_ns_[impostor] + 0.2 * r : r;
 }
 
 bool CellLoader::decode(Staging& s) {
-  unaccount(s);  // nothing is counted for a slot that was free; kept exact regardless
-  s.arena.reset();
+  s.arena.reset();  // the slot was free: release() / give_back() uncounted its bytes
   s.mesh_count = 0;
   s.uploaded = 0;
   s.error[0] = 0;
@@ -347,10 +351,7 @@ bool CellLoader::decode(Staging& s) {
     const uint64_t scratch_bytes = s.scratch.positions.capacity() * 4 + s.scratch.normals.capacity() * 4 +
                                    s.scratch.colors.capacity() + s.scratch.texcoords.capacity() * 4 +
                                    s.scratch.indices.capacity() * 4 + s.scratch.image.capacity();
-    // Jobs may run at once (two threads, or the host's executor).
-    uint64_t seen = decode_high_water_.load();
-    while (scratch_bytes > seen && !decode_high_water_.compare_exchange_weak(seen, scratch_bytes)) {
-    }
+    raiseTo(decode_high_water_, scratch_bytes);  // jobs may run at once (two threads, or the host's executor)
     return true;
   };
   const graph::StreetGraph& g = city_.graph();
@@ -372,9 +373,7 @@ bool CellLoader::decode(Staging& s) {
       if (k + 1 == rec.lod_count) blob.close();
       if (st != core::Status::Ok) return fail(err);
       if (!stage(MeshKind::Block, *b, k)) return true;
-      const int64_t cpu = threadCpuNs() - cpu0;
-      learnCost(false, units, cpu);
-      if (!s.urgent) prefetch_share::charge(cpu, share_);
+      measured(s, false, units, threadCpuNs() - cpu0);
     }
   if (s.cell < city_.cellTables().impostors.size()) {
     const graph::CellImpostors& ci = city_.cellTables().impostors[s.cell];
@@ -389,9 +388,7 @@ bool CellLoader::decode(Staging& s) {
         const core::Status st = city_.decodeImpostor(list[i], s.scratch, err);
         if (st != core::Status::Ok) return fail(err);
         if (!stage(single ? MeshKind::Single : MeshKind::Layered, i, 0)) return true;
-        const int64_t cpu = threadCpuNs() - cpu0;
-        learnCost(true, units, cpu);
-        if (!s.urgent) prefetch_share::charge(cpu, share_);
+        measured(s, true, units, threadCpuNs() - cpu0);
       }
     }
   }

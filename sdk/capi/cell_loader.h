@@ -146,7 +146,9 @@ class CellLoader {
   // (block: triangles + vertices; impostor: texels + triangles + vertices)
   // at the rate measured so far for its kind.
   void waitForGap(Staging& s, bool impostor, double units);
-  void learnCost(bool impostor, double units, int64_t cpu_ns);
+  // A mesh took `cpu_ns`: learns its kind's rate and, for a prediction,
+  // charges the process's prefetch_share bucket.
+  void measured(const Staging& s, bool impostor, double units, int64_t cpu_ns);
   // The pool's used bytes follow each slot's arena: account() after the
   // decoder staged a mesh (and raises the high-water mark), unaccount() when
   // the slot is handed back.

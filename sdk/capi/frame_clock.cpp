@@ -97,19 +97,26 @@ int64_t FrameClocks::decide(int64_t now, int64_t cost_ns) {
   return wake;
 }
 
-int64_t FrameClocks::waitForGap(int64_t cost_ns, int64_t max_wait_ns, bool (*cancel)(void*), void* user) {
+int64_t sleepUntilClear(int64_t (*decide)(int64_t now, void* ctx), void* ctx, int64_t max_wait_ns,
+                        int64_t max_sleep_ns, bool (*cancel)(void*), void* user) {
   const int64_t start = monoNs();
   for (;;) {
     const int64_t now = monoNs();
     if (now - start >= max_wait_ns || (cancel && cancel(user))) break;
-    int64_t wake = decide(now, cost_ns);
+    int64_t wake = decide(now, ctx);
     if (wake == 0) break;
     wake = std::min(wake, start + max_wait_ns);
+    if (max_sleep_ns > 0) wake = std::min(wake, now + max_sleep_ns);
     const timespec ts{time_t(wake / 1000000000), long(wake % 1000000000)};
     while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     }
   }
   return monoNs() - start;
+}
+
+int64_t FrameClocks::waitForGap(int64_t cost_ns, int64_t max_wait_ns, bool (*cancel)(void*), void* user) {
+  auto decideFor = [](int64_t now, void* cost) { return decide(now, *static_cast<int64_t*>(cost)); };
+  return sleepUntilClear(decideFor, &cost_ns, max_wait_ns, 0, cancel, user);
 }
 
 }  // namespace blvd::capi

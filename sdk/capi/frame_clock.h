@@ -31,6 +31,14 @@ inline int64_t monoNs(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
 }
 
+// The background waits' one loop (FrameClocks::waitForGap, prefetch_share::wait):
+// sleeps until `decide(now, ctx)` returns 0 (otherwise it returns the absolute
+// time to look again), `cancel(user)` says so, or `max_wait_ns` has passed.
+// No sleep is longer than `max_sleep_ns` (0: no cap), so that a cancel is seen.
+// Returns the nanoseconds waited.
+int64_t sleepUntilClear(int64_t (*decide)(int64_t now, void* ctx), void* ctx, int64_t max_wait_ns,
+                        int64_t max_sleep_ns, bool (*cancel)(void*), void* user);
+
 class FrameClock {
  public:
   // Forgets every frame (a slot handed to a new runtime).

@@ -1,10 +1,8 @@
 #include "capi/prefetch_share.h"
 
 #include <algorithm>
-#include <cerrno>
 #include <mutex>
 
-#include <time.h>
 
 #include "capi/frame_clock.h"
 
@@ -39,22 +37,16 @@ constexpr int64_t kLookNs = 1000000;
 
 int64_t wait(int64_t cost_ns, double share, int64_t max_wait_ns, bool (*cancel)(void*), void* user) {
   if (share <= 0) return 0;
-  const int64_t start = monoNs();
-  for (;;) {
-    const int64_t now = monoNs();
-    if (now - start >= max_wait_ns || (cancel && cancel(user))) break;
-    int64_t wake;
-    {
-      std::lock_guard<std::mutex> lock(g_mu);
-      wake = g_bucket.decide(now, cost_ns, share, kBurstNs);
-    }
-    if (wake == 0) break;
-    wake = std::min({wake, now + kLookNs, start + max_wait_ns});
-    const timespec ts{time_t(wake / 1000000000), long(wake % 1000000000)};
-    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    }
-  }
-  return monoNs() - start;
+  struct Ask {
+    int64_t cost;
+    double share;
+  } ask{cost_ns, share};
+  auto decide = [](int64_t now, void* p) {
+    const Ask& a = *static_cast<const Ask*>(p);
+    std::lock_guard<std::mutex> lock(g_mu);
+    return g_bucket.decide(now, a.cost, a.share, kBurstNs);
+  };
+  return sleepUntilClear(decide, &ask, max_wait_ns, kLookNs, cancel, user);
 }
 
 void charge(int64_t cpu_ns, double share) {

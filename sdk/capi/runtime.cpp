@@ -33,7 +33,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   loader_ = std::make_unique<CellLoader>(city_, alloc, plan_.staging_arena_bytes, plan_.staging_meshes, desc.executor,
                                          desc.prefetch_priority == BLVD_PREFETCH_LOW,
                                          desc.prefetch_priority == BLVD_PREFETCH_IDLE, desc.prefetch_cpu_mask,
-                                         desc.prefetch_share > 0 ? desc.prefetch_share : 0.0);
+                                         desc.prefetch_share);
   clock_ = FrameClocks::acquire();  // none left: this runtime's frames are not waited for
 
   ctx_ = render::createContext(static_cast<render::Backend>(desc.backend), err);

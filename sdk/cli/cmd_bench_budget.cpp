@@ -336,7 +336,12 @@ int runBudget(const BudgetOpts& o) {
   j["prefetch_gap_waits"] = bs.prefetch_gap_waits;
   j["prefetch_gap_wait_ms"] = bs.prefetch_gap_wait_ms;
   j["prefetch_cpu_mask"] = o.prefetch_cpus;
-  j["prefetch_share"] = o.prefetch_share == 0 ? 0.1 : o.prefetch_share;
+  {
+    blvd_runtime_desc d{};
+    d.struct_size = sizeof d;
+    d.prefetch_share = float(o.prefetch_share);
+    j["prefetch_share"] = std::round(double(blvd_runtime_desc_defaults(&d).prefetch_share) * 1e6) / 1e6;  // 0: the default
+  }
   j["prefetch_share_waits"] = bs.prefetch_share_waits;
   j["prefetch_share_wait_ms"] = bs.prefetch_share_wait_ms;
   j["prefetch_kept_off_cpu"] = bs.prefetch_kept_off_cpu;
