@@ -190,6 +190,13 @@ typedef struct blvd_runtime_desc {
    * the frames after. 0 means 0.1; within (0, 1], or negative for no bound. The current cell is never
    * held back, and no mesh waits more than 100 ms. No effect with a host executor. */
   float prefetch_share;
+
+  /* Neighbouring cells share most of their local blocks (five sixths of the block triangles a
+   * Monaco drive loads). A block another resident cell already holds is copied GPU to GPU
+   * (glCopyBufferSubData, within upload_budget_ms) into the new cell's slab instead of being read
+   * and decoded again; the source cell is not released until the copy is done. 0 or positive: on
+   * (the default); negative: off, every cell decodes all its blocks. */
+  int32_t block_reuse;
 } blvd_runtime_desc;
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */
@@ -296,6 +303,13 @@ typedef struct blvd_stats {
                                   * executor, or the affinity call refused) */
   uint64_t prefetch_share_waits;  /* predicted meshes held back by blvd_runtime_desc.prefetch_share */
   double prefetch_share_wait_ms;  /* their waits in all */
+  double loader_cpu_ms;           /* CPU time spent decoding the current cell (not resident when it
+                                   * became current), and ... */
+  double prefetch_cpu_ms;         /* ... decoding predictions: the loader threads' CPU clocks, or with
+                                   * a host executor its tasks' meshes; since create */
+  uint64_t blocks_reused;         /* blocks copied from another resident cell instead of decoded
+                                   * (blvd_runtime_desc.block_reuse) ... */
+  uint64_t block_levels_copied;   /* ... and their levels of detail, one mesh each */
 } blvd_stats;
 
 /* Fills *stats. Render thread. */

@@ -1,5 +1,6 @@
 #include "capi/cell_loader.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -95,6 +96,8 @@ CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_
     thread_ = std::thread([this] { run(false); });
     background_ = std::thread([this] { run(true); });
     if (pinned_) (void)::pthread_setaffinity_np(background_.native_handle(), sizeof pin, &pin);
+    has_cpu_clock_[0] = ::pthread_getcpuclockid(thread_.native_handle(), &cpu_clock_[0]) == 0;
+    has_cpu_clock_[1] = ::pthread_getcpuclockid(background_.native_handle(), &cpu_clock_[1]) == 0;
   }
 }
 
@@ -114,7 +117,7 @@ CellLoader::~CellLoader() {
   }
 }
 
-bool CellLoader::request(uint32_t cell, uint32_t target, bool urgent) {
+bool CellLoader::request(uint32_t cell, uint32_t target, bool urgent, const uint32_t* skip, uint32_t skip_count) {
   {
     std::lock_guard<std::mutex> lock(mu_);
     Staging* free_slot = nullptr;
@@ -130,6 +133,8 @@ bool CellLoader::request(uint32_t cell, uint32_t target, bool urgent) {
     free_slot->target = target;
     free_slot->urgent = urgent;
     free_slot->abandon = false;
+    free_slot->skip_count = std::min(skip_count, kMaxSkippedBlocks);
+    if (skip) std::copy(skip, skip + free_slot->skip_count, free_slot->skip);
     if (executor_.submit) ++tasks_out_;
   }
   if (executor_.submit) executor_.submit(&CellLoader::runTask, this, executor_.user);
@@ -202,6 +207,8 @@ void CellLoader::promote(uint32_t cell) {
           copy.target = background->target;
           copy.urgent = true;
           copy.abandon = false;
+          copy.skip_count = background->skip_count;
+          std::copy(background->skip, background->skip + background->skip_count, copy.skip);
           background->abandon = true;
           break;
         }
@@ -306,8 +313,19 @@ void CellLoader::waitForGap(Staging& s, bool impostor, double units) {
   if (pace_to_frames_) count(FrameClocks::waitForGap(cost, kMaxGapWaitNs, cancel, &s), gap_waits_, gap_wait_ns_);
 }
 
+double CellLoader::cpuMs(bool background) const {
+  const int i = background ? 1 : 0;
+  if (has_cpu_clock_[i]) {
+    timespec ts{};
+    if (::clock_gettime(cpu_clock_[i], &ts) != 0) return 0;
+    return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+  }
+  return double(task_cpu_ns_[background ? 1 : 0].load(std::memory_order_relaxed)) * 1e-6;
+}
+
 void CellLoader::measured(const Staging& s, bool impostor, double units, int64_t cpu_ns) {
   if (!s.urgent) prefetch_share::charge(cpu_ns, share_);
+  if (executor_.submit && cpu_ns > 0) task_cpu_ns_[s.urgent ? 0 : 1].fetch_add(uint64_t(cpu_ns), std::memory_order_relaxed);
   if (units <= 0) return;
   const double r = double(cpu_ns) / units;
   rate_ns_[impostor] = rate_ns_[impostor] > 0 ? 0.8 * rate_ns_[impostor] + 0.2 * r : r;
@@ -358,7 +376,8 @@ bool CellLoader::decode(Staging& s) {
   // One open per block: its blob's CRC and GLB JSON once for all its levels
   // (decision 0008 §13); the open's cost counts with level 0's.
   stream::City::BlockBlob blob;
-  for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b)
+  for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b) {
+    if (std::find(s.skip, s.skip + s.skip_count, *b) != s.skip + s.skip_count) continue;  // the runtime copies it
     for (uint32_t k = 0; k < city_.blocks()[*b].lod_count; ++k) {
       const graph::BlockRecord& rec = city_.blocks()[*b];
       const double units = double(rec.triangles[k]) + double(rec.vertices[k]);
@@ -375,6 +394,7 @@ bool CellLoader::decode(Staging& s) {
       if (!stage(MeshKind::Block, *b, k)) return true;
       measured(s, false, units, threadCpuNs() - cpu0);
     }
+  }
   if (s.cell < city_.cellTables().impostors.size()) {
     const graph::CellImpostors& ci = city_.cellTables().impostors[s.cell];
     for (int single = 0; single < 2; ++single) {

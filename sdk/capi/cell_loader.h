@@ -26,6 +26,9 @@
 namespace blvd::capi {
 
 inline constexpr uint32_t kStagingSlots = 2;
+// Blocks a request may name as not to be decoded (the runtime copies them
+// from another resident cell); a cell with more shared blocks decodes the rest.
+inline constexpr uint32_t kMaxSkippedBlocks = 64;
 
 enum class MeshKind : uint32_t { Block = 0, Layered = 1, Single = 2 };
 
@@ -55,6 +58,8 @@ struct Staging {
   uint32_t uploaded = 0;  // render thread: meshes already copied to the slab
   uint64_t accounted = 0; // arena bytes counted in the pool's used bytes (CellLoader::account)
   bool urgent = false;    // the current cell: decoded at normal priority
+  uint32_t skip[kMaxSkippedBlocks] = {};  // local blocks not to decode (copied by the runtime)
+  uint32_t skip_count = 0;
   // Set when the cell became current while a background thread decodes it:
   // an urgent copy of the request takes over and this one stops at its next
   // mesh (a SCHED_IDLE thread may not run again soon on a busy CPU).
@@ -95,7 +100,10 @@ class CellLoader {
   // that they delay themselves, not the frames (a CPU renderer such as
   // llvmpipe shares the cores with them). See promote() for a prediction
   // that becomes urgent mid-decode.
-  bool request(uint32_t cell, uint32_t target, bool urgent = false);
+  // `skip[0..skip_count)` (at most kMaxSkippedBlocks) are local blocks of
+  // the cell the caller has already: they are not decoded.
+  bool request(uint32_t cell, uint32_t target, bool urgent = false, const uint32_t* skip = nullptr,
+               uint32_t skip_count = 0);
   // A slot in state Ready or Failed, oldest request first, or nullptr.
   Staging* finished();
   // Gives a Ready/Failed slot back.
@@ -137,6 +145,11 @@ class CellLoader {
   // Background meshes held back by the share, and how long.
   uint64_t shareWaits() const { return share_waits_; }
   double shareWaitMs() const { return double(share_wait_ns_) * 1e-6; }
+  // CPU milliseconds spent decoding so far, by the current cell's thread
+  // (background false) or the prediction thread: the threads' own CPU clocks
+  // (any thread may read them, to the scheduler's tick), or with a host
+  // executor the sum of its tasks' meshes.
+  double cpuMs(bool background) const;
 
  private:
   void run(bool background);
@@ -175,6 +188,9 @@ class CellLoader {
   // Background thread only: decode CPU nanoseconds per unit, by kind (0 until measured).
   double rate_ns_[2] = {0, 0};
   std::atomic<uint64_t> gap_waits_{0}, gap_wait_ns_{0}, share_waits_{0}, share_wait_ns_{0};
+  std::atomic<uint64_t> task_cpu_ns_[2] = {};  // host executor: its meshes' CPU, urgent / prediction
+  clockid_t cpu_clock_[2] = {};                 // the threads' CPU clocks (thread_, background_)
+  bool has_cpu_clock_[2] = {false, false};
   uint32_t tasks_out_ = 0;  // submitted to the host and not yet run
   cpu_set_t allowed_{};     // the prediction thread's CPUs as inherited at construction
   bool pinned_ = false;     // cpu_mask given: keepOffCpu() does nothing

@@ -53,10 +53,13 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
     slot.slab = renderer_->createSlab(plan_.slab);
     if (slot.slab.id == 0) throw Error(Status::Backend, "cell slab: " + renderer_->lastError());
     slot.blocks.reserve(plan_.max_local_blocks);
+    slot.copies.reserve(std::min<size_t>(plan_.max_local_blocks, kMaxSkippedBlocks));
     slot.layered.reserve(plan_.slab.textures);
     slot.single.reserve(plan_.slab.textures);
   }
   failed_cells_.assign(8, graph::kNone);
+  victim_cells_.assign(plan_.resident_cells, graph::kNone);
+  copy_scratch_.reserve(std::min<size_t>(plan_.max_local_blocks, kMaxSkippedBlocks));
   const size_t nb = plan_.max_local_blocks;
   ach_.resize(nb);
   chains_.resize(nb);
@@ -187,7 +190,8 @@ void Runtime::uploadStaged(double budget_ms) {
   double spent = 0;
   while (Staging* st = loader_->finished()) {
     CellSlot& slot = slots_[st->target];
-    if (slot.state != CellSlot::Loading || slot.cell != st->cell) {  // evicted while loading
+    // Evicted while loading, or the second of a promoted request's two copies.
+    if (slot.state != CellSlot::Loading || slot.cell != st->cell || slot.staged) {
       pending_upload_ = render::SlabUpload{};
       loader_->release(st);
       continue;
@@ -196,6 +200,7 @@ void Runtime::uploadStaged(double budget_ms) {
       last_error = st->error;
       ++stats_.load_errors;
       failed_cells_[failed_next_++ % failed_cells_.size()] = st->cell;
+      dropCopies(slot);
       slot.state = CellSlot::Empty;
       slot.cell = slot_cells_[st->target] = graph::kNone;
       loader_->release(st);
@@ -234,28 +239,133 @@ void Runtime::uploadStaged(double budget_ms) {
       if (spent >= budget_ms) break;
     }
     if (st->uploaded >= st->mesh_count) {
-      const render::SlabUsage u = renderer_->slabUsage(slot.slab);
-      const uint64_t tex = uint64_t(plan_.slab.texture_width) * plan_.slab.texture_height * 4 * 4 / 3;
-      slot.bytes = u.vertex_bytes + u.index_bytes + u.textures * tex;
-      slot.state = CellSlot::Resident;
       loader_->release(st);
-      uint64_t used = 0;
-      for (const CellSlot& other : slots_) used += other.bytes;
-      gpu_high_water_ = std::max(gpu_high_water_, used);
+      slot.staged = true;
+      if (slot.copies_done >= slot.copies.size()) finishSlot(slot);
     }
     if (spent >= budget_ms) break;
   }
+  if (spent < budget_ms) copySharedBlocks(t0, budget_ms, spent);
   stats_.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   stats_.upload_ms_max = std::max(stats_.upload_ms_max, stats_.upload_ms);
+}
+
+void Runtime::finishSlot(CellSlot& slot) {
+  // The copied blocks came after the decoded ones: back into the cell's
+  // order of local blocks, so that a cell draws (and shares its budget) the
+  // same whichever way its blocks arrived. Block ids are unique in a slot.
+  if (!slot.copies.empty()) {
+    const graph::StreetGraph& g = city_.graph();
+    const uint32_t *first = g.local_blocks.begin(slot.cell), *last = g.local_blocks.end(slot.cell);
+    std::sort(slot.blocks.begin(), slot.blocks.end(), [&](const SlotBlock& a, const SlotBlock& b) {
+      return std::find(first, last, a.block) < std::find(first, last, b.block);
+    });
+  }
+  const render::SlabUsage u = renderer_->slabUsage(slot.slab);
+  const uint64_t tex = uint64_t(plan_.slab.texture_width) * plan_.slab.texture_height * 4 * 4 / 3;
+  slot.bytes = u.vertex_bytes + u.index_bytes + u.textures * tex;
+  slot.state = CellSlot::Resident;
+  uint64_t used = 0;
+  for (const CellSlot& other : slots_) used += other.bytes;
+  gpu_high_water_ = std::max(gpu_high_water_, used);
+}
+
+// The blocks a new cell shares with a resident one are copied from it, GPU
+// to GPU, after the cell's own (decoded) meshes are in: a level at a time in
+// chunks of kUploadChunk, within the frame's upload budget like an upload.
+// The copies come after the staged meshes so that each block's levels stay
+// together in slot.blocks.
+void Runtime::copySharedBlocks(std::chrono::steady_clock::time_point t0, double budget_ms, double& spent) {
+  constexpr uint64_t kUploadChunk = 128 << 10;
+  for (CellSlot& slot : slots_) {
+    if (slot.state != CellSlot::Loading || !slot.staged || slot.copies_done >= slot.copies.size()) continue;
+    if (pending_copy_.slab && pending_copy_.slab != slot.slab.id) continue;  // another slot's copy is open
+    while (slot.copies_done < slot.copies.size()) {
+      const BlockCopy& c = slot.copies[slot.copies_done];
+      const SlotBlock* src = nullptr;
+      for (const SlotBlock& sb : slots_[c.from].blocks)
+        if (sb.block == c.block) src = &sb;
+      if (!slot.copy_open) {
+        slot.blocks.push_back(SlotBlock{c.block, src ? src->levels : 0, {}});
+        slot.copy_open = true;
+      }
+      SlotBlock& dst = slot.blocks.back();
+      while (src && slot.copy_level < src->levels) {
+        const render::MeshHandle from = src->lod[slot.copy_level];
+        if (from.id == 0) {  // a level that decoded to nothing
+          ++slot.copy_level;
+          continue;
+        }
+        bool finished = true;
+        render::MeshHandle h;
+        if (pending_copy_.slab || renderer_->beginSlabCopy(slot.slab, from, pending_copy_))
+          h = renderer_->continueSlabUpload(pending_copy_, kUploadChunk, finished);
+        spent = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        if (!finished) {
+          if (spent >= budget_ms) return;
+          continue;
+        }
+        pending_copy_ = render::SlabUpload{};
+        if (h.id == 0) {
+          // The source is protected (copy_refs) and the slab sized for the
+          // largest cell: this is a bug.
+          last_error = "cell " + std::to_string(slot.cell) + ": block " + std::to_string(c.block) +
+                       " copy: " + renderer_->lastError();
+          ++stats_.load_errors;
+        } else {
+          dst.lod[slot.copy_level] = h;
+          ++stats_.block_levels_copied;
+        }
+        ++slot.copy_level;
+        if (spent >= budget_ms) return;
+      }
+      --slots_[c.from].copy_refs;
+      ++stats_.blocks_reused;
+      ++slot.copies_done;
+      slot.copy_level = 0;
+      slot.copy_open = false;
+    }
+    finishSlot(slot);
+  }
+}
+
+uint32_t Runtime::sharedBlocks(uint32_t cell, uint32_t victim, std::vector<BlockCopy>& copies, uint32_t* skip) const {
+  copies.clear();
+  if (desc_.block_reuse < 0) return 0;
+  const graph::StreetGraph& g = city_.graph();
+  for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) {
+    if (copies.size() >= copies.capacity() || copies.size() >= kMaxSkippedBlocks) break;  // the rest decode
+    for (uint32_t i = 0; i < slots_.size(); ++i) {
+      if (i == victim || slots_[i].state != CellSlot::Resident) continue;
+      bool has = false;
+      for (const SlotBlock& sb : slots_[i].blocks) has |= sb.block == *b;
+      if (!has) continue;
+      skip[copies.size()] = *b;
+      copies.push_back(BlockCopy{*b, i});
+      break;
+    }
+  }
+  return static_cast<uint32_t>(copies.size());
+}
+
+void Runtime::dropCopies(CellSlot& slot) {
+  for (uint32_t i = slot.copies_done; i < slot.copies.size(); ++i) --slots_[slot.copies[i].from].copy_refs;
+  if (pending_copy_.slab == slot.slab.id) pending_copy_ = render::SlabUpload{};
+  slot.copies.clear();
+  slot.copies_done = slot.copy_level = 0;
+  slot.copy_open = false;
+  slot.staged = false;
 }
 
 // Residency for this frame (issue 4): ask for what is wanted, most wanted
 // first, into free or releasable slots; never wait for a load.
 void Runtime::stream(uint32_t cell, double arc_m, double speed_mps, double upload_budget_ms) {
   residency_->update({cell, arc_m, speed_mps});
-  // A slot whose request was dropped goes back to empty.
+  // A slot whose request was dropped goes back to empty (one copying its
+  // shared blocks has no request left, and keeps going).
   for (size_t i = 0; i < slots_.size(); ++i)
-    if (slots_[i].state == CellSlot::Loading && !loader_->pending(slots_[i].cell)) {
+    if (slots_[i].state == CellSlot::Loading && !slots_[i].staged && !loader_->pending(slots_[i].cell)) {
+      dropCopies(slots_[i]);
       slots_[i].state = CellSlot::Empty;
       slots_[i].cell = slot_cells_[i] = graph::kNone;
     }
@@ -273,11 +383,17 @@ void Runtime::stream(uint32_t cell, double arc_m, double speed_mps, double uploa
     bool failed = false;
     for (uint32_t f : failed_cells_) failed |= f == c;
     if (failed) continue;
-    const uint32_t v = residency_->victim(slot_cells_.data(), slot_cells_.size(), r);
+    // A slot that shared blocks are being copied from stays: it shows as
+    // the most wanted cell.
+    for (size_t i = 0; i < slots_.size(); ++i)
+      victim_cells_[i] = slots_[i].copy_refs ? residency_->wanted()[0] : slot_cells_[i];
+    const uint32_t v = residency_->victim(victim_cells_.data(), victim_cells_.size(), r);
     if (v == graph::kNone) break;
-    if (!loader_->request(c, v, c == cell)) break;  // both staging arenas busy
+    const uint32_t shared = sharedBlocks(c, v, copy_scratch_, skip_scratch_);
+    if (!loader_->request(c, v, c == cell, skip_scratch_, shared)) break;  // both staging arenas busy
     CellSlot& slot = slots_[v];
     if (slot.cell != graph::kNone) ++stats_.evictions;
+    dropCopies(slot);
     renderer_->resetSlab(slot.slab);
     slot.blocks.clear();
     slot.layered.clear();
@@ -285,6 +401,10 @@ void Runtime::stream(uint32_t cell, double arc_m, double speed_mps, double uploa
     slot.bytes = 0;
     slot.state = CellSlot::Loading;
     slot.cell = slot_cells_[v] = c;
+    for (const BlockCopy& bc : copy_scratch_) {
+      slot.copies.push_back(bc);
+      ++slots_[bc.from].copy_refs;
+    }
   }
   uploadStaged(upload_budget_ms);
 }
@@ -604,6 +724,8 @@ void Runtime::stats(blvd_stats* out) const {
   s.prefetch_kept_off_cpu = loader_->keptOffCpu();
   s.prefetch_share_waits = loader_->shareWaits();
   s.prefetch_share_wait_ms = loader_->shareWaitMs();
+  s.loader_cpu_ms = loader_->cpuMs(false);
+  s.prefetch_cpu_ms = loader_->cpuMs(true);
   std::memcpy(out, &s, std::min<size_t>(s.struct_size, sizeof s));
 }
 

@@ -2,6 +2,7 @@
 // pose, and the last error. sdk/capi/blvd_capi.cpp maps the C API onto it.
 #pragma once
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -55,6 +56,11 @@ class Runtime {
     uint32_t levels = 0;
     render::MeshHandle lod[graph::kMaxBlockLods];
   };
+  // A local block another resident slot holds, to be copied from it.
+  struct BlockCopy {
+    uint32_t block = 0;
+    uint32_t from = 0;  // slots_ index
+  };
   struct CellSlot {
     enum State { Empty, Loading, Resident } state = Empty;
     uint32_t cell = 0xffffffffu;
@@ -62,6 +68,13 @@ class Runtime {
     std::vector<SlotBlock> blocks;
     std::vector<render::MeshHandle> layered, single;
     uint64_t bytes = 0;  // slab bytes in use
+    // Loading: the staged (decoded) meshes are all in, and the blocks shared
+    // with other slots are copied after them, in order, a level at a time.
+    bool staged = false;
+    std::vector<BlockCopy> copies;  // reserved once
+    uint32_t copies_done = 0, copy_level = 0;
+    bool copy_open = false;  // the SlotBlock of copies[copies_done] is pushed
+    uint32_t copy_refs = 0;  // other slots' pending copies from this one: not released meanwhile
   };
   // The camera from the tracker when it drives, then the current cell.
   uint32_t currentCell(double& arc_m, double& speed_mps);
@@ -72,6 +85,15 @@ class Runtime {
   // Residency for this frame: requests, then uploads within upload_budget_ms.
   void stream(uint32_t cell, double arc_m, double speed_mps, double upload_budget_ms);
   void uploadStaged(double budget_ms);
+  // Copies the shared blocks of Loading slots whose staging is in, within
+  // the frame's upload budget (`spent` so far since t0); slots become resident.
+  void copySharedBlocks(std::chrono::steady_clock::time_point t0, double budget_ms, double& spent);
+  // The blocks of `cell` that another resident slot than `victim` holds
+  // whole: into `copies` and their ids into `skip` (at most kMaxSkippedBlocks).
+  uint32_t sharedBlocks(uint32_t cell, uint32_t victim, std::vector<BlockCopy>& copies, uint32_t* skip) const;
+  // Gives back the copy sources' references of a slot's pending copies.
+  void dropCopies(CellSlot& slot);
+  void finishSlot(CellSlot& slot);
   void buildDrawList(uint32_t cell);
   void ensureReferenceBlocks();
   const CellSlot* residentSlot(uint32_t cell) const;
@@ -89,6 +111,9 @@ class Runtime {
   std::unique_ptr<stream::Residency> residency_;
   std::vector<CellSlot> slots_;
   std::vector<uint32_t> slot_cells_;  // slots_[i].cell, for Residency::victim
+  std::vector<uint32_t> victim_cells_;  // the same with copy sources shown as the most wanted cell
+  std::vector<BlockCopy> copy_scratch_;  // a request's shared blocks, before it is accepted
+  uint32_t skip_scratch_[kMaxSkippedBlocks] = {};
   std::vector<uint32_t> failed_cells_;  // cells whose load failed, not retried (fixed ring)
   size_t failed_next_ = 0;
 
@@ -108,6 +133,7 @@ class Runtime {
   bool rendered_ = false;
   blvd_stats stats_{};
   render::SlabUpload pending_upload_;  // the mesh being copied into its slab, chunk by chunk
+  render::SlabUpload pending_copy_;    // the shared block level being copied GPU-side
   std::unique_ptr<stream::FrameBudget> budget_;  // with target_frame_ms
   uint64_t floor_tris_ = 0;  // the visible blocks' coarsest levels, last frame
   // chooseLevels scratch, sized for the largest cell at create.

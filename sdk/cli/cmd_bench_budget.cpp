@@ -51,6 +51,7 @@ struct BudgetOpts {
   std::string prefetch = "idle";  // blvd_runtime_desc.prefetch_priority: idle, low or anytime
   uint64_t prefetch_cpus = 0;     // blvd_runtime_desc.prefetch_cpu_mask (0: off the render thread's CPU)
   double prefetch_share = 0;      // blvd_runtime_desc.prefetch_share (0: the default 0.1; < 0: no bound)
+  std::string block_reuse = "on";  // blvd_runtime_desc.block_reuse: on or off
 };
 
 // A display's refresh, as a host drawing at vsync sees it: a frame starts on
@@ -93,6 +94,7 @@ Runtime create(const BudgetOpts& o, int w, int h, blvd_render_mode mode, float t
                                                   : BLVD_PREFETCH_IDLE;
   d.prefetch_cpu_mask = o.prefetch_cpus;
   d.prefetch_share = float(o.prefetch_share);
+  d.block_reuse = o.block_reuse == "off" ? -1 : 0;
   blvd_runtime* rt = nullptr;
   check(blvd_runtime_create(&d, &rt), nullptr, "create runtime");
   return Runtime(rt, blvd_runtime_destroy);
@@ -110,6 +112,8 @@ struct Frame {
   uint64_t budget;      // the polygon budget set for the next frame
   double mono_s;        // CLOCK_MONOTONIC at the frame's start, to line frames up with `perf record -k mono`
   bool degraded;        // its cell was not resident: waited for, and this is the redraw
+  double prefetch_cpu_ms;  // this runtime's prediction thread's CPU since its last frame
+  double decode_cpu_ms;    // every loader thread's of the process (all runs'), over the frame
 };
 
 // One run of the benchmark: a runtime, its kept frames and images.
@@ -119,6 +123,7 @@ struct Run {
   std::vector<std::vector<uint8_t>> images;  // every image_every-th pose, when kept
   bool want_images = false;
   uint32_t last_cell = 0xffffffffu;
+  double last_prefetch_cpu_ms = 0;
   // Kept frames whose cell was not resident yet (drawn again once it was).
   size_t degraded() const {
     size_t n = 0;
@@ -127,25 +132,42 @@ struct Run {
   }
 };
 
-// Draws pose p with run r. A frame whose cell is not resident yet is waited
+// The CPU milliseconds every loader thread of the runs has spent decoding.
+double decodeCpuMs(const std::vector<Run*>& all) {
+  double ms = 0;
+  for (Run* r : all) {
+    blvd_stats st{};
+    st.struct_size = sizeof st;
+    check(blvd_runtime_stats(r->rt.get(), &st), r->rt.get(), "stats");
+    ms += st.loader_cpu_ms + st.prefetch_cpu_ms;
+  }
+  return ms;
+}
+
+// Draws pose p with run r (`all`: every run of the process, for the
+// loaders' CPU inside the frame). A frame whose cell is not resident yet is waited
 // for and drawn again; the kept time is the second one (residency is `bench
 // memory`'s subject, not this one's).
-void drawPose(Run& r, Pacer& pace, const Pose& p, bool keep, bool image, int w, int h) {
+void drawPose(Run& r, const std::vector<Run*>& all, Pacer& pace, const Pose& p, bool keep, bool image, int w,
+              int h) {
   blvd_runtime* rt = r.rt.get();
   pace.waitTick();
   check(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), rt, "pose");
   blvd_frame_stats fs{};
   fs.struct_size = sizeof fs;
+  double cpu0 = keep ? decodeCpuMs(all) : 0;
   auto t0 = std::chrono::steady_clock::now();
   check(blvd_render(rt, &fs), rt, "render");
   const bool degraded = (fs.flags & BLVD_FRAME_DEGRADED) != 0;
   if (degraded) {
     check(blvd_wait_resident(rt, 60000), rt, "wait");
     pace.waitTick();
+    if (keep) cpu0 = decodeCpuMs(all);
     t0 = std::chrono::steady_clock::now();
     check(blvd_render(rt, &fs), rt, "render");
   }
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const double decode_ms = keep ? decodeCpuMs(all) - cpu0 : 0;
   const bool boundary = fs.cell != r.last_cell;
   r.last_cell = fs.cell;
   if (!keep) return;
@@ -154,7 +176,9 @@ void drawPose(Run& r, Pacer& pace, const Pose& p, bool keep, bool image, int w, 
   check(blvd_runtime_stats(rt, &st), rt, "stats");
   r.frames.push_back({ms, boundary, fs.triangles, fs.cell, st.render_scale, st.upload_ms, st.frame_aim_ms,
                       st.block_triangles, st.polygon_budget,
-                      std::chrono::duration<double>(t0.time_since_epoch()).count(), degraded});
+                      std::chrono::duration<double>(t0.time_since_epoch()).count(), degraded,
+                      st.prefetch_cpu_ms - r.last_prefetch_cpu_ms, decode_ms});
+  r.last_prefetch_cpu_ms = st.prefetch_cpu_ms;
   if (image && r.want_images) {
     r.images.emplace_back(size_t(w) * h * 4);
     check(blvd_read_pixels(rt, r.images.back().data(), r.images.back().size()), rt, "pixels");
@@ -172,9 +196,9 @@ void lap(const std::vector<Run*>& runs, Pacer& pace, const std::vector<Pose>& po
   constexpr size_t kSegment = 64;
   for (size_t s = 0; s < poses.size(); s += kSegment)
     for (Run* r : runs) {
-      if (s > 0 && runs.size() > 1) drawPose(*r, pace, poses[s - 1], false, false, w, h);
+      if (s > 0 && runs.size() > 1) drawPose(*r, runs, pace, poses[s - 1], false, false, w, h);
       for (size_t i = s; i < std::min(poses.size(), s + kSegment); ++i)
-        drawPose(*r, pace, poses[i], keep, i % image_every == 0, w, h);
+        drawPose(*r, runs, pace, poses[i], keep, i % image_every == 0, w, h);
     }
 }
 
@@ -345,6 +369,14 @@ int runBudget(const BudgetOpts& o) {
   j["prefetch_share_waits"] = bs.prefetch_share_waits;
   j["prefetch_share_wait_ms"] = bs.prefetch_share_wait_ms;
   j["prefetch_kept_off_cpu"] = bs.prefetch_kept_off_cpu;
+  // Decode work: the budgeted runtime's loader threads, and the shared
+  // blocks copied from another resident cell instead of decoded.
+  j["block_reuse"] = o.block_reuse;
+  j["blocks_reused"] = bs.blocks_reused;
+  j["block_levels_copied"] = bs.block_levels_copied;
+  j["loads"] = bs.loads;
+  j["prefetch_cpu_ms"] = bs.prefetch_cpu_ms;
+  j["loader_cpu_ms"] = bs.loader_cpu_ms;
   // Frames that found their cell not resident (each waited for and drawn
   // again, the second time kept): a prefetch that falls behind shows here.
   j["degraded_frames"] = budgeted.degraded();
@@ -357,18 +389,19 @@ int runBudget(const BudgetOpts& o) {
   std::printf("%s\n", text.c_str());
   writeText(o.json_path, text);
   if (!o.csv_path.empty()) {
-    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s,degraded\n";
+    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s,degraded,prefetch_cpu_ms,decode_cpu_ms\n";
     const std::pair<const char*, const std::vector<Frame>*> runs[] = {
         {"local_lod0", &local.frames}, {"floor", &coarsest.frames}, {"unbudgeted", &unbudgeted.frames},
         {"budgeted", &budgeted.frames}};
     for (const auto& [name, frames] : runs)
       for (size_t i = 0; i < frames->size(); ++i) {
         const Frame& f = (*frames)[i];
-        char row[200];
-        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u,%.4f,%llu,%llu,%.6f,%d\n", name, i, f.ms,
+        char row[256];
+        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u,%.4f,%llu,%llu,%.6f,%d,%.4f,%.4f\n", name, i, f.ms,
                       f.upload_ms, static_cast<unsigned long long>(f.tris), double(f.scale), int(f.boundary), f.cell,
                       double(f.aim_ms), static_cast<unsigned long long>(f.block_tris),
-                      static_cast<unsigned long long>(f.budget), f.mono_s, int(f.degraded));
+                      static_cast<unsigned long long>(f.budget), f.mono_s, int(f.degraded), f.prefetch_cpu_ms,
+                      f.decode_cpu_ms);
         csv += row;
       }
     writeText(o.csv_path, csv);
@@ -437,6 +470,9 @@ void addBenchBudget(CLI::App& bench, Runner& run) {
   b->add_option("--prefetch-share", o->prefetch_share,
                 "the most of the wall time the process's predictions may decode (0: the runtime's 0.1; -1: no bound)")
       ->capture_default_str()->check(CLI::Range(-1.0, 1.0));
+  b->add_option("--block-reuse", o->block_reuse,
+                "copy the blocks a new cell shares with a resident one GPU-side (on) or decode them again (off)")
+      ->capture_default_str()->check(CLI::IsMember({"on", "off"}));
   b->add_option("--size", o->size)->capture_default_str();
   b->add_option("--resident-cells", o->resident_cells, "cell slots (0: the runtime's default)")->capture_default_str();
   b->add_option("--json", o->json_path, "write the JSON here too");

@@ -29,6 +29,7 @@ class Context;
   X(PFNGLBLENDFUNCPROC, BlendFunc)                             \
   X(PFNGLBUFFERDATAPROC, BufferData)                           \
   X(PFNGLBUFFERSUBDATAPROC, BufferSubData)                     \
+  X(PFNGLCOPYBUFFERSUBDATAPROC, CopyBufferSubData)             \
   X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus)   \
   X(PFNGLCLEARPROC, Clear)                                     \
   X(PFNGLCLEARCOLORPROC, ClearColor)                           \

@@ -29,6 +29,8 @@ void GlStateSnapshot::capture(const GlApi& gl) {
   gl.GetIntegerv(GL_VIEWPORT, viewport);
   gl.GetIntegerv(GL_SCISSOR_BOX, scissor_box);
   gl.GetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &pixel_unpack_buffer);
+  gl.GetIntegerv(GL_COPY_READ_BUFFER_BINDING, &copy_read_buffer);
+  gl.GetIntegerv(GL_COPY_WRITE_BUFFER_BINDING, &copy_write_buffer);
   gl.GetIntegerv(GL_UNPACK_ALIGNMENT, &unpack_alignment);
   gl.GetIntegerv(GL_UNPACK_ROW_LENGTH, &unpack_row_length);
   gl.GetIntegerv(GL_ACTIVE_TEXTURE, &active_texture);
@@ -68,6 +70,8 @@ void GlStateSnapshot::restore(const GlApi& gl) const {
   gl.Viewport(viewport[0], viewport[1], viewport[2], viewport[3]);
   gl.Scissor(scissor_box[0], scissor_box[1], scissor_box[2], scissor_box[3]);
   gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, static_cast<GLuint>(pixel_unpack_buffer));
+  gl.BindBuffer(GL_COPY_READ_BUFFER, static_cast<GLuint>(copy_read_buffer));
+  gl.BindBuffer(GL_COPY_WRITE_BUFFER, static_cast<GLuint>(copy_write_buffer));
   gl.PixelStorei(GL_UNPACK_ALIGNMENT, unpack_alignment);
   gl.PixelStorei(GL_UNPACK_ROW_LENGTH, unpack_row_length);
   gl.ActiveTexture(GL_TEXTURE0);

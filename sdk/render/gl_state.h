@@ -19,6 +19,7 @@ struct GlStateSnapshot {
   GLint draw_framebuffer, read_framebuffer, renderbuffer;
   GLint viewport[4], scissor_box[4];
   GLint pixel_unpack_buffer, unpack_alignment, unpack_row_length;
+  GLint copy_read_buffer, copy_write_buffer;  // slab copies (Renderer::beginSlabCopy)
   GLint active_texture, texture0_2d, depth_func, cull_face_mode, front_face;
   GLfloat clear_color[4];
   GLfloat clear_depth;

@@ -47,6 +47,8 @@ struct MeshSlot {
   GLsizei index_count = 0;
   GLenum index_type = GL_UNSIGNED_SHORT;
   uint64_t index_offset = 0;  // bytes into ibo (slab meshes share one)
+  uint64_t vertex_offset = 0; // bytes into vbo
+  uint32_t vertex_count = 0;
   uint32_t slab = 0;          // slab index + 1, or 0: the mesh owns its GL objects
   float uv_scale[2] = {1, 1}; // image size over the slab texture's size
   uint32_t generation = 1;
@@ -419,11 +421,17 @@ MeshHandle Renderer::uploadToSlab(SlabHandle slab, const PreparedMesh& mesh) {
 bool Renderer::beginSlabUpload(SlabHandle h, const PreparedMesh& p, SlabUpload& up) {
   up = SlabUpload{};
   if (h.id == 0 || h.id > impl_->slabs.size()) return fail("invalid slab handle");
-  Slab& slab = impl_->slabs[h.id - 1];
   if (p.vertex_count == 0 || p.index_count == 0 || !p.vertices || !p.indices) return fail("mesh has no triangles");
   if (p.rgba && p.mip_levels < 1) return fail("prepared texture has no levels");
+  if (!reserve(impl_->slabs[h.id - 1], p, up)) return false;
+  up.slab = h.id;
+  up.mesh = &p;
+  return true;
+}
+
+// Bump placement into the buffers made at createSlab: no GL allocation.
+bool Renderer::reserve(Slab& slab, const PreparedMesh& p, SlabUpload& up) {
   const uint64_t vbytes = p.vertexBytes(), ibytes = p.indexBytes();
-  // Bump placement into the buffers made at createSlab: no GL allocation.
   const uint64_t ioff = (slab.index_used + 3) & ~uint64_t(3), voff = slab.vertex_used;
   if (voff + vbytes > slab.desc.vertex_bytes || ioff + ibytes > slab.desc.index_bytes)
     return fail("slab full: vertex or index bytes exceed its size");
@@ -431,8 +439,6 @@ bool Renderer::beginSlabUpload(SlabHandle h, const PreparedMesh& p, SlabUpload& 
   if (p.rgba && (slab.textures_used >= slab.textures.size() || p.texture_width > slab.desc.texture_width ||
                  p.texture_height > slab.desc.texture_height))
     return fail("slab full: no texture slot of the image's size left");
-  up.slab = h.id;
-  up.mesh = &p;
   up.voff = voff;
   up.ioff = ioff;
   up.texture = p.rgba ? slab.textures[slab.textures_used++] : 0;
@@ -440,6 +446,28 @@ bool Renderer::beginSlabUpload(SlabHandle h, const PreparedMesh& p, SlabUpload& 
   up.resets = slab.resets;
   slab.vertex_used = voff + vbytes;
   slab.index_used = ioff + ibytes;
+  return true;
+}
+
+bool Renderer::beginSlabCopy(SlabHandle h, MeshHandle source, SlabUpload& up) {
+  up = SlabUpload{};
+  if (h.id == 0 || h.id > impl_->slabs.size()) return fail("invalid slab handle");
+  if (!isValid(source)) return fail("slab copy: invalid source mesh");
+  const uint32_t index = (source.id & kIndexMask) - 1;
+  const MeshSlot& src = impl_->slots[index];
+  if (src.slab == 0) return fail("slab copy: the source mesh is not in a slab");
+  if (src.texture) return fail("slab copy: the source mesh has a texture");
+  PreparedMesh shape;
+  shape.vertex_count = src.vertex_count;
+  shape.index_count = static_cast<uint32_t>(src.index_count);
+  shape.index16 = src.index_type == GL_UNSIGNED_SHORT;
+  for (int k = 0; k < 3; ++k) shape.center[k] = src.center[k], shape.half[k] = src.half[k];
+  if (!reserve(impl_->slabs[h.id - 1], shape, up)) return false;
+  up.slab = h.id;
+  up.shape = shape;
+  up.mesh = &up.shape;
+  up.source = source.id;
+  up.source_resets = impl_->slabs[src.slab - 1].resets;
   return true;
 }
 
@@ -459,6 +487,7 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
     fail("GL context is not current on this thread");
     return {};
   }
+  if (up.source) up.mesh = &up.shape;  // the SlabUpload may have been moved since begin
   const PreparedMesh& p = *up.mesh;
   const uint64_t vbytes = p.vertexBytes(), ibytes = p.indexBytes();
   const uint64_t chunk_min = 4096;
@@ -478,8 +507,33 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
         allowance -= n;
       }
     };
-    copyBuffer(slab.vbo, up.voff, p.vertices, 0, vbytes);
-    copyBuffer(slab.ibo, up.ioff, p.indices, vbytes, ibytes);
+    // A copy: from the source's slab buffers, GPU to GPU. The source is
+    // checked again each step (its slab must not have been reset).
+    auto copyGpu = [&](GLuint from, uint64_t from_base, GLuint to, uint64_t to_base, uint64_t begin, uint64_t size) {
+      while (allowance > 0 && up.copied >= begin && up.copied < begin + size) {
+        const uint64_t at = up.copied - begin, n = std::min(allowance, size - at);
+        gl.BindBuffer(GL_COPY_READ_BUFFER, from);
+        gl.BindBuffer(GL_COPY_WRITE_BUFFER, to);
+        gl.CopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, static_cast<GLintptr>(from_base + at),
+                             static_cast<GLintptr>(to_base + at), static_cast<GLsizeiptr>(n));
+        up.copied += n;
+        allowance -= n;
+      }
+    };
+    if (up.source) {
+      const MeshHandle source{up.source};
+      const MeshSlot* src = isValid(source) ? &impl_->slots[(source.id & kIndexMask) - 1] : nullptr;
+      if (!src || src->slab == 0 || impl_->slabs[src->slab - 1].resets != up.source_resets) {
+        up.slab = 0;
+        fail("slab copy abandoned: the source mesh is gone");
+        return {};
+      }
+      copyGpu(src->vbo, src->vertex_offset, slab.vbo, up.voff, 0, vbytes);
+      copyGpu(src->ibo, src->index_offset, slab.ibo, up.ioff, vbytes, ibytes);
+    } else {
+      copyBuffer(slab.vbo, up.voff, p.vertices, 0, vbytes);
+      copyBuffer(slab.ibo, up.ioff, p.indices, vbytes, ibytes);
+    }
     if (p.rgba && allowance > 0 && up.copied < up.total) {
       // Mip levels in order, whole rows at a time, each level into the
       // image's corner of the slab texture's level (uv_scale maps it).
@@ -521,7 +575,7 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
 MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUpload* copied) {
   Impl& m = *impl_;
   Slab* slab = slab_id ? &m.slabs[slab_id - 1] : nullptr;
-  if (p.vertex_count == 0 || p.index_count == 0 || !p.vertices || !p.indices) {
+  if (p.vertex_count == 0 || p.index_count == 0 || (!(copied && copied->source) && (!p.vertices || !p.indices))) {
     fail("mesh has no triangles");
     return {};
   }
@@ -608,6 +662,8 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUp
   s.index_count = static_cast<GLsizei>(p.index_count);
   s.index_type = p.index16 ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
   s.index_offset = ioff;
+  s.vertex_offset = voff;
+  s.vertex_count = p.vertex_count;
   s.slab = slab_id;
   s.center = glm::dvec3(p.center[0], p.center[1], p.center[2]);
   s.half = glm::dvec3(p.half[0], p.half[1], p.half[2]);

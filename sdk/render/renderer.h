@@ -76,9 +76,16 @@ struct SlabHandle {
 // indices and the texture's mip levels (whole rows) a chunk at a time. The
 // PreparedMesh must stay valid until the upload finishes; resetSlab abandons
 // an unfinished one.
+//
+// beginSlabCopy starts the same for a mesh already in another slab: the
+// bytes move GPU-side (glCopyBufferSubData), `mesh` then points at `shape`,
+// which holds the source's counts and box (no CPU pointers).
 struct SlabUpload {
   uint32_t slab = 0;                  // SlabHandle id; 0 when idle
   const PreparedMesh* mesh = nullptr;
+  uint32_t source = 0;                // a copy: the source mesh's handle id; 0 for an upload
+  uint32_t source_resets = 0;         // and its slab's reset count at begin
+  PreparedMesh shape;                 // a copy: the source's counts, index type and box
   uint64_t voff = 0, ioff = 0;        // placement in the slab's buffers
   uint32_t texture = 0;               // the slab texture taken (GL name), 0 without one
   uint64_t copied = 0, total = 0;     // bytes, in the order vertices, indices, texture levels
@@ -165,6 +172,12 @@ class Renderer {
   // resetSlab, pool full) an invalid handle, `finished` true, lastError() set.
   bool beginSlabUpload(SlabHandle slab, const PreparedMesh& mesh, SlabUpload& up);
   MeshHandle continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool& finished);
+  // A slab mesh without a texture (a block level) copied into another slab,
+  // GPU to GPU, then finished by continueSlabUpload like an upload: no CPU
+  // copy and no GL allocation. The source's slab must not be reset before
+  // the copy finishes. False with lastError() set for an invalid or textured
+  // source, a mesh outside a slab, or no room.
+  bool beginSlabCopy(SlabHandle slab, MeshHandle source, SlabUpload& up);
   // Releases every mesh placed in the slab and rewinds it.
   void resetSlab(SlabHandle slab);
   SlabUsage slabUsage(SlabHandle slab) const;
@@ -203,6 +216,9 @@ class Renderer {
   // A mesh's slot and vertex array; copies its bytes unless `copied` (a
   // finished SlabUpload) says where they already are.
   MeshHandle place(const PreparedMesh& mesh, uint32_t slab_id, const SlabUpload* copied = nullptr);
+  // Takes room for `mesh` in `slab` (no GL): its offsets, texture and byte
+  // count into `up`. False with lastError() set when it has none.
+  bool reserve(Slab& slab, const PreparedMesh& mesh, SlabUpload& up);
   bool init(const RendererDesc& desc);
   bool fail(const char* what);
 

@@ -25,7 +25,7 @@ fi
 grep -q -- "--speed-kmh needs --fps" "$work/nofps.err" || { echo "FAIL: --speed-kmh without --fps: $(cat "$work/nofps.err")"; exit 1; }
 # The page draws the frame times (with the target and the budget's aim) and the knobs.
 [ "$(grep -o '<svg' "$work/budget_html/index.html" | wc -l)" -ge 2 ] || { echo "FAIL: bench budget --html lacks its plots"; exit 1; }
-head -1 "$work/budget.csv" | grep -q '^run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s,degraded$' || { echo "FAIL: bench budget --csv header"; exit 1; }
+head -1 "$work/budget.csv" | grep -q '^run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s,degraded,prefetch_cpu_ms,decode_cpu_ms$' || { echo "FAIL: bench budget --csv header"; exit 1; }
 python3 - "$work/memory.json" "$work/budget.json" "$work/budget.csv" "$work/paced.json" "$work/paced.csv" <<'PY'
 import csv, json, math, sys
 m, b = (json.load(open(p)) for p in sys.argv[1:3])
@@ -63,6 +63,11 @@ for k in ("target_ms", "frame_ms_p50", "frame_ms_p95", "stutter_ratio", "ssim_vs
           "calibration_floor_ms_p50", "calibration_unbudgeted_ms_p50", "floor_ms_p95"):
     assert isinstance(b[k], float) and math.isfinite(b[k]) and b[k] > 0, (k, b[k])
 assert b["frames"] > 0
+# Decode work: shared blocks copied (on by default), the loaders' CPU, and per frame in the CSV.
+assert b["block_reuse"] == "on" and isinstance(b["blocks_reused"], int) and b["blocks_reused"] >= 0, b
+assert b["block_levels_copied"] >= b["blocks_reused"] and b["loads"] > 0, b
+assert b["prefetch_cpu_ms"] >= 0 and b["loader_cpu_ms"] >= 0 and b["prefetch_cpu_ms"] + b["loader_cpu_ms"] > 0, b
+assert all(float(r["decode_cpu_ms"]) >= 0 and float(r["prefetch_cpu_ms"]) >= 0 for r in rows), "negative decode CPU"
 lo, hi = b["stutter_ratio_ci90"]  # bootstrap spread of the stutter ratio
 assert math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi, b["stutter_ratio_ci90"]
 # The spike rates, recomputed from the CSV's budgeted frames (>= 1.5 x the median of the 5 before);

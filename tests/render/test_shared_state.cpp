@@ -11,6 +11,7 @@
 
 #include "render/context.h"
 #include "render/gl_api.h"
+#include "render/prepared_mesh.h"
 #include "render/renderer.h"
 #include "scene.h"
 
@@ -59,6 +60,8 @@ const std::vector<std::pair<GLenum, int>> kWatched = {
     {GL_ARRAY_BUFFER_BINDING, 1},
     {GL_ELEMENT_ARRAY_BUFFER_BINDING, 1},
     {GL_PIXEL_PACK_BUFFER_BINDING, 1},
+    {GL_COPY_READ_BUFFER_BINDING, 1},
+    {GL_COPY_WRITE_BUFFER_BINDING, 1},
     {GL_DRAW_FRAMEBUFFER_BINDING, 1},
     {GL_READ_FRAMEBUFFER_BINDING, 1},
     {GL_RENDERBUFFER_BINDING, 1},
@@ -134,7 +137,7 @@ TEST(SharedContext, RestoresHostStateAndDrawsIntoHostFramebuffer) {
   ASSERT_TRUE(gl.load(*ctx, why)) << why;
 
   // Host framebuffer, buffers, program and a deliberately odd state.
-  GLuint fbo = 0, rb[2] = {0, 0}, vao = 0, buf[3] = {0, 0, 0};
+  GLuint fbo = 0, rb[2] = {0, 0}, vao = 0, buf[5] = {0, 0, 0, 0, 0};
   gl.GenRenderbuffers(2, rb);
   gl.BindRenderbuffer(GL_RENDERBUFFER, rb[0]);
   gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, kW, kH);
@@ -150,10 +153,12 @@ TEST(SharedContext, RestoresHostStateAndDrawsIntoHostFramebuffer) {
 
   gl.GenVertexArrays(1, &vao);
   gl.BindVertexArray(vao);
-  gl.GenBuffers(3, buf);
+  gl.GenBuffers(5, buf);
   gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, buf[0]);
   gl.BindBuffer(GL_ARRAY_BUFFER, buf[1]);
   gl.BindBuffer(GL_PIXEL_PACK_BUFFER, buf[2]);
+  gl.BindBuffer(GL_COPY_READ_BUFFER, buf[3]);
+  gl.BindBuffer(GL_COPY_WRITE_BUFFER, buf[4]);
   gl.BufferData(GL_PIXEL_PACK_BUFFER, 16, nullptr, GL_STREAM_READ);
   const GLuint program = hostProgram(gl);
   gl.UseProgram(program);
@@ -208,6 +213,27 @@ TEST(SharedContext, RestoresHostStateAndDrawsIntoHostFramebuffer) {
   const test::Rgb mid = test::pixel(img, kW, kW / 2, kH / 2);
   EXPECT_GT(mid.r, 150) << mid.r << "," << mid.g << "," << mid.b;
   EXPECT_LT(mid.g, 90);
+
+  // A slab upload and a GPU-side copy into another slab (a block two cells share).
+  const geo::MeshData boxMesh = test::makeBox(0, 2, -10, 4, 4, 4, red);
+  std::vector<uint8_t> staging(preparedBytes(boxMesh.vertexCount(), boxMesh.indices.size(), 0, 0));
+  StagingArena arena{staging.data(), staging.size(), 0};
+  PreparedMesh prepared;
+  ASSERT_TRUE(prepareMesh(boxMesh, arena, prepared, why)) << why;
+  SlabDesc sd;
+  sd.vertex_bytes = prepared.vertexBytes();
+  sd.index_bytes = prepared.indexBytes() + 3;
+  sd.meshes = 1;
+  const SlabHandle from = renderer->createSlab(sd), to = renderer->createSlab(sd);
+  const MeshHandle placed = renderer->uploadToSlab(from, prepared);
+  ASSERT_TRUE(renderer->isValid(placed)) << renderer->lastError();
+  expectSame(before, snapshot(gl), "slab upload");
+  SlabUpload up;
+  ASSERT_TRUE(renderer->beginSlabCopy(to, placed, up)) << renderer->lastError();
+  bool finished = false;
+  EXPECT_TRUE(renderer->isValid(renderer->continueSlabUpload(up, 1 << 20, finished))) << renderer->lastError();
+  EXPECT_TRUE(finished);
+  expectSame(before, snapshot(gl), "slab copy");
 
   renderer->release(box);
   expectSame(before, snapshot(gl), "release");

@@ -1,7 +1,8 @@
 // Slab uploads in chunks (issue 4: a frame's GL uploads stay within its
 // budget): the mip chain is made on the preparing thread, an upload spread
 // over many small steps draws the same picture as one copied whole, and a
-// slab reset abandons an unfinished upload.
+// slab reset abandons an unfinished upload. A slab mesh copied GPU-side into
+// another slab (a block two cells share) draws what the original draws.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -160,6 +161,21 @@ std::vector<uint8_t> draw(Renderer& r, const std::vector<MeshHandle>& list) {
   return px;
 }
 
+// Finishes a begun upload or copy in steps of max_bytes; a step before the
+// last returns no handle.
+MeshHandle finishInSteps(Renderer& r, SlabUpload& up, uint64_t max_bytes, int& steps) {
+  bool finished = false;
+  MeshHandle h;
+  while (!finished) {
+    h = r.continueSlabUpload(up, max_bytes, finished);
+    ++steps;
+    if (!finished) {
+      EXPECT_EQ(h.id, 0u);
+    }
+  }
+  return h;
+}
+
 TEST(SlabUpload, ManySmallStepsDrawWhatOneCopyDraws) {
   Rig rig;
   ASSERT_NE(rig.renderer, nullptr) << rig.why;
@@ -180,15 +196,7 @@ TEST(SlabUpload, ManySmallStepsDrawWhatOneCopyDraws) {
   for (const PreparedMesh& m : prep.meshes) {
     SlabUpload up;
     ASSERT_TRUE(r->beginSlabUpload(stepped, m, up)) << r->lastError();
-    bool finished = false;
-    MeshHandle h;
-    while (!finished) {
-      h = r->continueSlabUpload(up, 1, finished);  // the smallest chunk: 4 KiB or one texture row
-      ++steps;
-      if (!finished) {
-        EXPECT_EQ(h.id, 0u);
-      }
-    }
+    const MeshHandle h = finishInSteps(*r, up, 1, steps);  // the smallest chunk: 4 KiB or one texture row
     ASSERT_NE(h.id, 0u) << r->lastError();
     chunked.push_back(h);
   }
@@ -224,6 +232,71 @@ TEST(SlabUpload, AResetAbandonsAnUnfinishedUpload) {
   EXPECT_EQ(r->meshCount(), 0u);
   // The slab is whole again for the next cell.
   EXPECT_NE(r->uploadToSlab(slab, prep.meshes[0]).id, 0u) << r->lastError();
+}
+
+// Copies the untextured mesh `from` into `slab` in steps of max_bytes.
+MeshHandle copyInSteps(Renderer& r, SlabHandle slab, MeshHandle from, uint64_t max_bytes, int& steps) {
+  SlabUpload up;
+  if (!r.beginSlabCopy(slab, from, up)) return {};
+  return finishInSteps(r, up, max_bytes, steps);
+}
+
+TEST(SlabCopy, AMeshCopiedBetweenSlabsDrawsWhatTheOriginalDraws) {
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
+  const Scene scene;
+  const Prepared prep(scene);
+  const SlabHandle a = r->createSlab(slabFor(prep)), b = r->createSlab(slabFor(prep));
+  // The wall first, so that the boxes' offsets differ between the two slabs.
+  const MeshHandle wall = r->uploadToSlab(a, prep.meshes[1]);
+  const MeshHandle boxes = r->uploadToSlab(a, prep.meshes[0]);
+  ASSERT_NE(boxes.id, 0u) << r->lastError();
+  const std::vector<uint8_t> original = draw(*r, {boxes});
+  int grey = 0;
+  for (size_t i = 0; i < original.size(); i += 4) grey += original[i] >= 100 && original[i] <= 200 && original[i + 2] > original[i];
+  ASSERT_GT(grey, 100) << "the boxes are not in view";
+
+  int steps = 0;
+  const MeshHandle copy = copyInSteps(*r, b, boxes, 1, steps);
+  ASSERT_NE(copy.id, 0u) << r->lastError();
+  EXPECT_GE(uint64_t(steps), (prep.meshes[0].vertexBytes() + prep.meshes[0].indexBytes()) / 4096);
+  EXPECT_EQ(r->slabUsage(b).vertex_bytes, prep.meshes[0].vertexBytes());
+  EXPECT_EQ(r->slabUsage(b).index_bytes, prep.meshes[0].indexBytes());
+  // The copy stands alone: the source's slab may go.
+  r->resetSlab(a);
+  EXPECT_EQ(draw(*r, {copy}), original) << "the copied mesh draws differently";
+
+  // A textured mesh is uploaded, not copied (blocks have no texture).
+  const MeshHandle wall2 = r->uploadToSlab(a, prep.meshes[1]);
+  ASSERT_NE(wall2.id, 0u) << r->lastError();
+  SlabUpload up;
+  EXPECT_FALSE(r->beginSlabCopy(b, wall2, up));
+  EXPECT_NE(r->lastError().find("texture"), std::string::npos) << r->lastError();
+  EXPECT_FALSE(r->beginSlabCopy(b, wall, up));  // released with its slab
+  EXPECT_FALSE(r->beginSlabCopy(SlabHandle{99}, boxes, up));
+}
+
+TEST(SlabCopy, AResetOfTheSourceAbandonsAnUnfinishedCopy) {
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
+  const Scene scene;
+  const Prepared prep(scene);
+  const SlabHandle a = r->createSlab(slabFor(prep)), b = r->createSlab(slabFor(prep));
+  const MeshHandle boxes = r->uploadToSlab(a, prep.meshes[0]);
+  ASSERT_NE(boxes.id, 0u) << r->lastError();
+  SlabUpload up;
+  ASSERT_TRUE(r->beginSlabCopy(b, boxes, up)) << r->lastError();
+  bool finished = true;
+  EXPECT_EQ(r->continueSlabUpload(up, 1, finished).id, 0u);
+  EXPECT_FALSE(finished);
+  // The same mesh placed again at the same offsets is still another mesh.
+  r->resetSlab(a);
+  ASSERT_NE(r->uploadToSlab(a, prep.meshes[0]).id, 0u);
+  EXPECT_EQ(r->continueSlabUpload(up, 1 << 20, finished).id, 0u);
+  EXPECT_TRUE(finished);
+  EXPECT_NE(r->lastError().find("source mesh is gone"), std::string::npos) << r->lastError();
 }
 
 }  // namespace

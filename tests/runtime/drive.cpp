@@ -5,6 +5,9 @@
 
 #include <glm/geometric.hpp>
 
+#include <gtest/gtest.h>
+
+#include "stream/city.h"
 #include "stream/residency.h"
 
 namespace blvd_test {
@@ -47,6 +50,19 @@ Drive makeDrive(const blvd::graph::StreetGraph& g, uint32_t start, uint32_t cell
     }
   }
   return d;
+}
+
+Drive impostorDrive(uint32_t cells, double step_m) {
+  blvd::stream::City city;
+  std::string err;
+  EXPECT_EQ(city.open(BLVD_TEST_PACKAGE, err), blvd::core::Status::Ok) << err;
+  uint32_t start = 0;
+  for (uint32_t c = 0; c < city.cellTables().impostors.size(); ++c)
+    if (!city.cellTables().impostors[c].layered.empty()) {
+      start = c;
+      break;
+    }
+  return makeDrive(city.graph(), start, cells, step_m);
 }
 
 }  // namespace blvd_test

@@ -21,4 +21,8 @@ struct Drive {
 
 Drive makeDrive(const blvd::graph::StreetGraph& g, uint32_t start, uint32_t cells, double step_m);
 
+// makeDrive on the test package (BLVD_TEST_PACKAGE) from its first cell with
+// impostors, so that textures stream too.
+Drive impostorDrive(uint32_t cells, double step_m);
+
 }  // namespace blvd_test

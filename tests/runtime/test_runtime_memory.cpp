@@ -34,18 +34,7 @@ using blvd_test::Runtime;
 using blvd_test::statsOf;
 
 // A drive from the first cell with impostors, so textures stream too.
-blvd_test::Drive drive(uint32_t cells, double step_m) {
-  blvd::stream::City city;
-  std::string err;
-  EXPECT_EQ(city.open(BLVD_TEST_PACKAGE, err), blvd::core::Status::Ok) << err;
-  uint32_t start = 0;
-  for (uint32_t c = 0; c < city.cellTables().impostors.size(); ++c)
-    if (!city.cellTables().impostors[c].layered.empty()) {
-      start = c;
-      break;
-    }
-  return blvd_test::makeDrive(city.graph(), start, cells, step_m);
-}
+blvd_test::Drive drive(uint32_t cells, double step_m) { return blvd_test::impostorDrive(cells, step_m); }
 
 TEST(RuntimeMemory, RequiredIsWhatCreateCarves) {
   blvd_runtime_desc d = baseDesc();

@@ -1,0 +1,108 @@
+// Blocks shared by neighbouring cells (blvd_runtime_desc.block_reuse): a new
+// cell copies the local blocks another resident cell holds, GPU to GPU,
+// instead of decoding them again. The copies must draw exactly what decoded
+// blocks draw, the cell they come from must stay until they are done (with
+// as few slots as the runtime allows and an upload budget that spreads each
+// copy over many frames), and the stats must say how many were copied.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "blvd/blvd.h"
+#include "drive.h"
+#include "runtime_fixture.h"
+#include "stream/city.h"
+
+namespace {
+
+using blvd_test::baseDesc;
+using blvd_test::Runtime;
+using blvd_test::statsOf;
+
+blvd_test::Drive drive(uint32_t cells, double step_m) { return blvd_test::impostorDrive(cells, step_m); }
+
+// The frame of pose p, drawn whole (a degraded frame waits for its cell and
+// is drawn again).
+std::vector<uint8_t> frame(blvd_runtime* rt, const blvd_test::DrivePose& p, const blvd_runtime_desc& d) {
+  EXPECT_EQ(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), BLVD_OK);
+  blvd_frame_stats fs{};
+  fs.struct_size = sizeof fs;
+  EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
+  if (fs.flags & BLVD_FRAME_DEGRADED) {
+    EXPECT_EQ(blvd_wait_resident(rt, 30000), BLVD_OK) << blvd_last_error(rt);
+    EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
+  }
+  EXPECT_EQ(fs.flags & BLVD_FRAME_DEGRADED, 0u);
+  std::vector<uint8_t> px(size_t(d.width) * d.height * 4);
+  EXPECT_EQ(blvd_read_pixels(rt, px.data(), px.size()), BLVD_OK) << blvd_last_error(rt);
+  return px;
+}
+
+struct Case {
+  uint32_t slots;
+  float upload_budget_ms;
+};
+
+class BlockReuse : public ::testing::TestWithParam<Case> {};
+
+TEST_P(BlockReuse, CopiedBlocksDrawWhatDecodedBlocksDraw) {
+  const blvd_test::Drive dr = drive(24, 6.0);
+  ASSERT_GE(dr.cells.size(), 10u);
+  blvd_runtime_desc d = baseDesc();
+  d.width = 160;
+  d.height = 96;
+  d.max_resident_cells = GetParam().slots;
+  d.upload_budget_ms = GetParam().upload_budget_ms;
+  d.prefetch_priority = BLVD_PREFETCH_LOW;  // predictions run on a loaded CI machine too
+  // The blocks alone: an impostor's edge texels are bilinear and mip
+  // neighbours of whatever the slab texture held before, which depends on
+  // the order cells came and went in (not on how the blocks arrived).
+  d.mode = BLVD_MODE_LOCAL;
+  blvd_runtime_desc off = d;
+  off.block_reuse = -1;
+  Runtime a, b;
+  ASSERT_EQ(blvd_runtime_create(&d, &a.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_runtime_create(&off, &b.rt), BLVD_OK) << blvd_last_error(nullptr);
+  for (blvd_runtime* rt : {a.rt, b.rt})
+    ASSERT_EQ(blvd_set_route(rt, dr.cells.data(), dr.cells.size()), BLVD_OK) << blvd_last_error(rt);
+  size_t compared = 0;
+  uint32_t differing = 0;
+  for (size_t i = 0; i < dr.poses.size(); ++i) {
+    const std::vector<uint8_t> with = frame(a.rt, dr.poses[i], d), without = frame(b.rt, dr.poses[i], off);
+    ++compared;
+    if (with == without) continue;
+    size_t px = 0;
+    for (size_t k = 0; k < with.size(); k += 4)
+      px += with[k] != without[k] || with[k + 1] != without[k + 1] || with[k + 2] != without[k + 2];
+    if (differing++ < 3) ADD_FAILURE() << "pose " << i << " (cell " << dr.poses[i].cell << "): " << px << " pixels differ";
+  }
+  EXPECT_EQ(differing, 0u) << "of " << compared << " frames";
+  const blvd_stats with = statsOf(a.rt), without = statsOf(b.rt);
+  EXPECT_EQ(with.load_errors, 0u) << blvd_last_error(a.rt);
+  EXPECT_EQ(without.load_errors, 0u);
+  // Neighbouring cells share blocks: most cells after the first copy some.
+  EXPECT_GE(with.blocks_reused, with.loads / 2) << with.loads << " loads";
+  EXPECT_GE(with.block_levels_copied, with.blocks_reused);
+  EXPECT_EQ(without.blocks_reused, 0u);
+  EXPECT_EQ(without.block_levels_copied, 0u);
+  // The loader threads' CPU clocks (blvd_stats.loader_cpu_ms, prefetch_cpu_ms) ran while they decoded.
+  EXPECT_GT(with.loader_cpu_ms + with.prefetch_cpu_ms, 0.0);
+  EXPECT_GE(with.loader_cpu_ms, 0.0);
+  EXPECT_GE(with.prefetch_cpu_ms, 0.0);
+  EXPECT_LE(with.resident_cells, d.max_resident_cells ? d.max_resident_cells : 1000u);
+  EXPECT_LE(with.gpu.high_water_bytes, with.gpu.capacity_bytes);
+  RecordProperty("blocks_reused", std::to_string(with.blocks_reused));
+  RecordProperty("loads", std::to_string(with.loads));
+}
+
+INSTANTIATE_TEST_SUITE_P(SlotsAndBudgets, BlockReuse,
+                         ::testing::Values(Case{0, 0.f},       // the defaults
+                                           Case{2, 0.f},       // the fewest slots: sources compete for them
+                                           Case{3, 0.01f}),    // copies spread over many frames
+                         [](const ::testing::TestParamInfo<Case>& i) {
+                           return "slots" + std::to_string(i.param.slots) + (i.param.upload_budget_ms > 0 ? "_tinyUploads" : "");
+                         });
+
+}  // namespace
