@@ -56,9 +56,9 @@ TEST_P(BlockReuse, CopiedBlocksDrawWhatDecodedBlocksDraw) {
   d.max_resident_cells = GetParam().slots;
   d.upload_budget_ms = GetParam().upload_budget_ms;
   d.prefetch_priority = BLVD_PREFETCH_LOW;  // predictions run on a loaded CI machine too
-  // The blocks alone: an impostor's edge texels are bilinear and mip
-  // neighbours of whatever the slab texture held before, which depends on
-  // the order cells came and went in (not on how the blocks arrived).
+  // The blocks alone: a few impostor pixels depend on the order in which
+  // cells came and went through the slots, with or without block reuse
+  // (docs/decisions/0008 §15), and that order differs between the two.
   d.mode = BLVD_MODE_LOCAL;
   blvd_runtime_desc off = d;
   off.block_reuse = -1;
