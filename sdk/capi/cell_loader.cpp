@@ -320,7 +320,7 @@ double CellLoader::cpuMs(bool background) const {
     if (::clock_gettime(cpu_clock_[i], &ts) != 0) return 0;
     return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
   }
-  return double(task_cpu_ns_[background ? 1 : 0].load(std::memory_order_relaxed)) * 1e-6;
+  return double(task_cpu_ns_[i].load(std::memory_order_relaxed)) * 1e-6;
 }
 
 void CellLoader::measured(const Staging& s, bool impostor, double units, int64_t cpu_ns) {

@@ -16,6 +16,11 @@ namespace blvd::capi {
 using core::Error;
 using core::Status;
 
+namespace {
+// A slab upload or copy moves at most this much a step (uploadStaged, copySharedBlocks).
+constexpr uint64_t kUploadChunk = 128 << 10;
+}  // namespace
+
 Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   std::string err;
   Status st = city_.open(desc.package_path, err);
@@ -58,7 +63,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
     slot.single.reserve(plan_.slab.textures);
   }
   failed_cells_.assign(8, graph::kNone);
-  victim_cells_.assign(plan_.resident_cells, graph::kNone);
+  copy_sources_ = std::make_unique<bool[]>(plan_.resident_cells);
   copy_scratch_.reserve(std::min<size_t>(plan_.max_local_blocks, kMaxSkippedBlocks));
   const size_t nb = plan_.max_local_blocks;
   ach_.resize(nb);
@@ -185,7 +190,6 @@ const Runtime::CellSlot* Runtime::residentSlot(uint32_t cell) const {
 // frames instead of stalling one. At least one chunk a frame, so a load
 // always ends.
 void Runtime::uploadStaged(double budget_ms) {
-  constexpr uint64_t kUploadChunk = 128 << 10;
   const auto t0 = std::chrono::steady_clock::now();
   double spent = 0;
   while (Staging* st = loader_->finished()) {
@@ -276,7 +280,6 @@ void Runtime::finishSlot(CellSlot& slot) {
 // The copies come after the staged meshes so that each block's levels stay
 // together in slot.blocks.
 void Runtime::copySharedBlocks(std::chrono::steady_clock::time_point t0, double budget_ms, double& spent) {
-  constexpr uint64_t kUploadChunk = 128 << 10;
   for (CellSlot& slot : slots_) {
     if (slot.state != CellSlot::Loading || !slot.staged || slot.copies_done >= slot.copies.size()) continue;
     if (pending_copy_.slab && pending_copy_.slab != slot.slab.id) continue;  // another slot's copy is open
@@ -334,7 +337,7 @@ uint32_t Runtime::sharedBlocks(uint32_t cell, uint32_t victim, std::vector<Block
   if (desc_.block_reuse < 0) return 0;
   const graph::StreetGraph& g = city_.graph();
   for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) {
-    if (copies.size() >= copies.capacity() || copies.size() >= kMaxSkippedBlocks) break;  // the rest decode
+    if (copies.size() >= copies.capacity()) break;  // reserved for min(max local blocks, kMaxSkippedBlocks): the rest decode
     for (uint32_t i = 0; i < slots_.size(); ++i) {
       if (i == victim || slots_[i].state != CellSlot::Resident) continue;
       bool has = false;
@@ -383,11 +386,9 @@ void Runtime::stream(uint32_t cell, double arc_m, double speed_mps, double uploa
     bool failed = false;
     for (uint32_t f : failed_cells_) failed |= f == c;
     if (failed) continue;
-    // A slot that shared blocks are being copied from stays: it shows as
-    // the most wanted cell.
-    for (size_t i = 0; i < slots_.size(); ++i)
-      victim_cells_[i] = slots_[i].copy_refs ? residency_->wanted()[0] : slot_cells_[i];
-    const uint32_t v = residency_->victim(victim_cells_.data(), victim_cells_.size(), r);
+    // A slot that shared blocks are being copied from stays.
+    for (size_t i = 0; i < slots_.size(); ++i) copy_sources_[i] = slots_[i].copy_refs > 0;
+    const uint32_t v = residency_->victim(slot_cells_.data(), slot_cells_.size(), r, copy_sources_.get());
     if (v == graph::kNone) break;
     const uint32_t shared = sharedBlocks(c, v, copy_scratch_, skip_scratch_);
     if (!loader_->request(c, v, c == cell, skip_scratch_, shared)) break;  // both staging arenas busy

@@ -111,7 +111,7 @@ class Runtime {
   std::unique_ptr<stream::Residency> residency_;
   std::vector<CellSlot> slots_;
   std::vector<uint32_t> slot_cells_;  // slots_[i].cell, for Residency::victim
-  std::vector<uint32_t> victim_cells_;  // the same with copy sources shown as the most wanted cell
+  std::unique_ptr<bool[]> copy_sources_;  // per slot: blocks are copied from it (kept by Residency::victim)
   std::vector<BlockCopy> copy_scratch_;  // a request's shared blocks, before it is accepted
   uint32_t skip_scratch_[kMaxSkippedBlocks] = {};
   std::vector<uint32_t> failed_cells_;  // cells whose load failed, not retried (fixed ring)

@@ -112,7 +112,7 @@ struct Frame {
   uint64_t budget;      // the polygon budget set for the next frame
   double mono_s;        // CLOCK_MONOTONIC at the frame's start, to line frames up with `perf record -k mono`
   bool degraded;        // its cell was not resident: waited for, and this is the redraw
-  double prefetch_cpu_ms;  // this runtime's prediction thread's CPU since its last frame
+  double prefetch_cpu_ms;  // this runtime's prediction thread's CPU since its last kept frame
   double decode_cpu_ms;    // every loader thread's of the process (all runs'), over the frame
 };
 

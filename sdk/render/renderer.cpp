@@ -465,7 +465,6 @@ bool Renderer::beginSlabCopy(SlabHandle h, MeshHandle source, SlabUpload& up) {
   if (!reserve(impl_->slabs[h.id - 1], shape, up)) return false;
   up.slab = h.id;
   up.shape = shape;
-  up.mesh = &up.shape;
   up.source = source.id;
   up.source_resets = impl_->slabs[src.slab - 1].resets;
   return true;
@@ -473,7 +472,7 @@ bool Renderer::beginSlabCopy(SlabHandle h, MeshHandle source, SlabUpload& up) {
 
 MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool& finished) {
   finished = true;
-  if (up.slab == 0 || up.slab > impl_->slabs.size() || !up.mesh) {
+  if (up.slab == 0 || up.slab > impl_->slabs.size() || (!up.mesh && !up.source)) {
     fail("no slab upload in progress");
     return {};
   }
@@ -487,8 +486,7 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
     fail("GL context is not current on this thread");
     return {};
   }
-  if (up.source) up.mesh = &up.shape;  // the SlabUpload may have been moved since begin
-  const PreparedMesh& p = *up.mesh;
+  const PreparedMesh& p = up.source ? up.shape : *up.mesh;
   const uint64_t vbytes = p.vertexBytes(), ibytes = p.indexBytes();
   const uint64_t chunk_min = 4096;
   uint64_t allowance = std::max(max_bytes, chunk_min);

@@ -78,8 +78,8 @@ struct SlabHandle {
 // an unfinished one.
 //
 // beginSlabCopy starts the same for a mesh already in another slab: the
-// bytes move GPU-side (glCopyBufferSubData), `mesh` then points at `shape`,
-// which holds the source's counts and box (no CPU pointers).
+// bytes move GPU-side (glCopyBufferSubData); `mesh` is null and `shape`
+// holds the source's counts and box (no CPU pointers).
 struct SlabUpload {
   uint32_t slab = 0;                  // SlabHandle id; 0 when idle
   const PreparedMesh* mesh = nullptr;

@@ -111,16 +111,17 @@ uint32_t Residency::rank(uint32_t cell) const {
   return graph::kNone;
 }
 
-uint32_t Residency::victim(const uint32_t* resident, size_t n, uint32_t for_rank) const {
+uint32_t Residency::victim(const uint32_t* resident, size_t n, uint32_t for_rank, const bool* kept) const {
+  auto may_go = [&](size_t i) { return !kept || !kept[i]; };
   for (size_t i = 0; i < n; ++i)
-    if (resident[i] == graph::kNone) return static_cast<uint32_t>(i);
+    if (resident[i] == graph::kNone && may_go(i)) return static_cast<uint32_t>(i);
   // Unwanted cells: the furthest from where the current cell starts.
   const glm::dvec2 here =
       current_ < g_.cellCount() ? g_.points[g_.halfedges[current_].pts_begin] : glm::dvec2(0, 0);
   uint32_t best = graph::kNone;
   double best_d = -1;
   for (size_t i = 0; i < n; ++i) {
-    if (rank(resident[i]) != graph::kNone) continue;
+    if (!may_go(i) || rank(resident[i]) != graph::kNone) continue;
     const double d = glm::length(g_.points[g_.halfedges[resident[i]].pts_begin] - here);
     if (d > best_d) best_d = d, best = static_cast<uint32_t>(i);
   }
@@ -129,7 +130,7 @@ uint32_t Residency::victim(const uint32_t* resident, size_t n, uint32_t for_rank
   uint32_t worst_rank = 0;
   for (size_t i = 0; i < n; ++i) {
     const uint32_t r = rank(resident[i]);
-    if (r > for_rank && r >= worst_rank) worst_rank = r, best = static_cast<uint32_t>(i);
+    if (may_go(i) && r > for_rank && r >= worst_rank) worst_rank = r, best = static_cast<uint32_t>(i);
   }
   return best;
 }

@@ -48,7 +48,8 @@ class Residency {
   // to fill next for a cell of rank `for_rank`: an empty slot first, else the
   // unwanted cell furthest from the current cell's start, else the wanted cell
   // of lowest priority if that is below `for_rank`; kNone when nothing may go.
-  uint32_t victim(const uint32_t* resident, size_t n, uint32_t for_rank) const;
+  // Slots whose `kept[i]` is true (the runtime copies blocks from them) never go.
+  uint32_t victim(const uint32_t* resident, size_t n, uint32_t for_rank, const bool* kept = nullptr) const;
 
   // The turn penalty in metres for a heading change of `turn_deg` at `speed`.
   static double turnPenalty(double turn_deg, double speed_mps);

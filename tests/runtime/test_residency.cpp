@@ -110,6 +110,26 @@ TEST(Residency, EvictsEmptyThenFurthestUnwantedThenLeastWanted) {
   }
 }
 
+TEST(Residency, AKeptSlotNeverGoes) {
+  const graph::StreetGraph g = junction();
+  Residency r(g, 4, 16);
+  r.update({0, 0.0, 0.0});  // wanted 0, 1, 2, 3
+  {
+    // Unwanted 4 and 5 (4 the further): with 4 kept, 5 goes.
+    const uint32_t resident[] = {5, 4, 1, 0};
+    const bool kept[] = {false, true, false, false};
+    EXPECT_EQ(r.victim(resident, 4, 2, kept), 0u);
+    const bool both[] = {true, true, false, false};
+    EXPECT_EQ(r.victim(resident, 4, 2, both), kNone);  // 1 and 0 rank above 2
+  }
+  {
+    // All wanted: the least wanted (3) is kept, so the next (2) goes for a rank-1 cell.
+    const uint32_t resident[] = {3, 2, 1, 0};
+    const bool kept[] = {true, false, false, false};
+    EXPECT_EQ(r.victim(resident, 4, 1, kept), 1u);
+  }
+}
+
 TEST(Residency, NoCellWantsNothing) {
   const graph::StreetGraph g = junction();
   Residency r(g, 4, 16);
