@@ -450,6 +450,30 @@ BLVD_API blvd_status blvd_feed_odometry(blvd_runtime* rt, const blvd_odometry* o
  * active). */
 BLVD_API blvd_status blvd_get_pose(blvd_runtime* rt, double t, blvd_pose* pose);
 
+/* The odometry's calibration, which the filter learns from GNSS while driving: the wheel-speed
+ * scale (tyre radius) and the yaw-rate sensor's bias. They belong to the vehicle, not to the
+ * drive: read them at the end of a drive (key-off), store them, and give them back before the
+ * next drive's first fix, so that dead reckoning starts calibrated instead of learning them
+ * again (as automotive dead reckoning keeps its odometer scale factor in non-volatile memory). */
+typedef struct blvd_odometry_calibration {
+  uint32_t struct_size;           /* sizeof(blvd_odometry_calibration) */
+  double speed_scale;             /* the odometry reads speed_scale x the ground speed; 1 = exact */
+  double speed_scale_sigma;       /* its 1-sigma (raised to 0.002 when set: tyre pressure and
+                                   * temperature change between drives) */
+  double yaw_rate_bias_dps;       /* measured minus true yaw rate, positive to the left */
+  double yaw_rate_bias_sigma_dps; /* its 1-sigma (raised to 0.05 when set: a gyro's bias moves
+                                   * from one power-up to the next) */
+} blvd_odometry_calibration;
+
+/* The current estimate (before the first fix: what the filter will start from). Render thread,
+ * as blvd_get_pose: it reflects what blvd_get_pose or blvd_render last processed. */
+BLVD_API blvd_status blvd_get_odometry_calibration(blvd_runtime* rt, blvd_odometry_calibration* cal);
+
+/* Starts the filter's scale and bias from `cal` (a running filter takes them at once; a reset
+ * keeps them). Render thread. Errors: BLVD_ERR_INVALID_ARG for a scale outside [0.5, 2], a bias
+ * beyond 10 deg/s, a negative sigma or a non-finite field; nothing changes then. */
+BLVD_API blvd_status blvd_set_odometry_calibration(blvd_runtime* rt, const blvd_odometry_calibration* cal);
+
 /* ---- CAN frames through a vehicle profile ---------------------------------------
  * A profile reads one vehicle's CAN signals, as its DBC file describes them
  * (opendbc's files), and turns them into odometry: speed, yaw rate, wheel speeds

@@ -274,6 +274,18 @@ blvd_status blvd_get_pose(blvd_runtime* rt, double t, blvd_pose* pose) {
   return guarded(rt, [&] { rt->impl->getPose(t, pose); });
 }
 
+blvd_status blvd_get_odometry_calibration(blvd_runtime* rt, blvd_odometry_calibration* cal) {
+  if (!rt) return misuse(nullptr, "blvd_get_odometry_calibration: rt is NULL");
+  if (!cal) return misuse(rt, "blvd_get_odometry_calibration: cal is NULL");
+  return guarded(rt, [&] { rt->impl->getCalibration(cal); });
+}
+
+blvd_status blvd_set_odometry_calibration(blvd_runtime* rt, const blvd_odometry_calibration* cal) {
+  if (!rt) return misuse(nullptr, "blvd_set_odometry_calibration: rt is NULL");
+  if (!cal) return misuse(rt, "blvd_set_odometry_calibration: cal is NULL");
+  return guarded(rt, [&] { rt->impl->setCalibration(*cal); });
+}
+
 blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats) {
   if (!rt) return misuse(nullptr, "blvd_render: rt is NULL");
   return guarded(rt, [&] { rt->impl->render(stats); });

@@ -45,6 +45,8 @@ class Runtime {
   blvd_status feedGnss(const blvd_gnss_fix& fix);
   blvd_status feedOdometry(const blvd_odometry& odo);
   void getPose(double t, blvd_pose* out);
+  void getCalibration(blvd_odometry_calibration* out) const;
+  void setCalibration(const blvd_odometry_calibration& in);
 
   std::string last_error;
 

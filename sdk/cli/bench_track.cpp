@@ -241,8 +241,14 @@ struct MatchSetup {
   track::TrackerDesc tracker;
 };
 
-MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry, const std::string& trace_path) {
+// calibrated: every drive after the first starts from the odometry calibration
+// (wheel-speed scale, yaw-rate bias) the previous drive's filter ended with, as a
+// host that stores it at key-off would (the simulated car is the same in every drive).
+MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry, const std::string& trace_path,
+                          bool calibrated = false) {
   MatchResult res;
+  track::OdometryCalibration cal;
+  bool have_cal = false;
   FILE* tf = trace_path.empty() ? nullptr : std::fopen(trace_path.c_str(), "w");
   if (tf)
     std::fprintf(tf, "drive,t,fix,true_cell,true_arc,true_len,cell,arc,conf,err_m,sigma_m,true_e,true_n,e,n,heading,"
@@ -282,6 +288,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
     if (replayer.open(rd, err) != BLVD_OK) throw Error(Status::Io, err);
 
     track::Tracker tr(ms.city->frame(), &g, ms.tracker);
+    if (calibrated && have_cal && !tr.setCalibration(cal)) throw Error(Status::Internal, "calibration refused");
     res.drive_starts.push_back(res.observations.size());
     uint64_t steps = 0, fed = 0;
     const auto noteStep = [&] {
@@ -368,6 +375,10 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
       }
     }
     res.bad_lines += replayer.stats().bad_lines;
+    if (calibrated) {
+      cal = tr.calibration();
+      have_cal = true;
+    }
     res.breaks += tr.stats().match.breaks;
     res.steps += tr.stats().match.steps;
   }
@@ -484,6 +495,10 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   const MatchResult m5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5.csv");
   const MatchResult m15 =
       opt.match_low_only ? MatchResult{} : benchMatching(ms, opt.sigma_high, true, tp.empty() ? "" : tp + "-match15.csv");
+  const MatchResult c5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5-calibrated.csv", true);
+  const MatchResult c15 = opt.match_low_only ? MatchResult{}
+                                             : benchMatching(ms, opt.sigma_high, true,
+                                                             tp.empty() ? "" : tp + "-match15-calibrated.csv", true);
   const MatchResult g5 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_low, false, "");
   const MatchResult g15 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_high, false, "");
   const double us = quick ? NAN : timeSteps(city.graph(), {&m5, &m15}, 3);
@@ -493,6 +508,9 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   nlohmann::json j;
   j["on_cell_sigma5"] = on5;
   j["on_cell_sigma15"] = on15;
+  // The same drives with the odometry calibration carried from one drive to the next.
+  j["on_cell_sigma5_calibrated"] = share(c5.on_cell, c5.epochs);
+  j["on_cell_sigma15_calibrated"] = share(c15.on_cell, c15.epochs);
   j["update_us_p50"] = us;
   j["fusion_err_m_p50"] = fu.err_p50;
   j["dr_drift_pct"] = fu.drift_pct;
@@ -517,6 +535,8 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   d["gnss_sigma_high_m"] = opt.sigma_high;
   d["match_sigma5"] = matchJson(m5);
   d["match_sigma15"] = matchJson(m15);
+  d["match_sigma5_calibrated"] = matchJson(c5);
+  d["match_sigma15_calibrated"] = matchJson(c15);
   d["match_sigma5_gnss_only"] = matchJson(g5);
   d["match_sigma15_gnss_only"] = matchJson(g15);
   d["graph_cells"] = city.graph().cellCount();

@@ -38,6 +38,9 @@ int runTrack(const TrackCmd& c) {
       std::printf("%-18s %10.4f   target %s %g: %s\n", k, j[k].is_number() ? double(j[k]) : NAN, j["targets"][k].contains("min") ? ">=" : "<=",
                   double(j["targets"][k].contains("min") ? j["targets"][k]["min"] : j["targets"][k]["max"]),
                   bool(j["targets"][k]["met"]) ? "met" : "NOT met");
+    for (const char* k : {"on_cell_sigma5_calibrated", "on_cell_sigma15_calibrated"})
+      std::printf("%-26s %10.4f   (odometry calibration carried from drive to drive)\n", k,
+                  j[k].is_number() ? double(j[k]) : NAN);
   }
   if (!c.check) return 0;
   bool ok = true;
@@ -53,6 +56,10 @@ int runTrack(const TrackCmd& c) {
   expect(fus <= 1.5, "fusion_err_m_p50 <=", 1.5, fus);
   expect(drift <= 2.0, "dr_drift_pct <=", 2.0, drift);
   if (c.timing_check) expect(us <= 20.0, "update_us_p50 <=", 20.0, us);
+  // A calibration carried from the previous drive must not track worse than learning it again.
+  const double cal5 = j["on_cell_sigma5_calibrated"], cal15 = j["on_cell_sigma15_calibrated"];
+  expect(cal5 >= on5, "on_cell_sigma5_calibrated >= on_cell_sigma5", on5, cal5);
+  expect(cal15 >= on15, "on_cell_sigma15_calibrated >= on_cell_sigma15", on15, cal15);
   return ok ? 0 : 1;
 }
 
@@ -89,6 +96,8 @@ void addBenchTrack(CLI::App& bench, Runner& run) {
   t->add_option("--q-pos", c->bench.tracker.ekf.q_pos);
   t->add_option("--q-speed", c->bench.tracker.ekf.q_speed);
   t->add_option("--q-scale", c->bench.tracker.ekf.q_scale);
+  t->add_option("--q-heading", c->bench.tracker.ekf.q_heading);
+  t->add_option("--q-bias", c->bench.tracker.ekf.q_bias);
   t->add_option("--init-scale-sigma", c->bench.tracker.ekf.init_scale_sigma);
   t->add_option("--odo-speed-sigma", c->bench.tracker.ekf.odo_speed_sigma);
   t->add_option("--gnss-speed-sigma", c->bench.tracker.ekf.gnss_speed_sigma);

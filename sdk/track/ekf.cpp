@@ -58,7 +58,40 @@ EkfDesc ekfDefaults(const EkfDesc& in) {
   return d;
 }
 
-Ekf::Ekf(const EkfDesc& desc) : d_(ekfDefaults(desc)) { reset(); }
+Ekf::Ekf(const EkfDesc& desc) : d_(ekfDefaults(desc)) {
+  prior_.speed_scale_sigma = d_.init_scale_sigma;
+  prior_.yaw_bias_sigma_rad_s = d_.init_bias_sigma_dps * kDeg;
+  reset();
+}
+
+OdometryCalibration Ekf::calibration() const {
+  if (!initialized_) return prior_;
+  OdometryCalibration c;
+  c.speed_scale = x_[kK];
+  c.speed_scale_sigma = std::sqrt(std::max(0.0, P_[kK][kK]));
+  c.yaw_bias_rad_s = x_[kB];
+  c.yaw_bias_sigma_rad_s = std::sqrt(std::max(0.0, P_[kB][kB]));
+  return c;
+}
+
+bool Ekf::setCalibration(const OdometryCalibration& c) {
+  const bool finite = std::isfinite(c.speed_scale) && std::isfinite(c.speed_scale_sigma) &&
+                      std::isfinite(c.yaw_bias_rad_s) && std::isfinite(c.yaw_bias_sigma_rad_s);
+  if (!finite || c.speed_scale < 0.5 || c.speed_scale > 2 || std::fabs(c.yaw_bias_rad_s) > 10 * kDeg ||
+      c.speed_scale_sigma < 0 || c.yaw_bias_sigma_rad_s < 0)
+    return false;
+  prior_ = c;
+  prior_.speed_scale_sigma = std::max(c.speed_scale_sigma, kMinScaleSigma);
+  prior_.yaw_bias_sigma_rad_s = std::max(c.yaw_bias_sigma_rad_s, kMinYawBiasSigmaRadS);
+  if (initialized_) {
+    for (int i = 0; i < kDim; ++i) P_[kK][i] = P_[i][kK] = P_[kB][i] = P_[i][kB] = 0;
+    x_[kK] = prior_.speed_scale;
+    x_[kB] = prior_.yaw_bias_rad_s;
+    P_[kK][kK] = prior_.speed_scale_sigma * prior_.speed_scale_sigma;
+    P_[kB][kB] = prior_.yaw_bias_sigma_rad_s * prior_.yaw_bias_sigma_rad_s;
+  }
+  return true;
+}
 
 void Ekf::reset() {
   std::memset(x_, 0, sizeof x_);
@@ -170,13 +203,13 @@ void Ekf::initPosition(double t, double e, double n, double sigma_m) {
   x_[kN] = n;
   P_[kE][kE] = P_[kN][kN] = sigma_m * sigma_m;
   if (!initialized_) {
-    x_[kPsi] = x_[kV] = x_[kB] = 0;
-    x_[kK] = 1;
+    x_[kPsi] = x_[kV] = 0;
+    x_[kB] = prior_.yaw_bias_rad_s;
+    x_[kK] = prior_.speed_scale;
     P_[kPsi][kPsi] = kPi * kPi;
     P_[kV][kV] = 100.0;
-    const double sb = d_.init_bias_sigma_dps * kDeg;
-    P_[kB][kB] = sb * sb;
-    P_[kK][kK] = d_.init_scale_sigma * d_.init_scale_sigma;
+    P_[kB][kB] = prior_.yaw_bias_sigma_rad_s * prior_.yaw_bias_sigma_rad_s;
+    P_[kK][kK] = prior_.speed_scale_sigma * prior_.speed_scale_sigma;
     t_ = t;
     initialized_ = true;
   }

@@ -60,6 +60,25 @@ struct EkfDesc {
 
 EkfDesc ekfDefaults(const EkfDesc& desc);
 
+// The odometry's calibration: the wheel-speed scale and the yaw-rate bias. They
+// belong to the vehicle, not to the drive, so a host keeps them between drives
+// (automotive dead reckoning stores its odometer scale factor and gyro bias in
+// non-volatile memory at key-off; Groves, 2nd ed., §16.2.1 and §16.3.4) and
+// gives them back at the next start instead of learning them again from GNSS.
+struct OdometryCalibration {
+  double speed_scale = 1;          // odometry reads speed_scale x ground speed
+  double speed_scale_sigma = 0;    // its 1-sigma
+  double yaw_bias_rad_s = 0;       // measured yaw rate minus the true one, positive left
+  double yaw_bias_sigma_rad_s = 0; // its 1-sigma
+};
+
+// The smallest sigmas Ekf::setCalibration accepts: between two drives the
+// tyres' pressure and temperature move the scale by a few tenths of a percent,
+// and a MEMS gyro's bias changes from one power-up to the next (its turn-on
+// bias repeatability, of the order of 0.01-0.1 deg/s for automotive yaw-rate sensors).
+constexpr double kMinScaleSigma = 0.002;
+constexpr double kMinYawBiasSigmaRadS = 0.05 * 3.14159265358979323846 / 180;
+
 class Ekf {
  public:
   enum : int { kE = 0, kN = 1, kPsi = 2, kV = 3, kB = 4, kK = 5, kDim = 6 };
@@ -100,6 +119,17 @@ class Ekf {
   // Sets the heading (first course from GNSS, or from displacement).
   void initHeading(double psi, double sigma);
 
+  // The filter's estimate of the odometry's calibration (the prior it started
+  // from while not initialised).
+  OdometryCalibration calibration() const;
+  // Starts from `c` instead of the defaults (scale 1 +- init_scale_sigma, bias
+  // 0 +- init_bias_sigma_dps), now and after every reset: a running filter takes
+  // the values and variances (sigmas raised to kMinScaleSigma /
+  // kMinYawBiasSigmaRadS) and forgets their correlation with the other states.
+  // False, changing nothing, for a scale outside [0.5, 2], a bias beyond 10 deg/s,
+  // a negative sigma or a non-finite field.
+  bool setCalibration(const OdometryCalibration& c);
+
   bool initialized() const { return initialized_; }
   bool headingValid() const { return heading_valid_; }
   double time() const { return t_; }
@@ -137,6 +167,7 @@ class Ekf {
   void initPosition(double t, double e, double n, double sigma_m);
 
   EkfDesc d_;
+  OdometryCalibration prior_;  // where a fresh filter starts its scale and bias
   double x_[kDim] = {};
   double P_[kDim][kDim] = {};
   double t_ = 0;

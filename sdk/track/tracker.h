@@ -124,8 +124,14 @@ class Tracker {
   const Pose& update(double t);
   const Pose& pose() const { return pose_; }
 
-  // Tracking thread: forgets the filter, the match and anything still in the ring.
+  // Tracking thread: forgets the filter, the match and anything still in the ring
+  // (not the odometry calibration given to setCalibration).
   void reset();
+
+  // Tracking thread: the odometry calibration learned so far (ekf.h), to keep
+  // for the vehicle's next drive, and the one to start from (Ekf::setCalibration).
+  OdometryCalibration calibration() const { return ekf_.calibration(); }
+  bool setCalibration(const OdometryCalibration& c) { return ekf_.setCalibration(c); }
 
   TrackerStats stats() const;
   const TrackerDesc& desc() const { return d_; }

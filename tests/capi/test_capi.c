@@ -117,10 +117,43 @@ int main(int argc, char** argv) {
     blvd_gnss_fix fix;
     blvd_odometry odo;
     blvd_pose pose;
+    blvd_odometry_calibration cal;
     int k;
     const double lat0 = 43.735370, lon0 = 7.417288, hdg = 211.0 * 3.14159265358979 / 180.0;
     EXPECT(blvd_feed_gnss(rt, NULL) == BLVD_ERR_INVALID_ARG);
     EXPECT(blvd_feed_gnss(NULL, NULL) == BLVD_ERR_MISUSE);
+    /* The odometry calibration a host stores between drives: the defaults, a stored one
+     * (sigmas raised to their floors), an impossible one refused with its values named. */
+    memset(&cal, 0, sizeof cal);
+    cal.struct_size = sizeof cal;
+    EXPECT(blvd_get_odometry_calibration(rt, &cal) == BLVD_OK);
+    EXPECT(cal.speed_scale == 1.0 && fabs(cal.speed_scale_sigma - 0.05) < 1e-9 && cal.yaw_rate_bias_dps == 0.0);
+    cal.speed_scale = 1.03;
+    cal.speed_scale_sigma = 0.0;
+    cal.yaw_rate_bias_dps = 0.2;
+    cal.yaw_rate_bias_sigma_dps = 0.01;
+    EXPECT(blvd_set_odometry_calibration(rt, &cal) == BLVD_OK);
+    memset(&cal, 0, sizeof cal);
+    cal.struct_size = sizeof cal;
+    EXPECT(blvd_get_odometry_calibration(rt, &cal) == BLVD_OK);
+    EXPECT(cal.speed_scale == 1.03 && fabs(cal.speed_scale_sigma - 0.002) < 1e-12);
+    EXPECT(fabs(cal.yaw_rate_bias_dps - 0.2) < 1e-12 && fabs(cal.yaw_rate_bias_sigma_dps - 0.05) < 1e-12);
+    cal.speed_scale = 3.0;
+    EXPECT(blvd_set_odometry_calibration(rt, &cal) == BLVD_ERR_INVALID_ARG);
+    EXPECT(strstr(blvd_last_error(rt), "speed_scale 3 ") != NULL);
+    cal.speed_scale = 1.0;
+    cal.struct_size = 8;
+    EXPECT(blvd_set_odometry_calibration(rt, &cal) == BLVD_ERR_INVALID_ARG);
+    EXPECT(blvd_set_odometry_calibration(rt, NULL) == BLVD_ERR_MISUSE);
+    EXPECT(blvd_get_odometry_calibration(NULL, &cal) == BLVD_ERR_MISUSE);
+    memset(&cal, 0, sizeof cal);
+    cal.struct_size = sizeof cal;
+    EXPECT(blvd_get_odometry_calibration(rt, &cal) == BLVD_OK);
+    EXPECT(cal.speed_scale == 1.03); /* the refused ones changed nothing */
+    cal.speed_scale = 0.9; /* the wheels read 10 % slow, +- 5 %: wrong for the feed below */
+    cal.speed_scale_sigma = 0.05;
+    cal.yaw_rate_bias_dps = 0.0;
+    EXPECT(blvd_set_odometry_calibration(rt, &cal) == BLVD_OK);
     for (k = 0; k < 10; ++k) {
       const double d = 10.0 * k; /* metres travelled */
       memset(&fix, 0, sizeof fix);
@@ -148,6 +181,12 @@ int main(int argc, char** argv) {
     EXPECT(pose.flags & BLVD_POSE_VALID);
     EXPECT(fabs(pose.lat - fix.lat) < 30.0 / 111132.0 && fabs(pose.lon - fix.lon) < 30.0 / 80000.0);
     EXPECT(fabs(pose.speed_mps - 10.0) < 2.0);
+    /* The fixes say 10 m/s, the odometry 10 m/s: the scale moves from 0.9 towards 1. */
+    memset(&cal, 0, sizeof cal);
+    cal.struct_size = sizeof cal;
+    EXPECT(blvd_get_odometry_calibration(rt, &cal) == BLVD_OK);
+    EXPECT(cal.speed_scale > 0.97 && cal.speed_scale < 1.03);
+    EXPECT(cal.speed_scale_sigma < 0.05);
     EXPECT(blvd_get_pose(rt, NAN, &pose) == BLVD_ERR_INVALID_ARG);
     memset(&fs, 0, sizeof fs);
     fs.struct_size = sizeof fs;

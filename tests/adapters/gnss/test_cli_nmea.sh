@@ -8,8 +8,8 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 
 # --json: one TPV object per line, gpsd's field names and formats.
 out=$("$blvd" nmea decode "$data/nmea-rtk.log" --json)
-[ "$(printf '%s\n' "$out" | wc -l)" -eq 122 ] || fail "nmea-rtk.log: expected 122 TPV lines"
-first=$(printf '%s\n' "$out" | head -1)
+[ "$(wc -l <<<"$out")" -eq 122 ] || fail "nmea-rtk.log: expected 122 TPV lines"
+first=${out%%$'\n'*}
 expect='{"class":"TPV","mode":3,"time":"2020-03-18T13:28:19.600Z","lat":41.574965910,"lon":-93.750571901,"alt":278.1610,"speed":0.076,"track":124.8880}'
 [ "$first" = "$expect" ] || fail "first TPV: got $first"
 printf '%s\n' "$out" | python3 -c '
@@ -22,8 +22,10 @@ for line in sys.stdin:
 
 # The table, and a summary on stderr.
 table=$("$blvd" nmea decode "$data/bt451.log" 2>/tmp/blvd_nmea_err.$$)
-printf '%s\n' "$table" | head -1 | grep -q "time (UTC)" || fail "no table header"
-printf '%s\n' "$table" | grep -q "2009-12-09T15:25:05.000Z   3D     55.7970188" || fail "table row"
+# (here-strings, not pipes: under pipefail a `grep -q` that exits at its match can
+# fail the pipeline with the writer's SIGPIPE)
+grep -q "time (UTC)" <<<"${table%%$'\n'*}" || fail "no table header"
+grep -q "2009-12-09T15:25:05.000Z   3D     55.7970188" <<<"$table" || fail "table row"
 grep -q "fixes from 144 sentences" /tmp/blvd_nmea_err.$$ || fail "no summary on stderr"
 
 # Problems go to stderr with line numbers and byte offsets; decoding goes on.
@@ -40,5 +42,5 @@ msg=$("$blvd" nmea decode /nonexistent/file.log 2>&1)
 rc=$?
 set -e
 [ $rc -eq 1 ] || fail "unreadable file: exit $rc, want 1"
-printf '%s\n' "$msg" | grep -q "cannot read /nonexistent/file.log" || fail "unreadable file message: $msg"
+grep -q "cannot read /nonexistent/file.log" <<<"$msg" || fail "unreadable file message: $msg"
 echo "cli nmea: ok"
