@@ -239,6 +239,8 @@ struct MatchSetup {
   std::string dbc_path;
   uint32_t routes, route_cells;
   track::TrackerDesc tracker;
+  double lane_wander_m = -1;  // TrackBenchOptions::sim_lane_wander_m
+  bool oracle_calibration = false;
 };
 
 // calibrated: every drive after the first starts from the odometry calibration
@@ -260,6 +262,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
     fd.drive.seed = 1000 + r;
     fd.drive.route_cells = ms.route_cells;
     fd.drive.gnss_sigma_m = sigma;
+    if (ms.lane_wander_m >= 0) fd.drive.lane_wander_m = ms.lane_wander_m;
     sim::Feed feed;
     std::string err;
     const blvd_status fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
@@ -288,7 +291,14 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
     if (replayer.open(rd, err) != BLVD_OK) throw Error(Status::Io, err);
 
     track::Tracker tr(ms.city->frame(), &g, ms.tracker);
-    if (calibrated && have_cal && !tr.setCalibration(cal)) throw Error(Status::Internal, "calibration refused");
+    if (ms.oracle_calibration) {
+      track::OdometryCalibration truth;
+      truth.speed_scale = fd.drive.speed_scale;
+      truth.yaw_bias_rad_s = fd.drive.yaw_bias_dps * 0.017453292519943295;  // raised to the sigma floors
+      if (!tr.setCalibration(truth)) throw Error(Status::Internal, "calibration refused");
+    } else if (calibrated && have_cal && !tr.setCalibration(cal)) {
+      throw Error(Status::Internal, "calibration refused");
+    }
     res.drive_starts.push_back(res.observations.size());
     uint64_t steps = 0, fed = 0;
     const auto noteStep = [&] {
@@ -491,6 +501,8 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   ms.routes = opt.routes;
   ms.route_cells = opt.route_cells;
   ms.tracker = opt.tracker;
+  ms.lane_wander_m = opt.sim_lane_wander_m;
+  ms.oracle_calibration = opt.oracle_calibration;
   const std::string& tp = opt.trace_prefix;
   const MatchResult m5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5.csv");
   const MatchResult m15 =

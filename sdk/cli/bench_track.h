@@ -47,6 +47,12 @@ struct TrackBenchOptions {
   // Experiments: only the on-cell runs with odometry (sigma_low, and sigma_high unless
   // match_low_only); no fusion, no GNSS-only runs, no timing (those keys are NaN).
   bool match_only = false, match_low_only = false;
+  // Experiments on the simulated drives, for bounds rather than figures: the car's
+  // lane wander (SimDesc::lane_wander_m; negative: the simulator's default), and
+  // every drive's filter started from the simulator's true wheel-speed scale and
+  // yaw-rate bias (sigmas at the floors of Ekf::setCalibration).
+  double sim_lane_wander_m = -1;
+  bool oracle_calibration = false;
 };
 
 // Runs everything; throws core::Error naming the file on bad input. The JSON holds

@@ -43,7 +43,7 @@ EkfDesc ekfDefaults(const EkfDesc& in) {
   if (d.reset_after_rejects == 0) d.reset_after_rejects = 5;
   d.q_pos = orDefault(d.q_pos, 0.002);
   d.q_speed = orDefault(d.q_speed, 4.0);
-  d.q_heading = orDefault(d.q_heading, (0.5 * kDeg) * (0.5 * kDeg));
+  d.q_heading = orDefault(d.q_heading, (0.2 * kDeg) * (0.2 * kDeg));
   d.q_bias = orDefault(d.q_bias, (0.01 * kDeg) * (0.01 * kDeg));
   d.q_turn = orDefault(d.q_turn, (20 * kDeg) * (20 * kDeg));
   d.odo_speed_sigma = orDefault(d.odo_speed_sigma, 0.1);

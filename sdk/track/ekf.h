@@ -44,7 +44,10 @@ struct EkfDesc {
   uint32_t reset_after_rejects = 0;  // consecutive rejected fixes that reset the position; default 5
   double q_pos = 0;                // position process noise (slip, model error), m^2/s; default 0.002
   double q_speed = 0;              // speed random walk, (m/s)^2/s; default 4 (2 m/s^2)
-  double q_heading = 0;            // heading noise with a gyro, rad^2/s; default (0.5 deg)^2/s
+  double q_heading = 0;            // heading noise with a gyro, rad^2/s; default (0.2 deg)^2/s: a yaw-rate
+                                   // sensor's angle random walk (0.3 deg/s of noise at 50 Hz is 0.04 deg/sqrt(s))
+                                   // with room for its scale and alignment errors (was (0.5 deg)^2/s: 3-4 % more
+                                   // on-cell misses over 200 drives, README)
   double q_bias = 0;               // yaw-rate bias random walk, (rad/s)^2/s; default (0.01 deg/s)^2/s
   double q_turn = 0;               // turn-rate random walk without a gyro, (rad/s)^2/s; default (20 deg/s)^2/s
   double odo_speed_sigma = 0;      // odometry speed, m/s; default 0.1
