@@ -243,6 +243,24 @@ struct MatchSetup {
   bool oracle_calibration = false;
 };
 
+// How the pose's cell relates to the true one, for the trace: same, next (a
+// successor of the truth: the pose is ahead), previous, sibling (another
+// successor of the same predecessor: the other branch of a fork), twin (the
+// other direction), none (no pose cell) or other.
+const char* cellRelation(const graph::StreetGraph& g, uint32_t est, uint32_t truth) {
+  if (est == truth) return "same";
+  if (est >= g.cellCount()) return "none";
+  if (g.halfedges[truth].twin == est) return "twin";
+  for (const uint32_t* s = g.successors.begin(truth); s != g.successors.end(truth); ++s)
+    if (*s == est) return "next";
+  for (const uint32_t* s = g.predecessors.begin(truth); s != g.predecessors.end(truth); ++s) {
+    if (*s == est) return "previous";
+    for (const uint32_t* t = g.successors.begin(*s); t != g.successors.end(*s); ++t)
+      if (*t == est) return "sibling";
+  }
+  return "other";
+}
+
 // calibrated: every drive after the first starts from the odometry calibration
 // (wheel-speed scale, yaw-rate bias) the previous drive's filter ended with, as a
 // host that stores it at key-off would (the simulated car is the same in every drive).
@@ -255,7 +273,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
   if (tf)
     std::fprintf(tf, "drive,t,fix,true_cell,true_arc,true_len,cell,arc,conf,err_m,sigma_m,true_e,true_n,e,n,heading,"
                      "true_heading,est_arc_on_true,est_dist_on_true,map_aids,true_dist_on_est,est_cell_heading,yaw_bias_dps,"
-                     "odo_scale,true_h0,true_h1,fix_e,fix_n,nees,sigma_along,aid_suspensions,head_cell,true_lat,est_lat,lane_m,kappa,aid_lowconf,aid_disagree,aid_ambiguous\n");
+                     "odo_scale,true_h0,true_h1,fix_e,fix_n,nees,sigma_along,aid_suspensions,head_cell,true_lat,est_lat,lane_m,kappa,aid_lowconf,aid_disagree,aid_ambiguous,relation\n");
   const graph::StreetGraph& g = ms.city->graph();
   for (uint32_t r = 0; r < ms.routes; ++r) {
     sim::FeedDesc fd;
@@ -357,7 +375,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
         // The filter's sigma along the true heading (its claimed along-track uncertainty).
         const double th = s.heading_deg * 0.017453292519943295, ue = std::sin(th), un = std::cos(th);
         const double sigma_along = std::sqrt(std::max(0.0, ue * ue * pee + 2 * ue * un * pen + un * un * pnn));
-        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f,%llu,%.2f,%.1f,%.3f,%.5f,%.1f,%.1f,%s,%.2f,%.3f,%llu,%d,%.3f,%.3f,%.2f,%.5f,%llu,%llu,%llu\n", r,
+        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f,%llu,%.2f,%.1f,%.3f,%.5f,%.1f,%.1f,%s,%.2f,%.3f,%llu,%d,%.3f,%.3f,%.2f,%.5f,%llu,%llu,%llu,%s\n", r,
                      s.t - feed.start_unix, s.fix ? 1 : 0, s.cell, s.arc_m, g.halfedges[s.cell].length, p.cell, p.arc_m,
                      p.confidence, std::hypot(p.e - s.e, p.n - s.n), p.pos_sigma_m, s.e, s.n, p.e, p.n, p.heading_deg,
                      s.heading_deg, q.arc_m, q.dist_m, static_cast<unsigned long long>(tr.stats().map_aids),
@@ -369,7 +387,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
                      std::fabs(tr.filter().speed()) > 1 ? tr.filter().turnRate() / tr.filter().speed() : 0.0,
                      static_cast<unsigned long long>(tr.stats().map_aid_low_confidence),
                      static_cast<unsigned long long>(tr.stats().map_aid_disagreeing),
-                     static_cast<unsigned long long>(tr.stats().map_aid_ambiguous));
+                     static_cast<unsigned long long>(tr.stats().map_aid_ambiguous), cellRelation(g, p.cell, s.cell));
       }
       res.on_cell += ok;
       if (s.fix) ++res.fix_epochs, res.fix_on_cell += ok;
