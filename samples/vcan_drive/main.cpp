@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration.h"
 #include "can_feed.h"
 #include "can_input.h"
 #include "gnss_feed.h"
@@ -60,6 +61,7 @@ struct Options {
   double idle_exit_s = 0, duration_s = 0;
   std::string ready_file;
   int rcvbuf = 4 << 20;
+  std::string calibration;  // odometry calibration kept between drives (calibration.h)
 };
 
 // Feeds the --start hint: one GNSS fix at t (5 m accuracy) and, with a
@@ -103,6 +105,8 @@ int main(int argc, char** argv) {
   app.add_option("--poses", opt.poses_path, "write poses as JSON lines");
   app.add_option("--odometry", opt.odometry_path, "write the decoded odometry as JSON lines");
   app.add_option("--stats", opt.stats_path, "write the run's stats JSON");
+  app.add_option("--calibration", opt.calibration,
+                 "odometry calibration kept between drives: read at start (when the file exists), written at exit");
   app.add_option("--pose-interval", opt.pose_interval_s, "seconds of bus time between poses")->capture_default_str();
   app.add_option("--idle-exit", opt.idle_exit_s, "stop after this many seconds without a frame (0: never)");
   app.add_option("--duration", opt.duration_s, "stop after this many seconds (0: never)");
@@ -194,6 +198,23 @@ int main(int argc, char** argv) {
   }
   if (opt.package.empty() && opt.start.empty() && opt.nmea.empty())
     std::fprintf(stderr, "vcan_drive: no --start and no --nmea: odometry is decoded, but poses stay invalid\n");
+  // The calibration the last drive learnt, before the first fix (none yet on a first drive).
+  bool calibration_loaded = false;
+  if (!opt.calibration.empty()) {
+    blvd_odometry_calibration cal{};
+    const CalibrationRead cr = readCalibration(opt.calibration, cal, err);
+    if (cr == CalibrationRead::Bad) {
+      std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
+      return 2;
+    }
+    if (cr == CalibrationRead::Loaded) {
+      if (tracking->setCalibration(cal) != BLVD_OK) {
+        std::fprintf(stderr, "vcan_drive: %s: %s\n", opt.calibration.c_str(), tracking->lastError().c_str());
+        return 2;
+      }
+      calibration_loaded = true;
+    }
+  }
 
   CanFeed feed;
   if (feed.open(opt.dbc, vehicle, err) != BLVD_OK) {
@@ -291,6 +312,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
     rc = 1;
   }
+  // What this drive learnt, for the next one.
+  blvd_odometry_calibration cal_end{};
+  if (tracking->getCalibration(cal_end) != BLVD_OK) {
+    std::fprintf(stderr, "vcan_drive: blvd_get_odometry_calibration: %s\n", tracking->lastError().c_str());
+    rc = 1;
+  } else if (!opt.calibration.empty() && !writeCalibration(opt.calibration, cal_end, err)) {
+    std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
+    rc = 1;
+  }
   const CanFeedStats& fs = feed.stats();
   nlohmann::json j;
   j["input"] = input.describe();
@@ -315,6 +345,12 @@ int main(int argc, char** argv) {
   j["valid_poses"] = valid;
   j["matched_poses"] = matched;
   j["cells_visited"] = cells;
+  j["calibration"] = {{"file", opt.calibration},
+                      {"loaded", calibration_loaded},
+                      {"speed_scale", cal_end.speed_scale},
+                      {"speed_scale_sigma", cal_end.speed_scale_sigma},
+                      {"yaw_rate_bias_dps", cal_end.yaw_rate_bias_dps},
+                      {"yaw_rate_bias_sigma_dps", cal_end.yaw_rate_bias_sigma_dps}};
   j["wall_s"] = std::chrono::duration<double>(Clock::now() - wall0).count();
   blvd_stats rs{};
   addMemoryStats(j, tracking->runtimeStats(rs) ? &rs : nullptr);

@@ -34,6 +34,9 @@ class Tracking {
   }
   virtual blvd_status feedGnss(const blvd_gnss_fix& fix) = 0;
   virtual blvd_status getPose(double t, blvd_pose& out) = 0;
+  // The odometry calibration (blvd_get/set_odometry_calibration): kept between drives.
+  virtual blvd_status getCalibration(blvd_odometry_calibration& out) = 0;
+  virtual blvd_status setCalibration(const blvd_odometry_calibration& in) = 0;
   // Package origin (degrees); 0, 0 when there is none.
   virtual void origin(double& lat, double& lon) const = 0;
 

@@ -32,6 +32,13 @@ class CapiTracking final : public Tracking {
     out.struct_size = sizeof out;
     return blvd_get_pose(rt_, t, &out);
   }
+  blvd_status getCalibration(blvd_odometry_calibration& out) override {
+    out.struct_size = sizeof out;
+    return blvd_get_odometry_calibration(rt_, &out);
+  }
+  blvd_status setCalibration(const blvd_odometry_calibration& in) override {
+    return blvd_set_odometry_calibration(rt_, &in);
+  }
   void origin(double& lat, double& lon) const override { lat = lat_, lon = lon_; }
 
   bool canRender() const override { return true; }

@@ -45,14 +45,25 @@ class DirectTracking final : public Tracking {
     return BLVD_OK;
   }
 
+  blvd_status getCalibration(blvd_odometry_calibration& out) override {
+    out.struct_size = sizeof out;
+    capi::toBlvd(tracker_.calibration(), &out);
+    return BLVD_OK;
+  }
+  blvd_status setCalibration(const blvd_odometry_calibration& in) override {
+    if (tracker_.setCalibration(capi::toTrack(in))) return BLVD_OK;
+    error_ = "odometry calibration refused (scale outside [0.5, 2], bias beyond 10 deg/s or a bad sigma)";
+    return BLVD_ERR_INVALID_ARG;
+  }
   void origin(double& lat, double& lon) const override { lat = lat_, lon = lon_; }
-  std::string lastError() const override { return {}; }
+  std::string lastError() const override { return error_; }
 
  private:
   std::unique_ptr<stream::City> city_;
   geo::LocalFrame frame_;
   track::Tracker tracker_;
   double lat_, lon_;
+  std::string error_;
 };
 
 }  // namespace

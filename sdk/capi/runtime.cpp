@@ -153,29 +153,13 @@ void Runtime::getPose(double t, blvd_pose* out) {
   toBlvd(tracker_->update(t), city_.frame(), out);
 }
 
-void Runtime::getCalibration(blvd_odometry_calibration* out) const {
-  constexpr double kDeg = 3.14159265358979323846 / 180;
-  const track::OdometryCalibration c = tracker_->calibration();
-  blvd_odometry_calibration r{};
-  r.struct_size = out->struct_size && out->struct_size < sizeof r ? out->struct_size : sizeof r;
-  r.speed_scale = c.speed_scale;
-  r.speed_scale_sigma = c.speed_scale_sigma;
-  r.yaw_rate_bias_dps = c.yaw_bias_rad_s / kDeg;
-  r.yaw_rate_bias_sigma_dps = c.yaw_bias_sigma_rad_s / kDeg;
-  std::memcpy(out, &r, r.struct_size);
-}
+void Runtime::getCalibration(blvd_odometry_calibration* out) const { toBlvd(tracker_->calibration(), out); }
 
 void Runtime::setCalibration(const blvd_odometry_calibration& in) {
-  constexpr double kDeg = 3.14159265358979323846 / 180;
   if (in.struct_size < sizeof in)
     throw Error(Status::InvalidArg, "blvd_set_odometry_calibration: struct_size " + std::to_string(in.struct_size) +
                                         " is smaller than the " + std::to_string(sizeof in) + " bytes it needs");
-  track::OdometryCalibration c;
-  c.speed_scale = in.speed_scale;
-  c.speed_scale_sigma = in.speed_scale_sigma;
-  c.yaw_bias_rad_s = in.yaw_rate_bias_dps * kDeg;
-  c.yaw_bias_sigma_rad_s = in.yaw_rate_bias_sigma_dps * kDeg;
-  if (!tracker_->setCalibration(c)) {
+  if (!tracker_->setCalibration(toTrack(in))) {
     char msg[256];
     std::snprintf(msg, sizeof msg,
                   "blvd_set_odometry_calibration: speed_scale %g +- %g, yaw_rate_bias_dps %g +- %g: the scale must lie "

@@ -11,6 +11,7 @@
 #include "blvd/blvd.h"
 #include "capi/sized.h"
 #include "geo/local_frame.h"
+#include "track/ekf.h"
 #include "track/types.h"
 
 namespace blvd::capi {
@@ -67,6 +68,29 @@ inline void toBlvd(const track::Pose& p, const geo::LocalFrame& frame, blvd_pose
   r.camera_heading_deg = p.camera.heading_deg;
   r.camera_pitch_deg = p.camera.pitch_deg;
   std::memcpy(out, &r, std::min<size_t>(r.struct_size, sizeof r));
+}
+
+// The odometry calibration: degrees per second in the C API, radians in sdk/track.
+inline track::OdometryCalibration toTrack(const blvd_odometry_calibration& in) {
+  constexpr double kDeg = 3.14159265358979323846 / 180;
+  track::OdometryCalibration c;
+  c.speed_scale = in.speed_scale;
+  c.speed_scale_sigma = in.speed_scale_sigma;
+  c.yaw_bias_rad_s = in.yaw_rate_bias_dps * kDeg;
+  c.yaw_bias_sigma_rad_s = in.yaw_rate_bias_sigma_dps * kDeg;
+  return c;
+}
+
+// Writes min(out->struct_size, sizeof) bytes (all of it when struct_size is 0).
+inline void toBlvd(const track::OdometryCalibration& c, blvd_odometry_calibration* out) {
+  constexpr double kDeg = 3.14159265358979323846 / 180;
+  blvd_odometry_calibration r{};
+  r.struct_size = out->struct_size && out->struct_size < sizeof r ? out->struct_size : sizeof r;
+  r.speed_scale = c.speed_scale;
+  r.speed_scale_sigma = c.speed_scale_sigma;
+  r.yaw_rate_bias_dps = c.yaw_bias_rad_s / kDeg;
+  r.yaw_rate_bias_sigma_dps = c.yaw_bias_sigma_rad_s / kDeg;
+  std::memcpy(out, &r, r.struct_size);
 }
 
 }  // namespace blvd::capi
