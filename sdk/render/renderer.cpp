@@ -34,6 +34,30 @@ constexpr uint32_t kIndexBits = 20;
 constexpr uint32_t kIndexMask = (1u << kIndexBits) - 1;
 constexpr uint32_t kGenerationMask = (1u << (32 - kIndexBits)) - 1;
 
+// Texels repeated past an image's right and bottom edges in a slab texture
+// level (tw x th): a slab texture holds a smaller image in its corner, the
+// rest is what earlier cells' images left there. The shader maps the image by
+// one scale for every level (w / tw of level 0), but a level of the image is
+// floor(w / 2^l) texels wide, so linear filtering of a level reads up to two
+// texels past the texels written. Repeating the edge makes those texels the
+// image's own (the clamp-to-edge rule an image of its own would get) and the
+// frame independent of what the slab held before (SlotHistory.* test).
+constexpr int kEdgePad = 2;
+
+void padLevel(const GlApi& gl, int level, const uint8_t* texels, int w, int h, int tw, int th) {
+  const int x_end = std::min(w + kEdgePad, tw), y_end = std::min(h + kEdgePad, th);
+  const uint8_t* last_column = texels + uint64_t(w - 1) * 4;
+  const uint8_t* last_row = texels + uint64_t(h - 1) * uint64_t(w) * 4;
+  gl.PixelStorei(GL_UNPACK_ROW_LENGTH, w);  // one texel of each row
+  for (int x = w; x < x_end; ++x) gl.TexSubImage2D(GL_TEXTURE_2D, level, x, 0, 1, h, GL_RGBA, GL_UNSIGNED_BYTE, last_column);
+  gl.PixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+  for (int y = h; y < y_end; ++y) {
+    gl.TexSubImage2D(GL_TEXTURE_2D, level, 0, y, w, 1, GL_RGBA, GL_UNSIGNED_BYTE, last_row);
+    for (int x = w; x < x_end; ++x)
+      gl.TexSubImage2D(GL_TEXTURE_2D, level, x, y, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, last_row + uint64_t(w - 1) * 4);
+  }
+}
+
 void setTextureSampling(const GlApi& gl) {
   gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
   gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -544,6 +568,9 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
       }
       gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
       uint64_t level_begin = vbytes + ibytes;
+      // The texture held other images before (the slab's earlier cells) and
+      // has levels past the image's chain: never sample those.
+      if (up.copied == level_begin) gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, p.mip_levels - 1);
       for (int l = 0; l < p.mip_levels && allowance > 0; ++l) {
         int w = 0, h = 0;
         const uint8_t* texels = mipLevel(p, l, w, h);
@@ -556,6 +583,7 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
           up.copied += n;
           allowance -= std::min(allowance, n);
           if (y + rows < h) break;  // the level is not done: the allowance is
+          padLevel(gl, l, texels, w, h, std::max(1, slab.desc.texture_width >> l), std::max(1, slab.desc.texture_height >> l));
         }
         level_begin += size;
       }

@@ -213,6 +213,67 @@ TEST(SlabUpload, ManySmallStepsDrawWhatOneCopyDraws) {
   EXPECT_GT(red, 10);
 }
 
+// A textured wall `tw` x `th` (no power of two), far away so that it is drawn
+// from the coarse mip levels, with each texel's colour from `texel`.
+template <typename F>
+geo::MeshData farWall(int tw, int th, F texel) {
+  geo::MeshData wall;
+  wall.positions = {-30, 0, -260, 30, 0, -260, 30, 40, -260, -30, 40, -260};
+  wall.texcoords = {0, 0, 1, 0, 1, 1, 0, 1};
+  wall.indices = {0, 1, 2, 0, 2, 3};
+  std::vector<uint8_t> texels(size_t(tw) * th * 4);
+  for (int y = 0; y < th; ++y)
+    for (int x = 0; x < tw; ++x) texel(x, y, &texels[(size_t(y) * tw + x) * 4]);
+  wall.image = png(texels, tw, th);
+  return wall;
+}
+
+// A slab texture keeps what earlier images left outside the current image's
+// corner; filtering the image's coarse levels must not reach it (the frames of
+// a runtime then depended on which cells its slots had held: SlotHistory.*).
+TEST(SlabUpload, AnImageIsNotBledIntoByWhatItsTextureHeldBefore) {
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
+  const geo::MeshData big = farWall(512, 256, [](int, int, uint8_t* t) { t[0] = 255, t[1] = 0, t[2] = 255, t[3] = 255; });
+  const geo::MeshData small = farWall(203, 117, [](int x, int y, uint8_t* t) {
+    t[0] = uint8_t(40 + (x * 7) % 60), t[1] = uint8_t(60 + (y * 5) % 80), t[2] = 70, t[3] = 255;
+  });
+  std::vector<uint8_t> block(preparedBytes(4, 6, 512, 256) + preparedBytes(4, 6, 203, 117));
+  StagingArena arena{block.data(), block.size(), 0};
+  PreparedMesh pb, ps;
+  std::string err;
+  ASSERT_TRUE(prepareMesh(big, arena, pb, err)) << err;
+  ASSERT_TRUE(prepareMesh(small, arena, ps, err)) << err;
+  SlabDesc d;
+  d.vertex_bytes = 2 * pb.vertexBytes();
+  d.index_bytes = 2 * pb.indexBytes() + 8;
+  d.meshes = 2;
+  d.textures = 1;
+  d.texture_width = 512;
+  d.texture_height = 256;
+  const SlabHandle fresh = r->createSlab(d), used = r->createSlab(d);
+  // The used slab's texture held a magenta image of its full size first.
+  ASSERT_NE(r->uploadToSlab(used, pb).id, 0u) << r->lastError();
+  r->resetSlab(used);
+  const MeshHandle a = r->uploadToSlab(fresh, ps);
+  int steps = 0;
+  SlabUpload up;
+  ASSERT_TRUE(r->beginSlabUpload(used, ps, up)) << r->lastError();
+  const MeshHandle b = finishInSteps(*r, up, 1, steps);
+  ASSERT_NE(a.id, 0u) << r->lastError();
+  ASSERT_NE(b.id, 0u) << r->lastError();
+  const std::vector<uint8_t> fa = draw(*r, {a}), fb = draw(*r, {b});
+  int wall = 0, magenta = 0;
+  for (size_t i = 0; i < fb.size(); i += 4) {
+    wall += fa[i + 2] == 70 || (fa[i] < 110 && fa[i + 1] > 50 && fa[i + 2] < 90);
+    magenta += fb[i] > 150 && fb[i + 1] < 100 && fb[i + 2] > 150;
+  }
+  EXPECT_GT(wall, 20) << "the wall is not in the frame";
+  EXPECT_EQ(magenta, 0);
+  EXPECT_TRUE(fa == fb) << "the image drawn from a texture that held another one differs";
+}
+
 TEST(SlabUpload, AResetAbandonsAnUnfinishedUpload) {
   Rig rig;
   ASSERT_NE(rig.renderer, nullptr) << rig.why;

@@ -40,6 +40,34 @@ std::vector<uint8_t> frame(blvd_runtime* rt, const blvd_test::DrivePose& p, cons
   return px;
 }
 
+// Draws every pose of `dr` in both runtimes and fails for each pair of frames
+// that differ (the first three named); returns the number of differing frames.
+uint32_t compareDrives(blvd_runtime* a, const blvd_runtime_desc& da, blvd_runtime* b, const blvd_runtime_desc& db,
+                       const blvd_test::Drive& dr) {
+  for (blvd_runtime* rt : {a, b})
+    EXPECT_EQ(blvd_set_route(rt, dr.cells.data(), dr.cells.size()), BLVD_OK) << blvd_last_error(rt);
+  uint32_t differing = 0;
+  for (size_t i = 0; i < dr.poses.size(); ++i) {
+    const std::vector<uint8_t> fa = frame(a, dr.poses[i], da), fb = frame(b, dr.poses[i], db);
+    if (fa == fb) continue;
+    size_t px = 0;
+    for (size_t k = 0; k < fa.size(); k += 4) px += fa[k] != fb[k] || fa[k + 1] != fb[k + 1] || fa[k + 2] != fb[k + 2];
+    if (differing++ < 3) ADD_FAILURE() << "pose " << i << " (cell " << dr.poses[i].cell << "): " << px << " pixels differ";
+  }
+  return differing;
+}
+
+// Small frames of the local blocks and the cell's impostors, with `slots` cell slots.
+blvd_runtime_desc impostorDesc(uint32_t slots) {
+  blvd_runtime_desc d = baseDesc();
+  d.width = 160;
+  d.height = 96;
+  d.mode = BLVD_MODE_BLVD;
+  d.max_resident_cells = slots;
+  d.prefetch_priority = BLVD_PREFETCH_LOW;  // predictions run on a loaded CI machine too
+  return d;
+}
+
 struct Case {
   uint32_t slots;
   float upload_budget_ms;
@@ -50,35 +78,14 @@ class BlockReuse : public ::testing::TestWithParam<Case> {};
 TEST_P(BlockReuse, CopiedBlocksDrawWhatDecodedBlocksDraw) {
   const blvd_test::Drive dr = drive(24, 6.0);
   ASSERT_GE(dr.cells.size(), 10u);
-  blvd_runtime_desc d = baseDesc();
-  d.width = 160;
-  d.height = 96;
-  d.max_resident_cells = GetParam().slots;
+  blvd_runtime_desc d = impostorDesc(GetParam().slots);
   d.upload_budget_ms = GetParam().upload_budget_ms;
-  d.prefetch_priority = BLVD_PREFETCH_LOW;  // predictions run on a loaded CI machine too
-  // The blocks alone: a few impostor pixels depend on the order in which
-  // cells came and went through the slots, with or without block reuse
-  // (docs/decisions/0008 §15), and that order differs between the two.
-  d.mode = BLVD_MODE_LOCAL;
   blvd_runtime_desc off = d;
   off.block_reuse = -1;
   Runtime a, b;
   ASSERT_EQ(blvd_runtime_create(&d, &a.rt), BLVD_OK) << blvd_last_error(nullptr);
   ASSERT_EQ(blvd_runtime_create(&off, &b.rt), BLVD_OK) << blvd_last_error(nullptr);
-  for (blvd_runtime* rt : {a.rt, b.rt})
-    ASSERT_EQ(blvd_set_route(rt, dr.cells.data(), dr.cells.size()), BLVD_OK) << blvd_last_error(rt);
-  size_t compared = 0;
-  uint32_t differing = 0;
-  for (size_t i = 0; i < dr.poses.size(); ++i) {
-    const std::vector<uint8_t> with = frame(a.rt, dr.poses[i], d), without = frame(b.rt, dr.poses[i], off);
-    ++compared;
-    if (with == without) continue;
-    size_t px = 0;
-    for (size_t k = 0; k < with.size(); k += 4)
-      px += with[k] != without[k] || with[k + 1] != without[k + 1] || with[k + 2] != without[k + 2];
-    if (differing++ < 3) ADD_FAILURE() << "pose " << i << " (cell " << dr.poses[i].cell << "): " << px << " pixels differ";
-  }
-  EXPECT_EQ(differing, 0u) << "of " << compared << " frames";
+  EXPECT_EQ(compareDrives(a.rt, d, b.rt, off, dr), 0u) << "of " << dr.poses.size() << " frames";
   const blvd_stats with = statsOf(a.rt), without = statsOf(b.rt);
   EXPECT_EQ(with.load_errors, 0u) << blvd_last_error(a.rt);
   EXPECT_EQ(without.load_errors, 0u);
@@ -104,5 +111,20 @@ INSTANTIATE_TEST_SUITE_P(SlotsAndBudgets, BlockReuse,
                          [](const ::testing::TestParamInfo<Case>& i) {
                            return "slots" + std::to_string(i.param.slots) + (i.param.upload_budget_ms > 0 ? "_tinyUploads" : "");
                          });
+
+// The frames of a pose do not depend on which cells came before it through
+// the slots: a slot's textures keep the images of the cells it held earlier
+// outside the current image's corner, and sampling must never reach them.
+// Two runtimes with 4 and 3 slots load the same cells into other slots.
+TEST(SlotHistory, ImpostorsDrawTheSameWhateverTheSlotsHeldBefore) {
+  const blvd_test::Drive dr = drive(24, 6.0);
+  ASSERT_GE(dr.cells.size(), 10u);
+  const blvd_runtime_desc d = impostorDesc(4), three = impostorDesc(3);
+  Runtime a, b;
+  ASSERT_EQ(blvd_runtime_create(&d, &a.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_runtime_create(&three, &b.rt), BLVD_OK) << blvd_last_error(nullptr);
+  EXPECT_EQ(compareDrives(a.rt, d, b.rt, three, dr), 0u) << "of " << dr.poses.size() << " frames";
+  EXPECT_GT(statsOf(a.rt).evictions + statsOf(b.rt).evictions, 0u) << "no slot was ever reused";
+}
 
 }  // namespace
