@@ -5,24 +5,31 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
 namespace vcan_drive {
 
 CalibrationRead readCalibration(const std::string& path, blvd_odometry_calibration& out, std::string& err) {
-  std::ifstream f(path);
+  // fopen, not ifstream: its errno tells a missing file (the first drive) from an unreadable one.
+  FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) {
     if (errno == ENOENT) return CalibrationRead::Missing;
     err = path + ": " + std::strerror(errno);
     return CalibrationRead::Bad;
   }
-  std::stringstream text;
-  text << f.rdbuf();
+  std::string text;
+  char buf[4096];
+  for (size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) text.append(buf, n);
+  const bool read_error = std::ferror(f) != 0;
+  std::fclose(f);
+  if (read_error) {
+    err = path + ": read error";
+    return CalibrationRead::Bad;
+  }
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(text.str());
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     err = path + ": not JSON (byte " + std::to_string(e.byte) + ")";
     return CalibrationRead::Bad;

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <thread>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 
@@ -156,9 +157,11 @@ void Runtime::getPose(double t, blvd_pose* out) {
 void Runtime::getCalibration(blvd_odometry_calibration* out) const { toBlvd(tracker_->calibration(), out); }
 
 void Runtime::setCalibration(const blvd_odometry_calibration& in) {
-  if (in.struct_size < sizeof in)
+  // Every field is needed; a later, longer struct is read up to these.
+  constexpr size_t kNeeded = offsetof(blvd_odometry_calibration, yaw_rate_bias_sigma_dps) + sizeof(double);
+  if (in.struct_size < kNeeded)
     throw Error(Status::InvalidArg, "blvd_set_odometry_calibration: struct_size " + std::to_string(in.struct_size) +
-                                        " is smaller than the " + std::to_string(sizeof in) + " bytes it needs");
+                                        " is smaller than the " + std::to_string(kNeeded) + " bytes it needs");
   if (!tracker_->setCalibration(toTrack(in))) {
     char msg[256];
     std::snprintf(msg, sizeof msg,

@@ -71,25 +71,25 @@ inline void toBlvd(const track::Pose& p, const geo::LocalFrame& frame, blvd_pose
 }
 
 // The odometry calibration: degrees per second in the C API, radians in sdk/track.
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180;
+
 inline track::OdometryCalibration toTrack(const blvd_odometry_calibration& in) {
-  constexpr double kDeg = 3.14159265358979323846 / 180;
   track::OdometryCalibration c;
   c.speed_scale = in.speed_scale;
   c.speed_scale_sigma = in.speed_scale_sigma;
-  c.yaw_bias_rad_s = in.yaw_rate_bias_dps * kDeg;
-  c.yaw_bias_sigma_rad_s = in.yaw_rate_bias_sigma_dps * kDeg;
+  c.yaw_bias_rad_s = in.yaw_rate_bias_dps * kRadPerDeg;
+  c.yaw_bias_sigma_rad_s = in.yaw_rate_bias_sigma_dps * kRadPerDeg;
   return c;
 }
 
 // Writes min(out->struct_size, sizeof) bytes (all of it when struct_size is 0).
 inline void toBlvd(const track::OdometryCalibration& c, blvd_odometry_calibration* out) {
-  constexpr double kDeg = 3.14159265358979323846 / 180;
   blvd_odometry_calibration r{};
   r.struct_size = out->struct_size && out->struct_size < sizeof r ? out->struct_size : sizeof r;
   r.speed_scale = c.speed_scale;
   r.speed_scale_sigma = c.speed_scale_sigma;
-  r.yaw_rate_bias_dps = c.yaw_bias_rad_s / kDeg;
-  r.yaw_rate_bias_sigma_dps = c.yaw_bias_sigma_rad_s / kDeg;
+  r.yaw_rate_bias_dps = c.yaw_bias_rad_s / kRadPerDeg;
+  r.yaw_rate_bias_sigma_dps = c.yaw_bias_sigma_rad_s / kRadPerDeg;
   std::memcpy(out, &r, r.struct_size);
 }
 

@@ -312,7 +312,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
     if (ms.oracle_calibration) {
       track::OdometryCalibration truth;
       truth.speed_scale = fd.drive.speed_scale;
-      truth.yaw_bias_rad_s = fd.drive.yaw_bias_dps * 0.017453292519943295;  // raised to the sigma floors
+      truth.yaw_bias_rad_s = fd.drive.yaw_bias_dps * capi::kRadPerDeg;  // sigmas 0: raised to the floors
       if (!tr.setCalibration(truth)) throw Error(Status::Internal, "calibration refused");
     } else if (calibrated && have_cal && !tr.setCalibration(cal)) {
       throw Error(Status::Internal, "calibration refused");

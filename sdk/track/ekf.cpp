@@ -83,14 +83,16 @@ bool Ekf::setCalibration(const OdometryCalibration& c) {
   prior_ = c;
   prior_.speed_scale_sigma = std::max(c.speed_scale_sigma, kMinScaleSigma);
   prior_.yaw_bias_sigma_rad_s = std::max(c.yaw_bias_sigma_rad_s, kMinYawBiasSigmaRadS);
-  if (initialized_) {
-    for (int i = 0; i < kDim; ++i) P_[kK][i] = P_[i][kK] = P_[kB][i] = P_[i][kB] = 0;
-    x_[kK] = prior_.speed_scale;
-    x_[kB] = prior_.yaw_bias_rad_s;
-    P_[kK][kK] = prior_.speed_scale_sigma * prior_.speed_scale_sigma;
-    P_[kB][kB] = prior_.yaw_bias_sigma_rad_s * prior_.yaw_bias_sigma_rad_s;
-  }
+  if (initialized_) applyCalibration();
   return true;
+}
+
+void Ekf::applyCalibration() {
+  for (int i = 0; i < kDim; ++i) P_[kK][i] = P_[i][kK] = P_[kB][i] = P_[i][kB] = 0;
+  x_[kK] = prior_.speed_scale;
+  x_[kB] = prior_.yaw_bias_rad_s;
+  P_[kK][kK] = prior_.speed_scale_sigma * prior_.speed_scale_sigma;
+  P_[kB][kB] = prior_.yaw_bias_sigma_rad_s * prior_.yaw_bias_sigma_rad_s;
 }
 
 void Ekf::reset() {
@@ -204,12 +206,9 @@ void Ekf::initPosition(double t, double e, double n, double sigma_m) {
   P_[kE][kE] = P_[kN][kN] = sigma_m * sigma_m;
   if (!initialized_) {
     x_[kPsi] = x_[kV] = 0;
-    x_[kB] = prior_.yaw_bias_rad_s;
-    x_[kK] = prior_.speed_scale;
     P_[kPsi][kPsi] = kPi * kPi;
     P_[kV][kV] = 100.0;
-    P_[kB][kB] = prior_.yaw_bias_sigma_rad_s * prior_.yaw_bias_sigma_rad_s;
-    P_[kK][kK] = prior_.speed_scale_sigma * prior_.speed_scale_sigma;
+    applyCalibration();
     t_ = t;
     initialized_ = true;
   }

@@ -168,6 +168,8 @@ class Ekf {
   // run of gated updates (-1: never forced).
   bool scalarUpdate(const double H[kDim], int idx, double residual, double r, double gate);
   void initPosition(double t, double e, double n, double sigma_m);
+  // The prior's scale and bias into the state, their variances, no correlations.
+  void applyCalibration();
 
   EkfDesc d_;
   OdometryCalibration prior_;  // where a fresh filter starts its scale and bias

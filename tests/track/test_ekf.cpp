@@ -129,12 +129,19 @@ TEST(Ekf, StraightDriveErrorShrinksBelowTheFixNoise) {
   EXPECT_NEAR(r.ekf.speed(), 12.0, 0.2);
 }
 
-TEST(Ekf, TurningDriveLearnsYawBiasAndOdometryScale) {
+// Four minutes on a circle of radius v / omega = 86 m, the gyro reading 0.5 deg/s
+// too much to the left and the wheels `speed_scale` x the ground speed.
+DriveSpec circling(double speed_scale) {
   DriveSpec s;
-  s.turn_dps = 8;          // a circle of radius v / omega = 86 m
-  s.yaw_bias_dps = 0.5;    // the gyro reads 0.5 deg/s too much to the left
-  s.speed_scale = 0.98;    // the wheels read 2 % slow
+  s.turn_dps = 8;
+  s.yaw_bias_dps = 0.5;
+  s.speed_scale = speed_scale;
   s.duration = 240;
+  return s;
+}
+
+TEST(Ekf, TurningDriveLearnsYawBiasAndOdometryScale) {
+  const DriveSpec s = circling(0.98);  // the wheels read 2 % slow
   const DriveResult r = drive(s);
   EXPECT_NEAR(r.ekf.bias(), 0.5 * kDeg, 0.1 * kDeg);
   EXPECT_NEAR(r.ekf.odometryScale(), 0.98, 0.005);
@@ -165,11 +172,7 @@ TEST(Ekf, SurvivesAnOutageOnDeadReckoning) {
 // with the accuracy of a calibrated car; a cold start has had 15 s of fixes to
 // learn them.
 TEST(Ekf, StartsFromTheCalibrationOfThePreviousDrive) {
-  DriveSpec first;
-  first.turn_dps = 8;
-  first.yaw_bias_dps = 0.5;
-  first.speed_scale = 0.97;
-  first.duration = 240;
+  const DriveSpec first = circling(0.97);
   const DriveResult learnt = drive(first);
   const OdometryCalibration cal = learnt.ekf.calibration();
   EXPECT_NEAR(cal.speed_scale, 0.97, 0.005);
