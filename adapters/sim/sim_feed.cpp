@@ -49,6 +49,11 @@ blvd_status makeFeed(const graph::StreetGraph& g, const geo::LocalFrame& frame, 
   out.start_unix = t0;
   out.duration_s = trace.duration_s;
   out.distance_m = trace.distance_m;
+  out.end_cell = trace.end_cell;
+  out.end_arc_m = trace.end_arc_m;
+  out.end_e = trace.end_e;
+  out.end_n = trace.end_n;
+  out.end_heading_deg = trace.end_heading_deg;
   out.outage_begin = t0 + trace.outage_begin;
   out.outage_end = t0 + trace.outage_end;
 

@@ -60,6 +60,9 @@ struct Feed {
   std::vector<TruthRow> truth;
   double start_unix = 0, duration_s = 0, distance_m = 0;
   double outage_begin = 0, outage_end = 0;  // UTC; equal when there is no outage
+  // Where the car stopped (track::SimTrace): a chained drive starts there.
+  uint32_t end_cell = 0xffffffffu;
+  double end_arc_m = 0, end_e = 0, end_n = 0, end_heading_deg = 0;
 };
 
 // Simulates the drive and encodes it. BLVD_ERR_NOT_FOUND when the graph has no

@@ -435,6 +435,10 @@ typedef struct blvd_pose {
    * renders a recorded drive later puts the camera here (blvd_set_pose_local). */
   double camera_x, camera_y, camera_z;
   double camera_heading_deg, camera_pitch_deg;
+  /* 1-sigma of the fused position (its larger axis, metres) and of the heading (degrees; 0 before
+   * the heading is known): what blvd_start_pose wants at the next start. */
+  double pos_sigma_m;
+  double heading_sigma_deg;
 } blvd_pose;
 
 /* Queues a GNSS fix. Any thread; no allocation. Errors: BLVD_ERR_INVALID_ARG
@@ -473,6 +477,29 @@ BLVD_API blvd_status blvd_get_odometry_calibration(blvd_runtime* rt, blvd_odomet
  * keeps them). Render thread. Errors: BLVD_ERR_INVALID_ARG for a scale outside [0.5, 2], a bias
  * beyond 10 deg/s, a negative sigma or a non-finite field; nothing changes then. */
 BLVD_API blvd_status blvd_set_odometry_calibration(blvd_runtime* rt, const blvd_odometry_calibration* cal);
+
+/* Where the vehicle was last known to be: the pose read at the end of the previous drive (key-off:
+ * blvd_get_pose's lat, lon, heading_deg, pos_sigma_m, heading_sigma_deg), kept by the host in
+ * non-volatile memory, as automotive navigation keeps its last position. Given back at the next
+ * start (key-on), the drive is tracked from there at once: a matched pose before the first fix,
+ * and dead reckoning out of a garage where there is none. Latitude and longitude, so it stays
+ * valid when the package is updated between drives. */
+typedef struct blvd_start_pose {
+  uint32_t struct_size;     /* sizeof(blvd_start_pose) */
+  double t;                 /* host clock, seconds: when the vehicle was (still) there, e.g. key-on */
+  double lat, lon;          /* WGS 84 degrees */
+  double heading_deg;       /* clockwise from north */
+  double sigma_m;           /* 1-sigma of the position per axis; 0: 2 m; raised to 0.5 m at least */
+  double heading_sigma_deg; /* 0: 5 degrees; raised to 1 degree at least */
+} blvd_start_pose;
+
+/* Starts tracking from `sp` instead of waiting for the first fix (a drive under way is forgotten;
+ * what was fed and not yet processed is kept). blvd_render follows the tracked pose from then on.
+ * Fixes that disagree with it (the car was moved while parked) are rejected at first and, after
+ * five in a row, taken instead. Render thread. Errors: BLVD_ERR_INVALID_ARG for a latitude or
+ * longitude out of range, a negative sigma, a non-finite field or a struct_size that does not
+ * cover heading_sigma_deg; nothing changes then. */
+BLVD_API blvd_status blvd_set_start_pose(blvd_runtime* rt, const blvd_start_pose* sp);
 
 /* ---- CAN frames through a vehicle profile ---------------------------------------
  * A profile reads one vehicle's CAN signals, as its DBC file describes them

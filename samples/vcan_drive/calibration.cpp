@@ -10,7 +10,27 @@
 
 namespace vcan_drive {
 
-CalibrationRead readCalibration(const std::string& path, blvd_odometry_calibration& out, std::string& err) {
+namespace {
+struct Field {
+  const char* key;
+  double* value;
+};
+
+// Every field a number; false with `err` naming the first that is not.
+template <size_t N>
+bool readNumbers(const nlohmann::json& j, const Field (&fields)[N], const std::string& where, std::string& err) {
+  for (const Field& fd : fields) {
+    if (!j.is_object() || !j.contains(fd.key) || !j[fd.key].is_number()) {
+      err = where + "no number \"" + fd.key + "\"";
+      return false;
+    }
+    *fd.value = j[fd.key].get<double>();
+  }
+  return true;
+}
+}  // namespace
+
+CalibrationRead readCalibration(const std::string& path, KeyOffState& state, std::string& err) {
   // fopen, not ifstream: its errno tells a missing file (the first drive) from an unreadable one.
   FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) {
@@ -34,30 +54,42 @@ CalibrationRead readCalibration(const std::string& path, blvd_odometry_calibrati
     err = path + ": not JSON (byte " + std::to_string(e.byte) + ")";
     return CalibrationRead::Bad;
   }
-  out = blvd_odometry_calibration{};
-  out.struct_size = sizeof out;
-  struct Field {
-    const char* key;
-    double* value;
-  } fields[] = {{"speed_scale", &out.speed_scale},
-                {"speed_scale_sigma", &out.speed_scale_sigma},
-                {"yaw_rate_bias_dps", &out.yaw_rate_bias_dps},
-                {"yaw_rate_bias_sigma_dps", &out.yaw_rate_bias_sigma_dps}};
-  for (const Field& fd : fields) {
-    if (!j.is_object() || !j.contains(fd.key) || !j[fd.key].is_number()) {
-      err = path + ": no number \"" + fd.key + "\"";
-      return CalibrationRead::Bad;
-    }
-    *fd.value = j[fd.key].get<double>();
+  state = KeyOffState{};
+  blvd_odometry_calibration& cal = state.calibration;
+  cal.struct_size = sizeof cal;
+  const Field fields[] = {{"speed_scale", &cal.speed_scale},
+                          {"speed_scale_sigma", &cal.speed_scale_sigma},
+                          {"yaw_rate_bias_dps", &cal.yaw_rate_bias_dps},
+                          {"yaw_rate_bias_sigma_dps", &cal.yaw_rate_bias_sigma_dps}};
+  if (!readNumbers(j, fields, path + ": ", err)) return CalibrationRead::Bad;
+  if (j.contains("start_pose")) {
+    blvd_start_pose& sp = state.pose;
+    sp.struct_size = sizeof sp;
+    const Field pose[] = {{"lat", &sp.lat},
+                          {"lon", &sp.lon},
+                          {"heading_deg", &sp.heading_deg},
+                          {"sigma_m", &sp.sigma_m},
+                          {"heading_sigma_deg", &sp.heading_sigma_deg}};
+    if (!readNumbers(j["start_pose"], pose, path + ": start_pose: ", err)) return CalibrationRead::Bad;
+    state.has_pose = true;
   }
   return CalibrationRead::Loaded;
 }
 
-bool writeCalibration(const std::string& path, const blvd_odometry_calibration& cal, std::string& err) {
-  const nlohmann::json j = {{"speed_scale", cal.speed_scale},
-                            {"speed_scale_sigma", cal.speed_scale_sigma},
-                            {"yaw_rate_bias_dps", cal.yaw_rate_bias_dps},
-                            {"yaw_rate_bias_sigma_dps", cal.yaw_rate_bias_sigma_dps}};
+bool writeCalibration(const std::string& path, const KeyOffState& state, std::string& err) {
+  const blvd_odometry_calibration& cal = state.calibration;
+  nlohmann::json j = {{"speed_scale", cal.speed_scale},
+                      {"speed_scale_sigma", cal.speed_scale_sigma},
+                      {"yaw_rate_bias_dps", cal.yaw_rate_bias_dps},
+                      {"yaw_rate_bias_sigma_dps", cal.yaw_rate_bias_sigma_dps}};
+  if (state.has_pose) {
+    const blvd_start_pose& sp = state.pose;
+    j["start_pose"] = {{"lat", sp.lat},
+                       {"lon", sp.lon},
+                       {"heading_deg", sp.heading_deg},
+                       {"sigma_m", sp.sigma_m},
+                       {"heading_sigma_deg", sp.heading_sigma_deg}};
+  }
   const std::string part = path + ".part";
   {
     std::ofstream f(part, std::ios::trunc);

@@ -64,27 +64,17 @@ struct Options {
   std::string calibration;  // odometry calibration kept between drives (calibration.h)
 };
 
-// Feeds the --start hint: one GNSS fix at t (5 m accuracy) and, with a
-// heading, one absolute-heading odometry sample. Without GNSS on the bus this
-// is what gives dead reckoning a place to start from.
-void feedStart(Tracking& tr, const std::vector<double>& start, double t) {
-  blvd_gnss_fix f{};
-  f.struct_size = sizeof f;
-  f.t = t;
-  f.lat = start[0];
-  f.lon = start[1];
-  f.h_acc_m = 5;
-  f.mode = 3;
-  f.flags = BLVD_GNSS_HAS_TIME | BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_HACC;
-  tr.feedGnss(f);
-  if (start.size() > 2) {
-    blvd_odometry o{};
-    o.struct_size = sizeof o;
-    o.t = t;
-    o.heading_deg = start[2];
-    o.flags = BLVD_ODO_HEADING;
-    tr.feedOdometry(o);
-  }
+// A start pose at time t (blvd_set_start_pose): --start's LAT LON HEADING, with
+// the 5 m of a first fix, or the pose the last drive ended with.
+blvd_start_pose startPose(const std::vector<double>& start, double t) {
+  blvd_start_pose sp{};
+  sp.struct_size = sizeof sp;
+  sp.t = t;
+  sp.lat = start[0];
+  sp.lon = start[1];
+  sp.heading_deg = start[2];
+  sp.sigma_m = 5;
+  return sp;
 }
 
 }  // namespace
@@ -96,8 +86,8 @@ int main(int argc, char** argv) {
   app.add_option("--candump", opt.candump, "read a candump -l log instead of an interface");
   app.add_option("--dbc", opt.dbc, "DBC file")->capture_default_str();
   app.add_option("--vehicle", opt.vehicle, "toyota, vw_mqb or hyundai")->capture_default_str();
-  app.add_option("--start", opt.start, "LAT LON [HEADING]: where dead reckoning starts without GNSS")
-      ->expected(2, 3);
+  app.add_option("--start", opt.start, "LAT LON HEADING: where dead reckoning starts without GNSS (blvd_set_start_pose)")
+      ->expected(3);
   app.add_option("--nmea", opt.nmea, "GNSS fixes from an NMEA log on the CAN trace's clock, fed in step with the bus");
   app.add_option("--nmea-offset", opt.nmea_offset_s, "seconds added to the NMEA times to put them on the trace clock");
   CLI::Option* t0_opt =
@@ -106,7 +96,8 @@ int main(int argc, char** argv) {
   app.add_option("--odometry", opt.odometry_path, "write the decoded odometry as JSON lines");
   app.add_option("--stats", opt.stats_path, "write the run's stats JSON");
   app.add_option("--calibration", opt.calibration,
-                 "odometry calibration kept between drives: read at start (when the file exists), written at exit");
+                 "odometry calibration and last pose kept between drives: read at start (when the file exists), "
+                 "written at exit");
   app.add_option("--pose-interval", opt.pose_interval_s, "seconds of bus time between poses")->capture_default_str();
   app.add_option("--idle-exit", opt.idle_exit_s, "stop after this many seconds without a frame (0: never)");
   app.add_option("--duration", opt.duration_s, "stop after this many seconds (0: never)");
@@ -198,23 +189,30 @@ int main(int argc, char** argv) {
   }
   if (opt.package.empty() && opt.start.empty() && opt.nmea.empty())
     std::fprintf(stderr, "vcan_drive: no --start and no --nmea: odometry is decoded, but poses stay invalid\n");
-  // The calibration the last drive learnt, before the first fix (none yet on a first drive).
+  // The calibration the last drive learnt, before the first fix (none yet on a first drive),
+  // and the pose it ended with (used at the first frame unless --start says otherwise).
   bool calibration_loaded = false;
+  KeyOffState stored;
   if (!opt.calibration.empty()) {
-    blvd_odometry_calibration cal{};
-    const CalibrationRead cr = readCalibration(opt.calibration, cal, err);
+    const CalibrationRead cr = readCalibration(opt.calibration, stored, err);
     if (cr == CalibrationRead::Bad) {
       std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
       return 2;
     }
     if (cr == CalibrationRead::Loaded) {
-      if (tracking->setCalibration(cal) != BLVD_OK) {
+      if (tracking->setCalibration(stored.calibration) != BLVD_OK) {
         std::fprintf(stderr, "vcan_drive: %s: %s\n", opt.calibration.c_str(), tracking->lastError().c_str());
         return 2;
       }
       calibration_loaded = true;
+      // Checked now, so that a bad stored pose stops the program before the bus is opened.
+      if (stored.has_pose && opt.start.empty() && tracking->setStartPose(stored.pose) != BLVD_OK) {
+        std::fprintf(stderr, "vcan_drive: %s: %s\n", opt.calibration.c_str(), tracking->lastError().c_str());
+        return 2;
+      }
     }
   }
+  const bool resume_pose = stored.has_pose && opt.start.empty();
 
   CanFeed feed;
   if (feed.open(opt.dbc, vehicle, err) != BLVD_OK) {
@@ -275,7 +273,14 @@ int main(int argc, char** argv) {
       started = true;
       first_t = f.t;
       next_pose_t = f.t;
-      if (!opt.start.empty()) feedStart(*tracking, opt.start, f.t);
+      blvd_start_pose sp = resume_pose ? stored.pose : blvd_start_pose{};
+      sp.t = f.t;
+      if (!opt.start.empty()) sp = startPose(opt.start, f.t);
+      if ((resume_pose || !opt.start.empty()) && tracking->setStartPose(sp) != BLVD_OK) {
+        std::fprintf(stderr, "vcan_drive: start pose: %s\n", tracking->lastError().c_str());
+        rc = 2;
+        break;
+      }
       // A candump file is its own trace clock; a live bus is placed on it at its first frame.
       double t0 = f.t;  // this frame's time on the trace clock
       if (opt.candump.empty() && opt.has_trace_t0)
@@ -312,12 +317,24 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
     rc = 1;
   }
-  // What this drive learnt, for the next one.
-  blvd_odometry_calibration cal_end{};
+  // What this drive learnt and where it ended, for the next one (key-off).
+  KeyOffState end;
+  blvd_odometry_calibration& cal_end = end.calibration;
+  blvd_pose last_pose{};
+  if (started && tracking->getPose(last_t, last_pose) == BLVD_OK &&
+      (last_pose.flags & (BLVD_POSE_VALID | BLVD_POSE_HEADING_VALID)) == (BLVD_POSE_VALID | BLVD_POSE_HEADING_VALID)) {
+    end.has_pose = true;
+    end.pose.struct_size = sizeof end.pose;
+    end.pose.lat = last_pose.lat;
+    end.pose.lon = last_pose.lon;
+    end.pose.heading_deg = last_pose.heading_deg;
+    end.pose.sigma_m = last_pose.pos_sigma_m;
+    end.pose.heading_sigma_deg = last_pose.heading_sigma_deg;
+  }
   if (tracking->getCalibration(cal_end) != BLVD_OK) {
     std::fprintf(stderr, "vcan_drive: blvd_get_odometry_calibration: %s\n", tracking->lastError().c_str());
     rc = 1;
-  } else if (!opt.calibration.empty() && !writeCalibration(opt.calibration, cal_end, err)) {
+  } else if (!opt.calibration.empty() && rc != 2 && !writeCalibration(opt.calibration, end, err)) {
     std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
     rc = 1;
   }
@@ -347,6 +364,8 @@ int main(int argc, char** argv) {
   j["cells_visited"] = cells;
   j["calibration"] = {{"file", opt.calibration},
                       {"loaded", calibration_loaded},
+                      {"start_pose_loaded", resume_pose},
+                      {"start_pose_written", end.has_pose},
                       {"speed_scale", cal_end.speed_scale},
                       {"speed_scale_sigma", cal_end.speed_scale_sigma},
                       {"yaw_rate_bias_dps", cal_end.yaw_rate_bias_dps},

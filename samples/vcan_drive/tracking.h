@@ -37,6 +37,8 @@ class Tracking {
   // The odometry calibration (blvd_get/set_odometry_calibration): kept between drives.
   virtual blvd_status getCalibration(blvd_odometry_calibration& out) = 0;
   virtual blvd_status setCalibration(const blvd_odometry_calibration& in) = 0;
+  // Tracking from a known pose before the first fix (blvd_set_start_pose).
+  virtual blvd_status setStartPose(const blvd_start_pose& in) = 0;
   // Package origin (degrees); 0, 0 when there is none.
   virtual void origin(double& lat, double& lon) const = 0;
 

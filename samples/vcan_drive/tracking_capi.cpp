@@ -39,6 +39,7 @@ class CapiTracking final : public Tracking {
   blvd_status setCalibration(const blvd_odometry_calibration& in) override {
     return blvd_set_odometry_calibration(rt_, &in);
   }
+  blvd_status setStartPose(const blvd_start_pose& in) override { return blvd_set_start_pose(rt_, &in); }
   void origin(double& lat, double& lon) const override { lat = lat_, lon = lon_; }
 
   bool canRender() const override { return true; }

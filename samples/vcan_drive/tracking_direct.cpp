@@ -55,6 +55,11 @@ class DirectTracking final : public Tracking {
     error_ = "odometry calibration refused (scale outside [0.5, 2], bias beyond 10 deg/s or a bad sigma)";
     return BLVD_ERR_INVALID_ARG;
   }
+  blvd_status setStartPose(const blvd_start_pose& in) override {
+    if (tracker_.setStartPose(capi::toTrack(in))) return BLVD_OK;
+    error_ = "start pose refused (a field not finite, lat/lon out of range or a negative sigma)";
+    return BLVD_ERR_INVALID_ARG;
+  }
   void origin(double& lat, double& lon) const override { lat = lat_, lon = lon_; }
   std::string lastError() const override { return error_; }
 

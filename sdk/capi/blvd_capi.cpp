@@ -286,6 +286,12 @@ blvd_status blvd_set_odometry_calibration(blvd_runtime* rt, const blvd_odometry_
   return guarded(rt, [&] { rt->impl->setCalibration(*cal); });
 }
 
+blvd_status blvd_set_start_pose(blvd_runtime* rt, const blvd_start_pose* sp) {
+  if (!rt) return misuse(nullptr, "blvd_set_start_pose: rt is NULL");
+  if (!sp) return misuse(rt, "blvd_set_start_pose: sp is NULL");
+  return guarded(rt, [&] { rt->impl->setStartPose(*sp); });
+}
+
 blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats) {
   if (!rt) return misuse(nullptr, "blvd_render: rt is NULL");
   return guarded(rt, [&] { rt->impl->render(stats); });

@@ -154,14 +154,20 @@ void Runtime::getPose(double t, blvd_pose* out) {
   toBlvd(tracker_->update(t), city_.frame(), out);
 }
 
+namespace {
+// Every field of an input struct is needed; a later, longer struct is read up to them.
+void needStructSize(const char* fn, uint32_t got, size_t needed) {
+  if (got < needed)
+    throw Error(Status::InvalidArg, std::string(fn) + ": struct_size " + std::to_string(got) + " is smaller than the " +
+                                        std::to_string(needed) + " bytes it needs");
+}
+}  // namespace
+
 void Runtime::getCalibration(blvd_odometry_calibration* out) const { toBlvd(tracker_->calibration(), out); }
 
 void Runtime::setCalibration(const blvd_odometry_calibration& in) {
-  // Every field is needed; a later, longer struct is read up to these.
-  constexpr size_t kNeeded = offsetof(blvd_odometry_calibration, yaw_rate_bias_sigma_dps) + sizeof(double);
-  if (in.struct_size < kNeeded)
-    throw Error(Status::InvalidArg, "blvd_set_odometry_calibration: struct_size " + std::to_string(in.struct_size) +
-                                        " is smaller than the " + std::to_string(kNeeded) + " bytes it needs");
+  needStructSize("blvd_set_odometry_calibration", in.struct_size,
+                 offsetof(blvd_odometry_calibration, yaw_rate_bias_sigma_dps) + sizeof(double));
   if (!tracker_->setCalibration(toTrack(in))) {
     char msg[256];
     std::snprintf(msg, sizeof msg,
@@ -170,6 +176,21 @@ void Runtime::setCalibration(const blvd_odometry_calibration& in) {
                   in.speed_scale, in.speed_scale_sigma, in.yaw_rate_bias_dps, in.yaw_rate_bias_sigma_dps);
     throw Error(Status::InvalidArg, msg);
   }
+}
+
+void Runtime::setStartPose(const blvd_start_pose& in) {
+  needStructSize("blvd_set_start_pose", in.struct_size, offsetof(blvd_start_pose, heading_sigma_deg) + sizeof(double));
+  if (!tracker_->setStartPose(toTrack(in))) {
+    char msg[256];
+    std::snprintf(msg, sizeof msg,
+                  "blvd_set_start_pose: t %g, lat %g, lon %g, heading %g deg, sigma %g m, heading sigma %g deg: every "
+                  "field must be finite, lat within 90, lon within 180, the sigmas not negative",
+                  in.t, in.lat, in.lon, in.heading_deg, in.sigma_m, in.heading_sigma_deg);
+    throw Error(Status::InvalidArg, msg);
+  }
+  // Tracking drives the camera from here, at the start pose's time until something is fed.
+  last_feed_t_ = std::max(last_feed_t_.load(), in.t);
+  manual_pose_ = false;
 }
 
 void Runtime::setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg) {

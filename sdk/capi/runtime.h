@@ -47,6 +47,7 @@ class Runtime {
   void getPose(double t, blvd_pose* out);
   void getCalibration(blvd_odometry_calibration* out) const;
   void setCalibration(const blvd_odometry_calibration& in);
+  void setStartPose(const blvd_start_pose& in);
 
   std::string last_error;
 

@@ -67,7 +67,20 @@ inline void toBlvd(const track::Pose& p, const geo::LocalFrame& frame, blvd_pose
   r.camera_z = p.camera.eye_u;
   r.camera_heading_deg = p.camera.heading_deg;
   r.camera_pitch_deg = p.camera.pitch_deg;
+  r.pos_sigma_m = p.pos_sigma_m;
+  r.heading_sigma_deg = p.heading_sigma_deg;
   std::memcpy(out, &r, std::min<size_t>(r.struct_size, sizeof r));
+}
+
+inline track::StartPose toTrack(const blvd_start_pose& in) {
+  track::StartPose s;
+  s.t = in.t;
+  s.lat = in.lat;
+  s.lon = in.lon;
+  s.heading_deg = in.heading_deg;
+  s.sigma_m = in.sigma_m;
+  s.heading_sigma_deg = in.heading_sigma_deg;
+  return s;
 }
 
 // The odometry calibration: degrees per second in the C API, radians in sdk/track.

@@ -226,7 +226,7 @@ struct MatchResult {
   size_t epochs = 0, on_cell = 0, fix_epochs = 0, fix_on_cell = 0, settled = 0, settled_ok = 0;
   size_t warm_epochs = 0, warm_on_cell = 0;    // after the first 10 s of each drive
   size_t inner_epochs = 0, inner_on_cell = 0;  // truth at least 2 m from both ends of its cell
-  size_t drives = 0;
+  size_t drives = 0, drives_chained = 0, drives_resumed = 0;
   double km = 0;
   uint64_t breaks = 0, steps = 0, gnss = 0, odometry = 0, nmea_bytes = 0, can_frames = 0, bad_lines = 0;
   std::vector<track::MatchObservation> observations;
@@ -261,14 +261,37 @@ const char* cellRelation(const graph::StreetGraph& g, uint32_t est, uint32_t tru
   return "other";
 }
 
-// calibrated: every drive after the first starts from the odometry calibration
-// (wheel-speed scale, yaw-rate bias) the previous drive's filter ended with, as a
-// host that stores it at key-off would (the simulated car is the same in every drive).
+// How one drive follows the one before (the simulated car is the same in every drive).
+struct DriveChain {
+  // Every drive after the first starts from the odometry calibration (wheel-speed
+  // scale, yaw-rate bias) the previous drive's filter ended with, as a host that
+  // stores it at key-off would.
+  bool calibrated = false;
+  // Each drive ends parked halfway along a cell near its route's end and the
+  // next one pulls away from there (sim park_cell_from_end, first_cell,
+  // start_arc_m); the first starts from a standstill on a seeded street.
+  bool chained = false;
+  // With chained: the tracker starts from the previous drive's last pose
+  // (Tracker::setStartPose), as a host that stores it at key-off would.
+  bool resume_pose = false;
+};
+
+// A chained drive parks halfway along its last cell; the next drive from there
+// is taken when its route has at least half the cells of a seeded one (a car
+// parked near a dead end or the edge of the map is towed to a seeded street).
+constexpr int kParkCellFromEnd = 0;
+
 MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry, const std::string& trace_path,
-                          bool calibrated = false) {
+                          DriveChain chain = DriveChain{}) {
+  const bool calibrated = chain.calibrated;
   MatchResult res;
   track::OdometryCalibration cal;
   bool have_cal = false;
+  // The previous drive's end: where the car stopped and the pose the tracker ended with.
+  uint32_t prev_end_cell = track::kNoCell;
+  double prev_end_arc = 0;
+  bool have_start = false;
+  track::StartPose start;
   FILE* tf = trace_path.empty() ? nullptr : std::fopen(trace_path.c_str(), "w");
   if (tf)
     std::fprintf(tf, "drive,t,fix,true_cell,true_arc,true_len,cell,arc,conf,err_m,sigma_m,true_e,true_n,e,n,heading,"
@@ -281,9 +304,25 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
     fd.drive.route_cells = ms.route_cells;
     fd.drive.gnss_sigma_m = sigma;
     if (ms.lane_wander_m >= 0) fd.drive.lane_wander_m = ms.lane_wander_m;
+    if (chain.chained) {
+      fd.drive.start_speed_mps = 0;
+      fd.drive.park_cell_from_end = kParkCellFromEnd;
+      fd.drive.first_cell = prev_end_cell;
+      fd.drive.start_arc_m = prev_end_arc;
+    }
     sim::Feed feed;
     std::string err;
-    const blvd_status fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
+    blvd_status fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
+    bool resumed = chain.resume_pose && have_start;
+    if (fd.drive.first_cell != track::kNoCell && (fst == BLVD_ERR_NOT_FOUND || 2 * feed.route.size() < ms.route_cells)) {
+      // The last drive parked where no route of half the length goes on:
+      // the car is towed to a seeded street and tracked cold there.
+      fd.drive.first_cell = track::kNoCell;
+      resumed = false;
+      fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
+    }
+    prev_end_cell = track::kNoCell;
+    have_start = false;
     if (fst == BLVD_ERR_NOT_FOUND) continue;
     if (fst != BLVD_OK) throw Error(Status::Internal, err);
     ++res.drives;
@@ -316,6 +355,12 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
       if (!tr.setCalibration(truth)) throw Error(Status::Internal, "calibration refused");
     } else if (calibrated && have_cal && !tr.setCalibration(cal)) {
       throw Error(Status::Internal, "calibration refused");
+    }
+    res.drives_chained += fd.drive.first_cell != track::kNoCell;
+    res.drives_resumed += resumed;
+    if (resumed) {
+      start.t = feed.start_unix;  // key-on: the car has not moved since the stored pose
+      if (!tr.setStartPose(start)) throw Error(Status::Internal, "start pose refused");
     }
     res.drive_starts.push_back(res.observations.size());
     uint64_t steps = 0, fed = 0;
@@ -403,6 +448,31 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
       }
     }
     res.bad_lines += replayer.stats().bad_lines;
+    if (chain.chained) {
+      // Key-off: the rest of the drive after its last epoch, then the pose where the car stopped.
+      while (!done) {
+        if (!have) {
+          const replay::Replayer::Step st = replayer.next(ev);
+          if (st == replay::Replayer::Step::End) break;
+          if (st == replay::Replayer::Step::Error) throw Error(Status::Corrupt, replayer.error());
+        }
+        have = false;
+        if (ev.type == replay::EventType::Gnss) tr.feedGnss(capi::toTrack(ev.gnss));
+        else tr.feedOdometry(capi::toTrack(ev.odometry));
+        if (++fed % 64 == 0) tr.update(ev.t);
+      }
+      const track::Pose& p = tr.update(feed.start_unix + feed.duration_s);
+      prev_end_cell = feed.end_cell;
+      prev_end_arc = feed.end_arc_m;
+      if (p.flags & track::kPoseValid) {
+        double h = 0;
+        ms.city->frame().reverse(geo::Enu{p.e, p.n, 0}, start.lat, start.lon, h);
+        start.heading_deg = p.heading_deg;
+        start.sigma_m = p.pos_sigma_m;
+        start.heading_sigma_deg = p.heading_sigma_deg;
+        have_start = (p.flags & track::kPoseHeadingValid) != 0;
+      }
+    }
     if (calibrated) {
       cal = tr.calibration();
       have_cal = true;
@@ -437,6 +507,8 @@ double share(size_t a, size_t b) { return b ? static_cast<double>(a) / static_ca
 
 nlohmann::json matchJson(const MatchResult& r) {
   return {{"drives", r.drives},
+          {"drives_chained", r.drives_chained},
+          {"drives_resumed", r.drives_resumed},
           {"km", r.km},
           {"epochs", r.epochs},
           {"on_cell", share(r.on_cell, r.epochs)},
@@ -525,10 +597,21 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   const MatchResult m5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5.csv");
   const MatchResult m15 =
       opt.match_low_only ? MatchResult{} : benchMatching(ms, opt.sigma_high, true, tp.empty() ? "" : tp + "-match15.csv");
-  const MatchResult c5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5-calibrated.csv", true);
+  constexpr DriveChain kCalibrated{true, false, false}, kChained{false, true, false}, kResumed{true, true, true};
+  const MatchResult c5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5-calibrated.csv", kCalibrated);
   const MatchResult c15 = opt.match_low_only ? MatchResult{}
                                              : benchMatching(ms, opt.sigma_high, true,
-                                                             tp.empty() ? "" : tp + "-match15-calibrated.csv", true);
+                                                             tp.empty() ? "" : tp + "-match15-calibrated.csv", kCalibrated);
+  // Drives that follow each other (each starts where the last one stopped), tracked
+  // cold and resumed from the last pose and calibration of the drive before.
+  const MatchResult h5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5-chained.csv", kChained);
+  const MatchResult r5 = benchMatching(ms, opt.sigma_low, true, tp.empty() ? "" : tp + "-match5-resumed.csv", kResumed);
+  const MatchResult h15 = opt.match_low_only ? MatchResult{}
+                                             : benchMatching(ms, opt.sigma_high, true,
+                                                             tp.empty() ? "" : tp + "-match15-chained.csv", kChained);
+  const MatchResult r15 = opt.match_low_only ? MatchResult{}
+                                             : benchMatching(ms, opt.sigma_high, true,
+                                                             tp.empty() ? "" : tp + "-match15-resumed.csv", kResumed);
   const MatchResult g5 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_low, false, "");
   const MatchResult g15 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_high, false, "");
   const double us = quick ? NAN : timeSteps(city.graph(), {&m5, &m15}, 3);
@@ -541,6 +624,12 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   // The same drives with the odometry calibration carried from one drive to the next.
   j["on_cell_sigma5_calibrated"] = share(c5.on_cell, c5.epochs);
   j["on_cell_sigma15_calibrated"] = share(c15.on_cell, c15.epochs);
+  // Chained drives (each starts where the previous one stopped), tracked cold and
+  // resumed from the previous drive's last pose and calibration (key-off state).
+  j["on_cell_sigma5_chained"] = share(h5.on_cell, h5.epochs);
+  j["on_cell_sigma5_resumed"] = share(r5.on_cell, r5.epochs);
+  j["on_cell_sigma15_chained"] = share(h15.on_cell, h15.epochs);
+  j["on_cell_sigma15_resumed"] = share(r15.on_cell, r15.epochs);
   j["update_us_p50"] = us;
   j["fusion_err_m_p50"] = fu.err_p50;
   j["dr_drift_pct"] = fu.drift_pct;
@@ -567,6 +656,10 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   d["match_sigma15"] = matchJson(m15);
   d["match_sigma5_calibrated"] = matchJson(c5);
   d["match_sigma15_calibrated"] = matchJson(c15);
+  d["match_sigma5_chained"] = matchJson(h5);
+  d["match_sigma5_resumed"] = matchJson(r5);
+  d["match_sigma15_chained"] = matchJson(h15);
+  d["match_sigma15_resumed"] = matchJson(r15);
   d["match_sigma5_gnss_only"] = matchJson(g5);
   d["match_sigma15_gnss_only"] = matchJson(g15);
   d["graph_cells"] = city.graph().cellCount();

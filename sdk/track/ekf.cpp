@@ -219,6 +219,12 @@ void Ekf::initPosition(double t, double e, double n, double sigma_m) {
   consecutive_rejects_ = 0;
 }
 
+void Ekf::initPose(double t, double e, double n, double sigma_m, double psi, double psi_sigma) {
+  reset();
+  initPosition(t, e, n, sigma_m);
+  initHeading(psi, psi_sigma);
+}
+
 void Ekf::addPositionVariance(double var) {
   if (!(var > 0)) return;
   P_[kE][kE] += var;

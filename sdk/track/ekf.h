@@ -121,6 +121,10 @@ class Ekf {
   void addPositionVariance(double var);
   // Sets the heading (first course from GNSS, or from displacement).
   void initHeading(double psi, double sigma);
+  // Starts the filter afresh at a known pose (a stored start pose): position
+  // (per-axis sigma) and heading (sigma) at time t, speed unknown, scale and
+  // bias from the calibration prior.
+  void initPose(double t, double e, double n, double sigma_m, double psi, double psi_sigma);
 
   // The filter's estimate of the odometry's calibration (the prior it started
   // from while not initialised).

@@ -92,7 +92,7 @@ struct State {
 };
 }  // namespace
 
-std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed) {
+std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed, uint32_t first) {
   std::vector<uint32_t> route;
   if (g.halfedges.empty() || cells == 0) return route;
   Rng rng(seed);
@@ -105,7 +105,8 @@ std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint
   std::vector<uint8_t> used(g.halfedges.size(), 0);
   for (int attempt = 0; attempt < 16 && route.size() < cells; ++attempt) {
     std::fill(used.begin(), used.end(), 0);
-    std::vector<uint32_t> r{starts[rng.next() % starts.size()]};
+    const uint64_t pick = rng.next();  // drawn either way: a given start does not shift the turns' noise
+    std::vector<uint32_t> r{first < g.halfedges.size() ? first : starts[pick % starts.size()]};
     auto use = [&](uint32_t h) {
       used[h] = 1;
       if (g.halfedges[h].twin < used.size()) used[g.halfedges[h].twin] = 1;
@@ -133,10 +134,19 @@ std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint
 
 SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame, const SimDesc& d) {
   SimTrace out;
-  out.route = simRoute(g, d.route_cells, d.seed);
+  out.route = simRoute(g, d.route_cells, d.seed, d.first_cell);
   const Path path = flatten(g, out.route);
   if (path.pts.size() < 2 || path.length() < 20 || d.dt <= 0) return out;
-  const double L = path.length();
+  const double L_route = path.length();
+  // Where the drive ends: the route's end, or halfway along a cell before it.
+  double L = L_route;
+  if (d.park_cell_from_end >= 0 && !out.route.empty()) {
+    const uint32_t park = out.route[out.route.size() - 1 - std::min<size_t>(d.park_cell_from_end, out.route.size() - 1)];
+    size_t i = path.pts.size() - 1;
+    while (i > 1 && path.cell_of[i] != park) --i;  // the park cell's last point
+    L = std::max(path.cell_start[i] + 0.5 * g.halfedges[park].length, std::min(L_route, 21.0));
+  }
+  const double s0 = d.first_cell < g.halfedges.size() ? std::clamp(d.start_arc_m, 0.0, std::max(0.0, L - 21.0)) : 0.0;
 
   // Speed profile on a 1 m grid: curvature over +-3 m limits the speed, then
   // braking and acceleration limits (backward and forward passes).
@@ -172,7 +182,7 @@ SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame
   // step between cells.
   auto offsetAt = [&](double s) {
     const glm::dvec2 dir = path.dirAt(s);
-    const uint32_t cell = path.cell_of[path.segmentAt(std::clamp(s, 0.0, L))];
+    const uint32_t cell = path.cell_of[path.segmentAt(std::clamp(s, 0.0, L_route))];
     const double lateral = laneOffset(g.halfedges[cell], d.lateral_m) + wander[std::min(static_cast<size_t>(std::clamp(s, 0.0, L)), ns - 1)];
     return path.at(s) + glm::dvec2(dir.y, -dir.x) * lateral;
   };
@@ -182,13 +192,13 @@ SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame
   std::vector<State> states;
   {
     State st{};
-    const glm::dvec2 p0 = offsetAt(0);
+    const glm::dvec2 p0 = offsetAt(s0);
     st.e = p0.x;
     st.n = p0.y;
-    st.psi = bearing(path.dirAt(0));
-    st.v = profile(0);
-    st.s = 0;
-    size_t seg = 1;
+    st.psi = bearing(path.dirAt(s0));
+    st.v = d.start_speed_mps >= 0 ? d.start_speed_mps : profile(s0);
+    st.s = s0;
+    size_t seg = path.segmentAt(s0);
     const size_t max_steps = static_cast<size_t>(3600.0 / d.dt);
     while (st.s < L - 1.0 && states.size() < max_steps) {
       states.push_back(st);
@@ -219,6 +229,18 @@ SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame
     states.push_back(st);
   }
   out.duration_s = static_cast<double>(states.size() - 1) * d.dt;
+  out.start_e = states.front().e;
+  out.start_n = states.front().n;
+  out.start_heading_deg = states.front().psi / kDeg;
+  {
+    const State& last = states.back();
+    const size_t i = path.segmentAt(last.s);
+    out.end_cell = path.cell_of[i];
+    out.end_arc_m = last.s - path.cell_start[i];
+    out.end_e = last.e;
+    out.end_n = last.n;
+    out.end_heading_deg = last.psi / kDeg;
+  }
   for (size_t i = 1; i < states.size(); ++i)
     out.distance_m += std::hypot(states[i].e - states[i - 1].e, states[i].n - states[i - 1].n);
 

@@ -25,6 +25,19 @@ namespace blvd::track {
 struct SimDesc {
   uint64_t seed = 1;
   uint32_t route_cells = 40;     // cells in the route
+  // Where the drive begins. By default a seeded street (simRoute); a chained
+  // drive instead begins where an earlier one ended (SimTrace::end_cell and
+  // end_arc_m): its route starts with that cell and the car pulls away from
+  // that arc at start_speed_mps, as a car parked at the end of one trip starts
+  // the next.
+  uint32_t first_cell = kNoCell;
+  double start_arc_m = 0;        // along first_cell (with first_cell only)
+  double start_speed_mps = -1;   // negative: the speed profile's (0.6 x cruise at most)
+  // The car parks halfway along the route's park_cell_from_end-th cell from
+  // the last (0: the last cell) instead of driving on to the route's end (a
+  // junction, often at the edge of the map): where a chained drive starts, as
+  // cars park along streets. Negative: drive to the end.
+  int park_cell_from_end = -1;
   double dt = 0.01;              // integration step, seconds
   double lateral_m = 1.8;        // two-way streets: driving this far right of the centre line
                                  // (one-way streets: the centre; lane.h)
@@ -70,10 +83,17 @@ struct SimTrace {
   std::vector<uint8_t> epoch_has_fix;  // per epoch
   double outage_begin = 0, outage_end = 0;
   double duration_s = 0, distance_m = 0;
+  // Where the car stopped: its cell and the arc along it (the next chained
+  // drive's SimDesc::first_cell / start_arc_m), its position and heading.
+  double start_e = 0, start_n = 0, start_heading_deg = 0;  // where the car was at t = 0
+  uint32_t end_cell = kNoCell;
+  double end_arc_m = 0;
+  double end_e = 0, end_n = 0, end_heading_deg = 0;
 };
 
-// A route of `cells` connected cells from a seeded start (autoRoute's logic).
-std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed);
+// A route of `cells` connected cells from a seeded start (autoRoute's logic),
+// or from `first` when it is a cell of the graph.
+std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed, uint32_t first = kNoCell);
 
 // Drives the route for `desc`; an empty trace when the graph has no usable route.
 SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame, const SimDesc& desc);

@@ -86,6 +86,11 @@ void Tracker::reset() {
     std::lock_guard<std::mutex> lock(mu_);
     ring_head_ = ring_count_ = 0;
   }
+  forgetDrive();
+  st_ = TrackerStats{};
+}
+
+void Tracker::forgetDrive() {
   ekf_.reset();
   if (matcher_) matcher_->reset();
   pose_ = Pose{};
@@ -95,7 +100,24 @@ void Tracker::reset() {
   agreement_fixes_ = 0;
   street_agrees_ = false;
   last_step_t_ = last_fix_t_ = last_fix_event_t_ = last_gyro_t_ = last_odo_speed_t_ = -1e300;
-  st_ = TrackerStats{};
+}
+
+bool Tracker::setStartPose(const StartPose& sp) {
+  if (!finite(sp.t) || !finite(sp.lat) || !finite(sp.lon) || !finite(sp.heading_deg) || !finite(sp.sigma_m) ||
+      !finite(sp.heading_sigma_deg) || std::fabs(sp.lat) > 90 || std::fabs(sp.lon) > 180 || sp.sigma_m < 0 ||
+      sp.heading_sigma_deg < 0)
+    return false;
+  forgetDrive();
+  const geo::Enu p = frame_.forward(sp.lat, sp.lon, frame_.h0());
+  const double sigma = sp.sigma_m > 0 ? std::max(sp.sigma_m, kStartSigmaMinM) : kStartSigmaDefaultM;
+  const double hsig =
+      (sp.heading_sigma_deg > 0 ? std::max(sp.heading_sigma_deg, kStartHeadingSigmaMinDeg) : kStartHeadingSigmaDefaultDeg) * kDeg;
+  ekf_.initPose(sp.t, p.e, p.n, sigma, sp.heading_deg * kDeg, hsig);
+  // The first HMM step from the stored pose (no fix): a matched pose before
+  // the first fix, and the chain the fixes continue. The heading is the stored
+  // one: it tells the street's two directions apart while the car stands.
+  matchStep(nullptr, 0, true);
+  return true;
 }
 
 TrackerStats Tracker::stats() const {
@@ -112,7 +134,7 @@ TrackerStats Tracker::stats() const {
   return s;
 }
 
-void Tracker::matchStep(const double* fix_en, double fix_sigma) {
+void Tracker::matchStep(const double* fix_en, double fix_sigma, bool heading_at_rest) {
   if (!matcher_ || !ekf_.initialized()) return;
   MatchObservation obs;
   obs.t = ekf_.time();
@@ -121,7 +143,9 @@ void Tracker::matchStep(const double* fix_en, double fix_sigma) {
   obs.sigma_m = ekf_.positionSigma();
   obs.heading_rad = ekf_.heading();
   obs.heading_sigma_rad =
-      ekf_.headingValid() && std::fabs(ekf_.speed()) > 1.0 ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi))) : 0.0;
+      ekf_.headingValid() && (heading_at_rest || std::fabs(ekf_.speed()) > 1.0)
+          ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi)))
+          : 0.0;
   if (fix_en && fix_sigma > 0) {
     obs.fix_e = fix_en[0];
     obs.fix_n = fix_en[1];
@@ -379,6 +403,7 @@ const Pose& Tracker::update(double t) {
   p.speed_mps = x[Ekf::kV];
   p.pos_sigma_m = sigma;
   p.flags = kPoseValid | (ekf_.headingValid() ? static_cast<uint32_t>(kPoseHeadingValid) : 0u);
+  p.heading_sigma_deg = ekf_.headingValid() ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi))) / kDeg : 0.0;
   if (ekf_.time() - last_fix_t_ > d_.outage_s) p.flags |= kPoseDeadReckoning;
 
   const double hsig = ekf_.headingValid() && std::fabs(x[Ekf::kV]) > 1.0

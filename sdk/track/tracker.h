@@ -128,6 +128,18 @@ class Tracker {
   // (not the odometry calibration given to setCalibration).
   void reset();
 
+  // Tracking thread: starts the drive from a known pose (types.h StartPose: the
+  // pose kept from the end of the previous drive) instead of waiting for the
+  // first fix: the filter starts there (sigmas raised to the floors) and the
+  // matcher takes one step from it, so update() gives a matched pose at once,
+  // dead reckoning until a fix arrives. A drive under way is forgotten first
+  // (as reset(), except for the events still in the ring). Fixes that disagree
+  // with the start pose (the car was moved while parked) are gated out and,
+  // after EkfDesc::reset_after_rejects of them, reset the position to theirs.
+  // False, changing nothing, for a non-finite or out-of-range field or a
+  // negative sigma.
+  bool setStartPose(const StartPose& sp);
+
   // Tracking thread: the odometry calibration learned so far (ekf.h), to keep
   // for the vehicle's next drive, and the one to start from (Ekf::setCalibration).
   OdometryCalibration calibration() const { return ekf_.calibration(); }
@@ -150,10 +162,14 @@ class Tracker {
   };
 
   bool push(const Event& ev);
+  // Forgets the drive: filter, match, map aid, times (not the ring, not the stats).
+  void forgetDrive();
   void processGnss(const GnssFix& f, double t);
   // advance: move the filter to o.t after applying o (false while more samples of the same stamp follow).
   void processOdometry(const Odometry& o, bool advance);
-  void matchStep(const double* fix_en = nullptr, double fix_sigma = 0);
+  // heading_at_rest: the filter's heading counts below walking speed too (a
+  // stored start pose's, not a course from GNSS).
+  void matchStep(const double* fix_en = nullptr, double fix_sigma = 0, bool heading_at_rest = false);
   // The fixes' side of the matched street: suspends the map aid when they disagree.
   void checkStreetAgreement(double e, double n, double sigma);
   double expectedOffset(uint32_t cell) const;

@@ -64,6 +64,27 @@ struct Odometry {
   uint32_t flags = 0;               // OdometryFlag bits: the fields this sample carries
 };
 
+// Where the vehicle was last known to be, to start a drive from
+// (Tracker::setStartPose): typically the pose read at the end of the previous
+// drive (key-off) and kept in non-volatile memory, as automotive navigation
+// keeps its last position so that it knows where it is at the next start,
+// before the first fix and in a garage without one (Groves, 2nd ed., §16.3.4).
+// Stored as latitude and longitude, so it outlives a package update.
+struct StartPose {
+  double t = 0;                  // tracker clock, seconds: when the vehicle was (still) there
+  double lat = 0, lon = 0;       // degrees, WGS 84
+  double heading_deg = 0;        // clockwise from north
+  double sigma_m = 0;            // per-axis 1-sigma of the position; 0: kStartSigmaDefaultM
+  double heading_sigma_deg = 0;  // 0: kStartHeadingSigmaDefaultDeg
+};
+
+// StartPose sigmas: the defaults when the host gives none, and the floors a
+// given one is raised to (a parked car is rarely where its last fused pose put
+// it to better than half a metre: the pose's own error, the last metres of
+// parking).
+inline constexpr double kStartSigmaDefaultM = 2.0, kStartSigmaMinM = 0.5;
+inline constexpr double kStartHeadingSigmaDefaultDeg = 5.0, kStartHeadingSigmaMinDeg = 1.0;
+
 // A camera placement for rendering, in the package's local frame (east, north,
 // up metres); maps onto render::Camera's eye_enu / heading_deg / pitch_deg.
 struct CameraPose {
@@ -90,6 +111,7 @@ struct Pose {
   double e = 0, n = 0;          // fused position, local frame metres
   double speed_mps = 0;         // fused speed
   double pos_sigma_m = 0;       // 1-sigma of the fused position (largest axis)
+  double heading_sigma_deg = 0; // 1-sigma of the fused heading (0 until the heading is valid)
   uint32_t settled_cell = kNoCell;  // the fixed-lag Viterbi decision for the step at settled_t
   double settled_t = 0;
   CameraPose camera;            // eye on the matched street (or at the fused position when unmatched)

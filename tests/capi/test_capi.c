@@ -3,6 +3,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "blvd/blvd.h"
@@ -192,6 +193,61 @@ int main(int argc, char** argv) {
     fs.struct_size = sizeof fs;
     EXPECT(blvd_render(rt, &fs) == BLVD_OK); /* the camera follows the tracked pose */
     EXPECT(fs.cell != 0xffffffffu);
+
+    /* Key-off: the pose to keep, with its sigmas; key-on: the next drive starts from it
+     * and has a matched pose, dead reckoning, before any fix. */
+    {
+      blvd_start_pose sp;
+      blvd_pose again;
+      unsigned char raw[sizeof(blvd_pose)];
+      blvd_pose* old = (blvd_pose*)raw;
+      EXPECT(blvd_get_pose(rt, 109.0, &pose) == BLVD_OK);
+      EXPECT(pose.pos_sigma_m > 0.0 && pose.pos_sigma_m < 10.0);
+      EXPECT(pose.heading_sigma_deg > 0.0 && pose.heading_sigma_deg < 10.0);
+      /* A host built against the struct before those two fields gets nothing written past it. */
+      memset(raw, 0xab, sizeof raw);
+      old->struct_size = (uint32_t)offsetof(blvd_pose, pos_sigma_m);
+      EXPECT(blvd_get_pose(rt, 109.0, old) == BLVD_OK);
+      EXPECT(old->lat == pose.lat && raw[offsetof(blvd_pose, pos_sigma_m)] == 0xab && raw[sizeof raw - 1] == 0xab);
+
+      memset(&sp, 0, sizeof sp);
+      sp.struct_size = sizeof sp;
+      sp.t = 500.0;
+      sp.lat = pose.lat;
+      sp.lon = pose.lon;
+      sp.heading_deg = pose.heading_deg;
+      sp.sigma_m = pose.pos_sigma_m;
+      sp.heading_sigma_deg = pose.heading_sigma_deg;
+      EXPECT(blvd_set_start_pose(rt, &sp) == BLVD_OK);
+      memset(&again, 0, sizeof again);
+      again.struct_size = sizeof again;
+      EXPECT(blvd_get_pose(rt, 500.0, &again) == BLVD_OK);
+      EXPECT((again.flags & (BLVD_POSE_VALID | BLVD_POSE_HEADING_VALID | BLVD_POSE_DEAD_RECKONING)) ==
+             (BLVD_POSE_VALID | BLVD_POSE_HEADING_VALID | BLVD_POSE_DEAD_RECKONING));
+      EXPECT(fabs(again.lat - pose.lat) < 1e-7 && fabs(again.lon - pose.lon) < 1e-7);
+      EXPECT(fabs(again.heading_deg - pose.heading_deg) < 1e-6);
+      EXPECT(fabs(again.pos_sigma_m - (pose.pos_sigma_m > 0.5 ? pose.pos_sigma_m : 0.5)) < 1e-6);
+      if (pose.flags & BLVD_POSE_MATCHED) EXPECT((again.flags & BLVD_POSE_MATCHED) && again.cell == pose.cell);
+      memset(&fs, 0, sizeof fs);
+      fs.struct_size = sizeof fs;
+      EXPECT(blvd_render(rt, &fs) == BLVD_OK); /* the camera is at the start pose */
+      EXPECT(fs.cell != 0xffffffffu);
+
+      sp.lat = 95.0; /* refused, naming the value; nothing changes */
+      EXPECT(blvd_set_start_pose(rt, &sp) == BLVD_ERR_INVALID_ARG);
+      EXPECT(strstr(blvd_last_error(rt), "lat 95") != NULL);
+      sp.lat = pose.lat;
+      sp.sigma_m = -1.0;
+      EXPECT(blvd_set_start_pose(rt, &sp) == BLVD_ERR_INVALID_ARG);
+      sp.sigma_m = 1.0;
+      sp.struct_size = (uint32_t)offsetof(blvd_start_pose, heading_sigma_deg);
+      EXPECT(blvd_set_start_pose(rt, &sp) == BLVD_ERR_INVALID_ARG);
+      EXPECT(strstr(blvd_last_error(rt), "struct_size") != NULL);
+      EXPECT(blvd_set_start_pose(rt, NULL) == BLVD_ERR_MISUSE);
+      EXPECT(blvd_set_start_pose(NULL, &sp) == BLVD_ERR_MISUSE);
+      EXPECT(blvd_get_pose(rt, 500.0, &again) == BLVD_OK);
+      EXPECT(fabs(again.lat - pose.lat) < 1e-7 && fabs(again.lon - pose.lon) < 1e-7);
+    }
   }
   blvd_runtime_destroy(rt);
   if (failures) fprintf(stderr, "%d failures\n", failures);

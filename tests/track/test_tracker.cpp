@@ -16,6 +16,7 @@
 #include "fault/alloc_counter.h"
 #include "track/sim.h"
 #include "track/tracker.h"
+#include "sim_replay.h"
 #include "track_test_util.h"
 
 namespace blvd::track {
@@ -23,15 +24,8 @@ namespace {
 
 using blvd_test::AllocCounter;
 
-const geo::LocalFrame& frame() {
-  static const geo::LocalFrame f(43.7384, 7.4246, 0);
-  return f;
-}
-
-const graph::StreetGraph& grid() {
-  static const graph::StreetGraph g = blvd_test::makeGrid(9, 70);
-  return g;
-}
+const geo::LocalFrame& frame() { return blvd_test::gridFrame(); }
+const graph::StreetGraph& grid() { return blvd_test::gridCity(); }
 
 SimDesc simDesc(uint64_t seed, double sigma) {
   SimDesc d;
@@ -41,26 +35,10 @@ SimDesc simDesc(uint64_t seed, double sigma) {
   return d;
 }
 
-// Feeds a trace in time order, updating at every GNSS epoch (and every 50
-// odometry samples); calls fn(epoch index, pose) at each epoch.
+// Every fix, in time order (sim_replay.h).
 template <class Fn>
 void replay(Tracker& tr, const SimTrace& trace, Fn&& fn) {
-  size_t fi = 0, oi = 0;
-  for (size_t e = 0; e < trace.epochs.size(); ++e) {
-    const double t = trace.epochs[e].t;
-    for (;;) {
-      const bool f = fi < trace.fixes.size() && trace.fixes[fi].t <= t;
-      const bool o = oi < trace.odometry.size() && trace.odometry[oi].t <= t;
-      if (!f && !o) break;
-      if (f && (!o || trace.fixes[fi].t <= trace.odometry[oi].t)) {
-        tr.feedGnss(trace.fixes[fi++]);
-      } else {
-        tr.feedOdometry(trace.odometry[oi++]);
-        if (oi % 50 == 0) tr.update(trace.odometry[oi - 1].t);
-      }
-    }
-    fn(e, tr.update(t));
-  }
+  blvd_test::replaySim(tr, trace, -1e300, fn);
 }
 
 TEST(Tracker, MatchesASimulatedDriveOnAGrid) {
