@@ -438,6 +438,31 @@ CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double h
     }
     cur = best;
   }
+  // Just past a fork the branches have not drawn apart: the successor taken at
+  // the junction (by heading, while the vehicle was still turning into one) is
+  // weighed again against the junction's other branches while the position lies
+  // within the first metres of it, so that the pose does not hold the wrong
+  // branch until the next HMM step. Only with a precise heading (a yaw-rate
+  // sensor's, within 2 degrees): by distance alone every street leaving the
+  // junction is about as near as the one taken, and a GNSS course alone moved
+  // GNSS-only drives onto the wrong branch more often than off it (bench track:
+  // 1,235 -> 1,257 misses at sigma 5 m without this bound, 1,235 with it).
+  constexpr double kForkWindowM = 8.0;  // about one HMM step (1 s) of urban driving
+  constexpr double kForkHeadingSigma = 2 * kDeg;
+  if (heading_sigma_rad > 0 && heading_sigma_rad < kForkHeadingSigma && cur.arc_m < kForkWindowM && cur.arc_m > 0.01) {
+    CellPoint best = cur;
+    double best_cost = cost(cur);
+    const uint32_t twin = g_.halfedges[cur.cell].twin;
+    for (const uint32_t* p = g_.predecessors.begin(cur.cell); p != g_.predecessors.end(cur.cell); ++p) {
+      for (const uint32_t* s = g_.successors.begin(*p); s != g_.successors.end(*p); ++s) {
+        if (*s == cur.cell || *s == twin) continue;
+        const CellPoint q = project(*s, e, n);
+        const double c = cost(q);
+        if (q.cell != graph::kNone && q.arc_m > 0.01 && c < best_cost) best = q, best_cost = c;
+      }
+    }
+    cur = best;
+  }
   return cur;
 }
 

@@ -11,6 +11,8 @@
 //                             (the filter extrapolated to t, followed along the graph
 //                             from the last match)
 //   pose()                    the last update's result
+//   setStartPose(sp)          key-on: start from the pose kept at the last key-off
+//                             (a matched pose before the first fix)
 //
 // Lifecycle:
 //   blvd::track::Tracker tr(city.frame(), &city.graph(), desc);  // allocates everything

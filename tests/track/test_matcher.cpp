@@ -1,7 +1,7 @@
 // The HMM map matcher on hand-built graphs: the fixed-lag decision at a
 // T-junction, direction (twin half-edges) from heading, the candidate bound, a
-// chain break, following the graph between steps, the spatial index, and no
-// allocation per step.
+// chain break, following the graph between steps (turns, forks), the spatial
+// index, and no allocation per step.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -178,6 +178,34 @@ TEST(MapMatcher, FollowTakesTheNearerStreetAtATurn) {
   // the truth's cell too; the heading only picks which successor.
   EXPECT_EQ(m.follow(p, 3.0, -1.8, 0.1, 0.1).cell, to_east);
   EXPECT_EQ(m.follow(p, 1.0, -2.5, 0.1, 0.1).cell, north);
+}
+
+// A fork whose branches part at 24 degrees: 4 m past it they are 1.7 m apart, so
+// the successor taken at the junction (by the heading while the vehicle still
+// turned) may be the other branch. Within the first metres of a cell, follow
+// weighs the junction's other branches again (distance and heading).
+TEST(MapMatcher, FollowTakesTheOtherBranchJustPastAFork) {
+  blvd_test::GraphBuilder b;
+  const double half = 12 * kPi / 180;
+  const uint32_t a = b.vertex(0, -100), j = b.vertex(0, 0);
+  const uint32_t r = b.vertex(100 * std::sin(half), 100 * std::cos(half)), l = b.vertex(-100 * std::sin(half), 100 * std::cos(half));
+  b.street(a, j);
+  const uint32_t right = b.street(j, r), left = b.street(j, l);
+  const auto g = b.finish();
+  MapMatcher m(g);
+  // 5 m along the right branch, heading along it, but following from the left one.
+  const double e = 5 * std::sin(half), n = 5 * std::cos(half);
+  const CellPoint wrong = m.project(left, e, n);
+  ASSERT_EQ(wrong.cell, left);
+  ASSERT_GT(wrong.arc_m, 4.0);
+  const CellPoint q = m.follow(wrong, e, n, half, 0.02);
+  EXPECT_EQ(q.cell, right);
+  EXPECT_NEAR(q.arc_m, 5.0, 1e-9);
+  // On the left branch, heading along it: stays.
+  EXPECT_EQ(m.follow(wrong, -e, n, -half, 0.02).cell, left);
+  // Past the first metres the choice is the HMM's (its next step), not follow's.
+  const double e2 = 12 * std::sin(half), n2 = 12 * std::cos(half);
+  EXPECT_EQ(m.follow(m.project(left, e2, n2), e2, n2, half, 0.02).cell, left);
 }
 
 TEST(MapMatcher, GridFindsEverySegmentInReach) {
