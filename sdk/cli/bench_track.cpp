@@ -612,8 +612,8 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   const MatchResult r15 = opt.match_low_only ? MatchResult{}
                                              : benchMatching(ms, opt.sigma_high, true,
                                                              tp.empty() ? "" : tp + "-match15-resumed.csv", kResumed);
-  const MatchResult g5 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_low, false, "");
-  const MatchResult g15 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_high, false, "");
+  const MatchResult g5 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_low, false, tp.empty() ? "" : tp + "-gnss5.csv");
+  const MatchResult g15 = quick ? MatchResult{} : benchMatching(ms, opt.sigma_high, false, tp.empty() ? "" : tp + "-gnss15.csv");
   const double us = quick ? NAN : timeSteps(city.graph(), {&m5, &m15}, 3);
   const track::MapMatcher probe(city.graph());
 

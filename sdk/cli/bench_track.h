@@ -29,7 +29,8 @@
 //                      with Google Benchmark).
 //
 // --trace PREFIX writes one CSV row per pose of the matching runs (PREFIX-match5.csv,
-// PREFIX-match15.csv): the truth, the pose and the filter's state (columns in the header),
+// PREFIX-match15.csv, and -calibrated, -chained, -resumed of each; PREFIX-gnss5.csv and
+// -gnss15.csv without odometry): the truth, the pose and the filter's state (columns in the header),
 // for classifying the misses; --match-only / --match5-only run just the on-cell parts.
 #pragma once
 
