@@ -131,7 +131,7 @@ void FrameBudget::updateAim(double frame_ms) {
   std::copy(ratio_, ratio_ + ratios_, scratch_);
   float* q = scratch_ + size_t(0.95 * double(ratios_ - 1));
   std::nth_element(scratch_, q, scratch_ + ratios_);
-  aim_ms_ = target_ms_ * std::clamp(kTailLimit / double(*q), kMinAim, 1.0);
+  aim_ms_ = target_ms_ * std::clamp(kTailAim / double(*q), kMinAim, 1.0);
   poly_.setTarget(aim_ms_);
   scale_.setTarget(aim_ms_);
 }

@@ -109,14 +109,19 @@ class RenderScale {
 // driver's flush), and for a display a late frame matters more than a median
 // a little under the target. FrameBudget keeps the ratio of each of the last
 // kTailWindow frames to the aim it was drawn under; when their 95th
-// percentile would carry frames past kTailLimit × target, it aims lower, by
+// percentile would carry frames past kTailAim × target, it aims lower, by
 // as much as that takes, but never below kMinAim × target, so the median
 // stays within 8 % of the target and only the tail gives way. On a steady
-// machine the aim is the target.
+// machine the aim is the target. kTailAim lies under the bound kTailLimit by
+// about the sampling error of that 95th percentile: from 128 frames of a
+// tail like JitteryMachine's (tests/runtime/test_frame_budget.cpp) it moves
+// by 5.5 % (one standard deviation) from window to window, and aimed at the
+// bound itself the frames' p95 came out over it (0008 §17).
 class FrameBudget {
  public:
   static constexpr uint32_t kTailWindow = 128;
   static constexpr double kTailLimit = 1.25;  // p95 at most this × the target
+  static constexpr double kTailAim = 1.20;    // where the tail is aimed: under the limit by its estimate's noise
   static constexpr double kMinAim = 0.92;     // the aim never goes below this × the target
 
   FrameBudget(double target_ms, uint64_t max_triangles, double min_scale);

@@ -251,7 +251,8 @@ TEST(FrameBudget, ATailMovesTheAimUnderTheTargetWithinTheMedianTolerance) {
   EXPECT_LT(percentile(aims, 50), 0.98 * 5.0);
   EXPECT_GE(percentile(aims, 0), FrameBudget::kMinAim * 5.0);
   EXPECT_NEAR(percentile(settled, 50), 5.0, 0.5);
-  EXPECT_LE(percentile(settled, 95), 1.25 * 5.0 * 1.03);
+  // Under the limit, not at it: the tail is aimed under it by its estimate's noise.
+  EXPECT_LE(percentile(settled, 95), FrameBudget::kTailLimit * 5.0);
 }
 
 TEST(ShareBudget, CoverageSharesAndLeftoversPassOn) {
