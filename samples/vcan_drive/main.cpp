@@ -205,14 +205,14 @@ int main(int argc, char** argv) {
         return 2;
       }
       calibration_loaded = true;
-      // Checked now, so that a bad stored pose stops the program before the bus is opened.
-      if (stored.has_pose && opt.start.empty() && tracking->setStartPose(stored.pose) != BLVD_OK) {
-        std::fprintf(stderr, "vcan_drive: %s: %s\n", opt.calibration.c_str(), tracking->lastError().c_str());
-        return 2;
-      }
     }
   }
+  // Where tracking starts at the first frame: --start, else the stored pose, else the first fix.
   const bool resume_pose = stored.has_pose && opt.start.empty();
+  const bool has_start = resume_pose || !opt.start.empty();
+  blvd_start_pose start = resume_pose ? stored.pose : blvd_start_pose{};
+  if (!opt.start.empty()) start = startPose(opt.start, 0);
+  const std::string start_source = resume_pose ? opt.calibration : "--start";
 
   CanFeed feed;
   if (feed.open(opt.dbc, vehicle, err) != BLVD_OK) {
@@ -273,12 +273,10 @@ int main(int argc, char** argv) {
       started = true;
       first_t = f.t;
       next_pose_t = f.t;
-      blvd_start_pose sp = resume_pose ? stored.pose : blvd_start_pose{};
-      sp.t = f.t;
-      if (!opt.start.empty()) sp = startPose(opt.start, f.t);
-      if ((resume_pose || !opt.start.empty()) && tracking->setStartPose(sp) != BLVD_OK) {
-        std::fprintf(stderr, "vcan_drive: start pose: %s\n", tracking->lastError().c_str());
-        rc = 2;
+      start.t = f.t;
+      if (has_start && tracking->setStartPose(start) != BLVD_OK) {
+        std::fprintf(stderr, "vcan_drive: %s: %s\n", start_source.c_str(), tracking->lastError().c_str());
+        rc = 2;  // the stored state is left as it was
         break;
       }
       // A candump file is its own trace clock; a live bus is placed on it at its first frame.

@@ -267,19 +267,14 @@ struct DriveChain {
   // scale, yaw-rate bias) the previous drive's filter ended with, as a host that
   // stores it at key-off would.
   bool calibrated = false;
-  // Each drive ends parked halfway along a cell near its route's end and the
-  // next one pulls away from there (sim park_cell_from_end, first_cell,
-  // start_arc_m); the first starts from a standstill on a seeded street.
+  // Each drive ends parked halfway along its last cell and the next one pulls
+  // away from there (sim park_mid_last_cell, first_cell, start_arc_m); the
+  // first starts from a standstill on a seeded street.
   bool chained = false;
   // With chained: the tracker starts from the previous drive's last pose
   // (Tracker::setStartPose), as a host that stores it at key-off would.
   bool resume_pose = false;
 };
-
-// A chained drive parks halfway along its last cell; the next drive from there
-// is taken when its route has at least half the cells of a seeded one (a car
-// parked near a dead end or the edge of the map is towed to a seeded street).
-constexpr int kParkCellFromEnd = 0;
 
 MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry, const std::string& trace_path,
                           DriveChain chain = DriveChain{}) {
@@ -306,7 +301,7 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
     if (ms.lane_wander_m >= 0) fd.drive.lane_wander_m = ms.lane_wander_m;
     if (chain.chained) {
       fd.drive.start_speed_mps = 0;
-      fd.drive.park_cell_from_end = kParkCellFromEnd;
+      fd.drive.park_mid_last_cell = true;
       fd.drive.first_cell = prev_end_cell;
       fd.drive.start_arc_m = prev_end_arc;
     }
@@ -315,8 +310,9 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
     blvd_status fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
     bool resumed = chain.resume_pose && have_start;
     if (fd.drive.first_cell != track::kNoCell && (fst == BLVD_ERR_NOT_FOUND || 2 * feed.route.size() < ms.route_cells)) {
-      // The last drive parked where no route of half the length goes on:
-      // the car is towed to a seeded street and tracked cold there.
+      // The last drive parked where no route of half the cells goes on (a dead
+      // end, the edge of the map): the car is towed to a seeded street and
+      // tracked cold there.
       fd.drive.first_cell = track::kNoCell;
       resumed = false;
       fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);

@@ -138,14 +138,9 @@ SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame
   const Path path = flatten(g, out.route);
   if (path.pts.size() < 2 || path.length() < 20 || d.dt <= 0) return out;
   const double L_route = path.length();
-  // Where the drive ends: the route's end, or halfway along a cell before it.
-  double L = L_route;
-  if (d.park_cell_from_end >= 0 && !out.route.empty()) {
-    const uint32_t park = out.route[out.route.size() - 1 - std::min<size_t>(d.park_cell_from_end, out.route.size() - 1)];
-    size_t i = path.pts.size() - 1;
-    while (i > 1 && path.cell_of[i] != park) --i;  // the park cell's last point
-    L = std::max(path.cell_start[i] + 0.5 * g.halfedges[park].length, std::min(L_route, 21.0));
-  }
+  // Where the drive ends: the route's end, or halfway along its last cell.
+  const double L =
+      d.park_mid_last_cell ? std::max(0.5 * (path.cell_start.back() + L_route), std::min(L_route, 21.0)) : L_route;
   const double s0 = d.first_cell < g.halfedges.size() ? std::clamp(d.start_arc_m, 0.0, std::max(0.0, L - 21.0)) : 0.0;
 
   // Speed profile on a 1 m grid: curvature over +-3 m limits the speed, then

@@ -33,11 +33,10 @@ struct SimDesc {
   uint32_t first_cell = kNoCell;
   double start_arc_m = 0;        // along first_cell (with first_cell only)
   double start_speed_mps = -1;   // negative: the speed profile's (0.6 x cruise at most)
-  // The car parks halfway along the route's park_cell_from_end-th cell from
-  // the last (0: the last cell) instead of driving on to the route's end (a
-  // junction, often at the edge of the map): where a chained drive starts, as
-  // cars park along streets. Negative: drive to the end.
-  int park_cell_from_end = -1;
+  // The car parks halfway along the route's last cell instead of driving on
+  // to its end (a junction, often at the edge of the map): where a chained
+  // drive starts, as cars park along streets.
+  bool park_mid_last_cell = false;
   double dt = 0.01;              // integration step, seconds
   double lateral_m = 1.8;        // two-way streets: driving this far right of the centre line
                                  // (one-way streets: the centre; lane.h)
@@ -83,9 +82,9 @@ struct SimTrace {
   std::vector<uint8_t> epoch_has_fix;  // per epoch
   double outage_begin = 0, outage_end = 0;
   double duration_s = 0, distance_m = 0;
+  double start_e = 0, start_n = 0, start_heading_deg = 0;  // where the car was at t = 0
   // Where the car stopped: its cell and the arc along it (the next chained
   // drive's SimDesc::first_cell / start_arc_m), its position and heading.
-  double start_e = 0, start_n = 0, start_heading_deg = 0;  // where the car was at t = 0
   uint32_t end_cell = kNoCell;
   double end_arc_m = 0;
   double end_e = 0, end_n = 0, end_heading_deg = 0;

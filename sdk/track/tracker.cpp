@@ -403,12 +403,12 @@ const Pose& Tracker::update(double t) {
   p.speed_mps = x[Ekf::kV];
   p.pos_sigma_m = sigma;
   p.flags = kPoseValid | (ekf_.headingValid() ? static_cast<uint32_t>(kPoseHeadingValid) : 0u);
-  p.heading_sigma_deg = ekf_.headingValid() ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi))) / kDeg : 0.0;
+  const double psi_sigma = ekf_.headingValid() ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi))) : 0.0;
+  p.heading_sigma_deg = psi_sigma / kDeg;
   if (ekf_.time() - last_fix_t_ > d_.outage_s) p.flags |= kPoseDeadReckoning;
 
-  const double hsig = ekf_.headingValid() && std::fabs(x[Ekf::kV]) > 1.0
-                          ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi)))
-                          : 0.0;
+  // follow() picks successors by heading only while moving.
+  const double hsig = std::fabs(x[Ekf::kV]) > 1.0 ? psi_sigma : 0.0;
   if (matcher_ && cur_.cell != graph::kNone) {
     cur_ = matcher_->follow(cur_, p.e, p.n, x[Ekf::kPsi], hsig);
     p.cell = cur_.cell;

@@ -41,7 +41,7 @@ StartPose startAt(double t, double e, double n, double heading_deg, double sigma
 
 TEST(StartPose, ChainedDriveStartsWhereTheLastOneParked) {
   SimDesc a = parkedStart(3);
-  a.park_cell_from_end = 0;
+  a.park_mid_last_cell = true;
   const SimTrace ta = simulateDrive(grid(), frame(), a);
   ASSERT_GT(ta.epochs.size(), 30u);
   EXPECT_EQ(ta.end_cell, ta.route.back());
