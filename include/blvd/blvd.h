@@ -366,6 +366,20 @@ BLVD_API blvd_status blvd_render_views(blvd_runtime* rt, const blvd_view* views,
  * (at least width*height*4 bytes). Errors: BLVD_ERR_INVALID_ARG if too small. */
 BLVD_API blvd_status blvd_read_pixels(blvd_runtime* rt, void* rgba, size_t rgba_bytes);
 
+/* Object ids of the last frame (ground truth for segmentation, and fidelity
+ * checks): draws the last frame's draw list again from its pose and writes one
+ * id per pixel, top row first, into `ids` (at least width*height of them):
+ *   block + 1                 where a block's geometry shows (0-based block id);
+ *   BLVD_ITEM_IMPOSTOR | k    where the k-th impostor layer drawn shows (k >= 1);
+ *   0                         where sky or ground shows.
+ * The frame's pixels are overwritten: call blvd_read_pixels first (after this
+ * call it fails with BLVD_ERR_MISUSE until the next render). Views of
+ * blvd_render_views are not repeated: the ids are of the whole frame's
+ * camera. Errors: BLVD_ERR_INVALID_ARG if `ids` is too small, BLVD_ERR_MISUSE
+ * before the first render. Render thread only. */
+#define BLVD_ITEM_IMPOSTOR 0x800000u
+BLVD_API blvd_status blvd_read_items(blvd_runtime* rt, uint32_t* ids, size_t count);
+
 
 /* ---- position tracking ---------------------------------------------------------
  * Feed GNSS fixes and odometry from any thread; blvd fuses them (EKF), matches

@@ -10,5 +10,5 @@ cmake --build build --target blvd_cli
 mkdir -p out
 ./build/sdk/cli/blvd bake data/osm/monaco-geofabrik-2026.osm.pbf -o out/monaco.blvd --report out/bake-report
 ./build/sdk/cli/blvd pack info out/monaco.blvd
-./build/sdk/cli/blvd view out/monaco.blvd --path auto:12 --seed 7 --step 12 -o out/drive
+./build/sdk/cli/blvd view out/monaco.blvd --path auto:12 --seed 7 --step 12 --with-full -o out/drive
 echo "open out/drive/index.html (frames) and out/bake-report/index.html (bake report)"

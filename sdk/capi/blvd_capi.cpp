@@ -303,4 +303,10 @@ blvd_status blvd_read_pixels(blvd_runtime* rt, void* rgba, size_t rgba_bytes) {
   return guarded(rt, [&] { rt->impl->readPixels(rgba, rgba_bytes); });
 }
 
+blvd_status blvd_read_items(blvd_runtime* rt, uint32_t* ids, size_t count) {
+  if (!rt) return misuse(nullptr, "blvd_read_items: rt is NULL");
+  if (!ids) return misuse(rt, "blvd_read_items: ids is NULL");
+  return guarded(rt, [&] { rt->impl->readItems(ids, count); });
+}
+
 }  // extern "C"

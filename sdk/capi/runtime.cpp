@@ -83,6 +83,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   stats_.render_scale = 1.f;
   residency_ = std::make_unique<stream::Residency>(city_.graph(), plan_.resident_cells, desc.route_capacity);
   draw_.reserve(city_.blocks().size() + plan_.slab.meshes + 1);
+  draw_items_.reserve(draw_.capacity());
   setMode(desc.mode, desc.radius_m);
   cam_.fov_y_deg = desc.fov_y_deg;
   cam_.far_m = desc.far_m;
@@ -522,11 +523,15 @@ void Runtime::chooseLevels(const CellSlot& slot) {
 
 void Runtime::buildDrawList(uint32_t cell) {
   draw_.clear();
+  draw_items_.clear();
   impostors_drawn_ = 0;
   degraded_ = false;
   const auto& blocks = city_.blocks();
   auto addBlock = [&](uint32_t b) {
-    if (b < reference_blocks_.size() && reference_blocks_[b].id) draw_.push_back(reference_blocks_[b]);
+    if (b < reference_blocks_.size() && reference_blocks_[b].id) {
+      draw_.push_back(reference_blocks_[b]);
+      draw_items_.push_back(b + 1);
+    }
   };
   switch (mode_) {
     case BLVD_MODE_FULL:
@@ -561,13 +566,16 @@ void Runtime::buildDrawList(uint32_t cell) {
       // Sillion 97 §3.1: the local model as geometry, each block at the
       // level of detail the budget or the error bound gives it ...
       chooseLevels(*slot);
-      for (size_t i = 0; i < slot->blocks.size(); ++i) draw_.push_back(slot->blocks[i].lod[level_[i]]);
+      for (size_t i = 0; i < slot->blocks.size(); ++i) {
+        draw_.push_back(slot->blocks[i].lod[level_[i]]);
+        draw_items_.push_back(slot->blocks[i].block + 1);
+      }
       if (mode_ == BLVD_MODE_LOCAL) break;
       // ... plus the cell's impostors for the rest; the blocks they stand
       // for are never drawn with them (K06 §3.1.2): they are not local.
       for (render::MeshHandle h : mode_ == BLVD_MODE_SINGLE ? slot->single : slot->layered) {
         draw_.push_back(h);
-        ++impostors_drawn_;
+        draw_items_.push_back(BLVD_ITEM_IMPOSTOR | ++impostors_drawn_);
       }
       break;
     }
@@ -712,6 +720,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
     renderer_->setReadSize(int(W), int(H));
   }
   rendered_ = true;
+  items_drawn_ = false;
   const auto t_drawn = std::chrono::steady_clock::now();
   if (clock_) clock_->end(monoNs(t_drawn));
   if (budget_ && !(mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS)) {
@@ -773,11 +782,35 @@ void Runtime::stats(blvd_stats* out) const {
 
 void Runtime::readPixels(void* rgba, size_t bytes) {
   if (!rendered_) throw Error(Status::Misuse, "blvd_read_pixels before blvd_render");
+  if (items_drawn_)
+    throw Error(Status::Misuse, "blvd_read_pixels after blvd_read_items: the ids replaced the frame; render again");
   const size_t need = static_cast<size_t>(renderer_->lastWidth()) * renderer_->lastHeight() * 4;
   if (bytes < need)
     throw Error(Status::InvalidArg, "pixel buffer holds " + std::to_string(bytes) + " bytes, the frame needs " +
                                         std::to_string(need));
   if (!renderer_->readPixels(static_cast<uint8_t*>(rgba))) throw Error(Status::Internal, renderer_->lastError());
+}
+
+void Runtime::readItems(uint32_t* ids, size_t count) {
+  if (!rendered_) throw Error(Status::Misuse, "blvd_read_items before blvd_render");
+  const size_t need = size_t(cam_.width) * size_t(cam_.height);
+  if (count < need)
+    throw Error(Status::InvalidArg, "id buffer holds " + std::to_string(count) + " ids, the frame needs " +
+                                        std::to_string(need));
+  if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
+  render::RenderOptions ro;
+  ro.pass = render::Pass::ItemBuffer;
+  ro.item_ids = draw_items_.data();
+  if (!renderer_->render(cam_, draw_.data(), draw_.size(), nullptr, ro))
+    throw Error(Status::Internal, "item buffer failed: " + renderer_->lastError());
+  items_drawn_ = true;
+  // The RGBA read-back is unpacked in place: 4 bytes a pixel, one id a pixel.
+  auto* px = reinterpret_cast<uint8_t*>(ids);
+  if (!renderer_->readPixels(px)) throw Error(Status::Internal, renderer_->lastError());
+  for (size_t i = 0; i < need; ++i) {
+    const uint8_t* p = px + 4 * i;
+    ids[i] = p[3] ? uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 : 0u;
+  }
 }
 
 void Runtime::info(blvd_runtime_info* out) const {

@@ -34,6 +34,8 @@ class Runtime {
   // One frame of the current pose: the whole frame, or `n` views of it.
   void render(blvd_frame_stats* stats, const blvd_view* views = nullptr, uint32_t n = 0);
   void readPixels(void* rgba, size_t bytes);
+  // The last frame's draw list again as an object-id buffer (blvd_read_items).
+  void readItems(uint32_t* ids, size_t count);
   void info(blvd_runtime_info* out) const;
   void setMode(blvd_render_mode mode, float radius_m);
   void setRoute(const uint32_t* cells, size_t n);
@@ -124,6 +126,7 @@ class Runtime {
   // block, loaded on first use outside the budget (docs/decisions/0006).
   std::vector<render::MeshHandle> reference_blocks_;
   std::vector<render::MeshHandle> draw_;  // this frame's list, reserved at create
+  std::vector<uint32_t> draw_items_;      // its object ids (blvd_read_items), reserved with it
   uint64_t frame_ = 0;
   uint32_t last_cell_ = 0xffffffffu;  // the cell of the last frame with a host-set pose
   FrameClock* clock_ = nullptr;  // this runtime's frames, for the loaders' gap scheduling
@@ -134,6 +137,7 @@ class Runtime {
   bool degraded_ = false;
   render::Camera cam_;
   bool rendered_ = false;
+  bool items_drawn_ = false;  // readItems drew over the frame
   blvd_stats stats_{};
   render::SlabUpload pending_upload_;  // the mesh being copied into its slab, chunk by chunk
   render::SlabUpload pending_copy_;    // the shared block level being copied GPU-side

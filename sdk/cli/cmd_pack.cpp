@@ -144,6 +144,46 @@ int extract(const std::string& path, int block, int cell, const std::string& out
   return 0;
 }
 
+// One cell as the runtime sees it: its street, local model, PVS with
+// coverage hints, and impostor layers with the blocks each stands for.
+int cellInfo(const std::string& path, int cell) {
+  const stream::City city = openCity(path);
+  const auto& g = city.graph();
+  if (cell < 0 || size_t(cell) >= g.cellCount())
+    throw core::Error(core::Status::NotFound, "cell " + std::to_string(cell) + " does not exist (" +
+                                                  std::to_string(g.cellCount()) + " cells)");
+  const graph::HalfEdge& e = g.halfedges[size_t(cell)];
+  const glm::dvec2 a = g.points[e.pts_begin], b = g.points[e.pts_begin + e.pts_count - 1];
+  nlohmann::json j = {{"cell", cell},
+                      {"length_m", e.length},
+                      {"from", {a.x, a.y}},
+                      {"to", {b.x, b.y}},
+                      {"polyline_points", e.pts_count},
+                      {"local_blocks", std::vector<uint32_t>(g.local_blocks.begin(size_t(cell)),
+                                                             g.local_blocks.end(size_t(cell)))}};
+  const auto& t = city.cellTables();
+  if (size_t(cell) < t.visibility.size()) {
+    nlohmann::json pvs = nlohmann::json::array();
+    const auto& v = t.visibility[size_t(cell)];
+    for (size_t k = 0; k < v.blocks.size(); ++k) pvs.push_back({v.blocks[k], v.ach[k]});
+    j["pvs_block_ach"] = pvs;
+  }
+  if (size_t(cell) < t.impostors.size()) {
+    for (const char* kind : {"layered", "single"}) {
+      const auto& layers = std::string(kind) == "single" ? t.impostors[size_t(cell)].single
+                                                          : t.impostors[size_t(cell)].layered;
+      nlohmann::json arr = nlohmann::json::array();
+      for (const auto& l : layers)
+        arr.push_back({{"blocks", l.blocks},
+                       {"triangles", l.triangles},
+                       {"texture", {l.texture_width, l.texture_height}}});
+      j[kind] = arr;
+    }
+  }
+  std::printf("%s\n", j.dump(2).c_str());
+  return 0;
+}
+
 }  // namespace
 
 void addPack(CLI::App& app, Runner& run) {
@@ -161,6 +201,11 @@ void addPack(CLI::App& app, Runner& run) {
   verify_cmd->callback([&run, path] { run = [path] { return verify(*path); }; });
 
   auto block = std::make_shared<int>(-1), cell = std::make_shared<int>(-1);
+  auto* cell_cmd = pack->add_subcommand("cell", "one cell as JSON: street, local blocks, PVS with coverage, impostor layers");
+  cell_cmd->add_option("package", *path)->required();
+  cell_cmd->add_option("cell", *cell, "cell index")->required();
+  cell_cmd->callback([&run, path, cell] { run = [path, cell] { return cellInfo(*path, *cell); }; });
+
   auto out = std::make_shared<std::string>();
   auto* ex = pack->add_subcommand("extract", "write one block's or one cell's local model as a GLB");
   ex->add_option("package", *path)->required();

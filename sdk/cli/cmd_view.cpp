@@ -23,6 +23,7 @@ struct ViewOpts {
   double lat = NAN, lon = NAN, heading = 0, pitch = 0, fov = 45, step = 8;
   uint64_t seed = 1;
   int repeat = 1;
+  bool with_full = false;  // a drive also writes the full model's frame of each pose
 };
 
 void check(blvd_status st, blvd_runtime* rt, const char* what) {
@@ -57,6 +58,21 @@ void writeFrame(blvd_runtime* rt, int w, int h, const std::string& path, std::ve
   check(blvd_read_pixels(rt, rgba.data(), rgba.size()), rt, "read pixels");
   std::string err;
   if (!render::writePng(path, w, h, rgba.data(), err)) throw core::Error(core::Status::Io, err);
+}
+
+const char* fullName(char (&buf)[64], size_t i) {
+  std::snprintf(buf, sizeof buf, "frame_%04zu_full.png", i);
+  return buf;
+}
+
+// The full model's frame of the pose just drawn, then back to the drive's mode.
+void writeFullFrame(blvd_runtime* rt, const blvd_runtime_desc& desc, int w, int h, const std::string& path,
+                    std::vector<uint8_t>& rgba) {
+  check(blvd_set_render_mode(rt, BLVD_MODE_FULL, 0.f), rt, "mode");
+  check(blvd_wait_resident(rt, 60000), rt, "load the full model");
+  check(blvd_render(rt, nullptr), rt, "render");
+  writeFrame(rt, w, h, path, rgba);
+  check(blvd_set_render_mode(rt, desc.mode, desc.radius_m), rt, "mode");
 }
 
 double median(std::vector<double> v) {
@@ -127,6 +143,12 @@ int run(const ViewOpts& o) {
        << "<h1>blvd drive</h1><p>" << o.package << " &middot; " << route.size() << " cells, " << poses.size()
        << " frames, " << w << "&times;" << h << " on " << info.backend << " (" << info.gl_renderer
        << ")</p>\n<p>Map data &copy; OpenStreetMap contributors (ODbL)</p>\n";
+  if (o.with_full)
+    html << "<p><button onclick=\"flipAll()\">show the full model / blvd</button>; click a frame to flip it alone:"
+            " an orange outline marks the full model</p>\n"
+            "<script>function flip(i){const f=i.getAttribute('src')==i.dataset.blvd;i.src=f?i.dataset.full:"
+            "i.dataset.blvd;i.style.outline=f?'3px solid #e94':'none';}"
+            "function flipAll(){document.querySelectorAll('img[data-full]').forEach(flip);}</script>\n";
   // The route lets residency prefetch exactly the cells ahead. A drive steps
   // --step metres a frame, far faster than a car, so a frame whose cell is
   // still loading is counted, then the cell is waited for and drawn again.
@@ -142,16 +164,22 @@ int run(const ViewOpts& o) {
       check(blvd_render(rt, &fs), rt, "render");
     }
     ms.push_back(fs.frame_ms);
-    char name[64];
+    char name[64], full_name[64];
     std::snprintf(name, sizeof name, "frame_%04zu.png", i);
     writeFrame(rt, w, h, o.out + "/" + name, rgba);
+    if (o.with_full) writeFullFrame(rt, desc, w, h, o.out + "/" + fullName(full_name, i), rgba);
     double lat = 0, lon = 0, alt = 0;
     city.frame().reverse({p.x, p.y, 0}, lat, lon, alt);
     char caption[256];
     std::snprintf(caption, sizeof caption,
                   "#%zu cell %u &middot; %.6f, %.6f heading %.0f&deg; &middot; %.1f ms, %llu triangles", i, p.cell,
                   lat, lon, p.heading_deg, fs.frame_ms, static_cast<unsigned long long>(fs.triangles));
-    html << "<figure><img src=\"" << name << "\"><figcaption>" << caption << "</figcaption></figure>\n";
+    if (o.with_full)
+      html << "<figure><img src=\"" << name << "\" data-blvd=\"" << name << "\" data-full=\"" << full_name
+           << "\" onclick=\"flip(this)\" title=\"click: blvd / full model\"><figcaption>" << caption
+           << "</figcaption></figure>\n";
+    else
+      html << "<figure><img src=\"" << name << "\"><figcaption>" << caption << "</figcaption></figure>\n";
     std::fprintf(stderr, "\r  frame %zu/%zu", i + 1, poses.size());
   }
   std::fprintf(stderr, "\n");
@@ -190,6 +218,7 @@ void addView(CLI::App& app, Runner& runner) {
   cmd->add_option("--seed", o->seed, "seed of the auto path")->capture_default_str();
   cmd->add_option("--step", o->step, "metres between frames of a drive")->capture_default_str()->check(CLI::Range(0.5, 500.0));
   cmd->add_option("-o,--output", o->out, "PNG to write (or folder, with --path)")->required();
+  cmd->add_flag("--with-full", o->with_full, "a drive also writes each pose's full-model frame; index.html flips between them");
   cmd->callback([o, &runner] { runner = [o] { return run(*o); }; });
 }
 

@@ -942,9 +942,10 @@ bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, Frame
     gl.DepthFunc(GL_LESS);
     for (int textured = 0; textured < 2; ++textured) {
       if (textured) {
-        if (opt.pass != Pass::Shaded) break;
-        program = m.tex_program;
-        u = &m.tex;
+        // An item buffer shows impostors too (flat, in their ids); captures
+        // never hold them.
+        if (opt.pass != Pass::Shaded && opt.pass != Pass::ItemBuffer) break;
+        if (opt.pass == Pass::Shaded) program = m.tex_program, u = &m.tex;
       }
       bool bound = false;
       m.order.clear();
@@ -980,7 +981,7 @@ bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, Frame
             gl.Uniform3f(u->forward, float(f.x), float(f.y), float(f.z));
             gl.Uniform1f(u->depth_scale, float(16777215.0 / opt.max_depth_m));
           }
-          if (textured) {
+          if (textured && opt.pass == Pass::Shaded) {
             gl.ActiveTexture(GL_TEXTURE0);
             gl.Uniform1i(u->texture, 0);
           }
@@ -990,7 +991,7 @@ bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, Frame
           gl.Uniform4f(u->item, float(id & 255u) / 255.0f, float((id >> 8) & 255u) / 255.0f,
                        float((id >> 16) & 255u) / 255.0f, 1.0f);
         }
-        if (textured) {
+        if (textured && opt.pass == Pass::Shaded) {
           gl.BindTexture(GL_TEXTURE_2D, s.texture);
           gl.Uniform2f(u->uv_scale, s.uv_scale[0], s.uv_scale[1]);
         }

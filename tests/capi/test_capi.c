@@ -110,6 +110,26 @@ int main(int argc, char** argv) {
   EXPECT(blvd_read_pixels(rt, px, n) == BLVD_OK);
   for (i = 0; i < n; i += 4) lit += (px[i] | px[i + 1] | px[i + 2]) != 0;
   EXPECT(lit == n / 4); /* sky, ground or city everywhere: nothing left black */
+  {
+    /* Object ids: block + 1, BLVD_ITEM_IMPOSTOR | layer, 0 for sky and ground
+     * (of the full model: the cell of the frame above may still be loading). */
+    uint32_t* ids = (uint32_t*)malloc(320 * 192 * sizeof(uint32_t));
+    size_t blocks = 0, sky = 0;
+    EXPECT(blvd_set_render_mode(rt, BLVD_MODE_FULL, 0) == BLVD_OK);
+    EXPECT(blvd_render(rt, &fs) == BLVD_OK);
+    EXPECT(blvd_read_items(rt, ids, 320 * 192 - 1) == BLVD_ERR_INVALID_ARG);
+    EXPECT(blvd_read_items(rt, ids, 320 * 192) == BLVD_OK);
+    for (i = 0; i < 320 * 192; ++i) {
+      sky += ids[i] == 0;
+      blocks += ids[i] != 0 && !(ids[i] & BLVD_ITEM_IMPOSTOR) && ids[i] <= info.block_count;
+    }
+    EXPECT(sky > 0 && blocks > 0);
+    EXPECT(blvd_read_pixels(rt, px, n) == BLVD_ERR_MISUSE); /* the ids replaced the frame */
+    EXPECT(blvd_render(rt, &fs) == BLVD_OK);
+    EXPECT(blvd_read_pixels(rt, px, n) == BLVD_OK);
+    EXPECT(blvd_set_render_mode(rt, BLVD_MODE_BLVD, 0) == BLVD_OK);
+    free(ids);
+  }
   free(px);
 
   /* Tracking: fixes along a street at 10 m/s; the pose becomes valid, stays
