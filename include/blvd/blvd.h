@@ -370,7 +370,8 @@ BLVD_API blvd_status blvd_read_pixels(blvd_runtime* rt, void* rgba, size_t rgba_
  * checks): draws the last frame's draw list again from its pose and writes one
  * id per pixel, top row first, into `ids` (at least width*height of them):
  *   block + 1                 where a block's geometry shows (0-based block id);
- *   BLVD_ITEM_IMPOSTOR | k    where the k-th impostor layer drawn shows (k >= 1);
+ *   BLVD_ITEM_IMPOSTOR | k    where impostor layer k of the cell shows (k >= 1, the
+ *                             package's order: pack cell lists them);
  *   0                         where sky or ground shows.
  * The frame's pixels are overwritten: call blvd_read_pixels first (after this
  * call it fails with BLVD_ERR_MISUSE until the next render). Views of

@@ -68,6 +68,39 @@ void CaptureRig::itemBuffer(const render::Camera& cam, std::vector<uint32_t>& co
   }
 }
 
+void CaptureRig::coverage(const render::Camera& cam, const std::vector<uint32_t>& blocks, std::vector<uint8_t>& mask) {
+  list_.clear();
+  ids_.clear();
+  for (uint32_t b : blocks)
+    if (b < handles_.size() && handles_[b].id != 0) list_.push_back(handles_[b]), ids_.push_back(1);
+  render::RenderOptions opt;
+  opt.pass = render::Pass::ItemBuffer;
+  opt.item_ids = ids_.data();
+  if (!renderer_->render(cam, list_.data(), list_.size(), nullptr, opt) || !renderer_->readPixels(pixels_.data()))
+    throw core::Error(core::Status::Internal, "bake coverage: " + renderer_->lastError());
+  const size_t n = size_t(cam.width) * cam.height;
+  mask.resize(n);
+  for (size_t i = 0; i < n; ++i) mask[i] = pixels_[i * 4 + 3] != 0;
+}
+
+bool CaptureRig::insideGeometry(const glm::dvec3& eye_enu) {
+  render::Camera cam;
+  cam.eye_enu = eye_enu;
+  cam.pitch_deg = 89.0;
+  cam.fov_y_deg = 2.0;
+  cam.width = cam.height = 4;
+  cam.near_m = 0.05;
+  cam.far_m = 6000.0;
+  list_.clear();
+  for (const render::MeshHandle& h : handles_)
+    if (h.id != 0) list_.push_back(h);
+  render::RenderOptions opt;
+  opt.pass = render::Pass::CaptureColor;  // back faces in alpha 128, culling off
+  if (!renderer_->render(cam, list_.data(), list_.size(), nullptr, opt) || !renderer_->readPixels(pixels_.data()))
+    throw core::Error(core::Status::Internal, "bake inside test: " + renderer_->lastError());
+  return pixels_[(2 * 4 + 2) * 4 + 3] == 128;
+}
+
 void CaptureRig::capture(const render::Camera& cam, const std::vector<uint32_t>& blocks, CaptureImage& out,
                          PinholeCamera& pinhole) {
   list_.clear();

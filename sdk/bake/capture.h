@@ -28,10 +28,18 @@ class CaptureRig {
   // count to counts[block] (counts is sized to the block count).
   void itemBuffer(const render::Camera& cam, std::vector<uint32_t>& counts);
 
+  // Which pixels of `cam` show any of `blocks` (mask: width * height, top
+  // row first, 1 = covered). An item-buffer pass with one id.
+  void coverage(const render::Camera& cam, const std::vector<uint32_t>& blocks, std::vector<uint8_t>& mask);
+
   // Colour (lit, unfogged) and view depth of `blocks` only, as seen by `cam`.
   // Also fills `pinhole` with the matching camera for depth-mesh building.
   void capture(const render::Camera& cam, const std::vector<uint32_t>& blocks, CaptureImage& out,
                PinholeCamera& pinhole);
+
+  // Whether `eye_enu` lies inside a building: looking straight up, the
+  // first surface is a back face (a roof seen from below).
+  bool insideGeometry(const glm::dvec3& eye_enu);
 
   const char* backendName() const { return ctx_->name(); }
   size_t blockCount() const { return handles_.size(); }

@@ -10,6 +10,8 @@
 #include <glm/trigonometric.hpp>
 
 #include "bake/capture.h"
+#include "bake/capture_plan.h"
+#include "bake/atlas.h"
 #include "bake/depth_mesh.h"
 #include "bake/layers.h"
 #include "bake/texture_encode.h"
@@ -64,6 +66,232 @@ struct BlockInfo {
   glm::dvec3 lo{0}, hi{0};       // glTF box
   double top = 0;
 };
+
+// Where a run of a cell's captures stand and which directions they must
+// cover (capture_plan.h, docs/decisions/0010).
+struct CellView {
+  double s0 = 0, s1 = 0;      // the run: arc lengths along the cell
+  glm::dvec2 P{0.0}, Q{0.0};  // its ends: D99's viewing segment
+  glm::dvec3 eye_enu{0.0};    // the vantage point
+  double heading_deg = 0;     // the reference direction: the run's chord
+  double az_lo = 0, az_hi = 0;  // azimuths to cover, relative to heading_deg
+};
+
+double headingOf(glm::dvec2 d) { return glm::degrees(std::atan2(d.x, d.y)); }
+double wrap180(double a) { return a - 360.0 * std::floor((a + 180.0) / 360.0); }
+constexpr double kMaxNeighbourTurnDeg = 120.0;
+constexpr int kAtlasGutter = 4;  // pixels around each capture in a layer's atlas
+
+// Heading of a cell's first (or last) segment of non-zero length.
+double edgeHeading(const graph::StreetGraph& g, uint32_t cell, bool first) {
+  const graph::HalfEdge& e = g.halfedges[cell];
+  for (uint32_t k = 1; k < e.pts_count; ++k) {
+    const uint32_t i = first ? k : e.pts_count - k;
+    const glm::dvec2 d = g.points[e.pts_begin + i] - g.points[e.pts_begin + i - 1];
+    if (glm::length(d) > 1e-6) return headingOf(d);
+  }
+  return 0.0;
+}
+
+// Headings of the cell's segments that overlap [s0, s1], in order.
+std::vector<double> runHeadings(const graph::StreetGraph& g, const graph::HalfEdge& e, double s0, double s1) {
+  std::vector<double> out;
+  double s = 0;
+  for (uint32_t i = 1; i < e.pts_count; ++i) {
+    const glm::dvec2 d = g.points[e.pts_begin + i] - g.points[e.pts_begin + i - 1];
+    const double len = glm::length(d);
+    if (len > 1e-6 && s + len > s0 && s < s1) out.push_back(headingOf(d));
+    s += len;
+  }
+  return out;
+}
+
+// The runs of a cell (S97 §4.2's vantage point, repeated): a cell longer
+// than run_length_m or turning more than run_turn_deg gets several, equal
+// in length, at most max_runs. Each run's impostors are drawn only while the
+// viewer is on it, so each is captured from where its viewer stands.
+std::vector<std::pair<double, double>> cellRuns(const graph::StreetGraph& g, const graph::HalfEdge& e,
+                                                const ImpostorOptions& opt) {
+  const std::vector<double> hd = runHeadings(g, e, 0.0, e.length);
+  double turn = 0, lo = 0, hi = 0;
+  for (size_t i = 1; i < hd.size(); ++i) turn += wrap180(hd[i] - hd[i - 1]), lo = std::min(lo, turn), hi = std::max(hi, turn);
+  const int n = std::clamp(std::max(static_cast<int>(std::ceil(e.length / opt.run_length_m - 1e-9)),
+                                    static_cast<int>(std::ceil((hi - lo) / opt.run_turn_deg - 1e-9))),
+                           1, opt.max_runs);
+  std::vector<std::pair<double, double>> runs;
+  for (int k = 0; k < n; ++k) runs.emplace_back(e.length * k / n, e.length * (k + 1) / n);
+  return runs;
+}
+
+// The vantage point sits at the run's start, pulled back along its chord so
+// a viewer anywhere across the carriageway stays in front of it (K06 §4.4.4,
+// S97 §4.2), but never inside a building. The azimuths: every heading the
+// street takes along the run (unwrapped, so a hairpin's sweep is kept),
+// widened by half the display's field and a margin.
+CellView cellView(const graph::StreetGraph& g, const graph::HalfEdge& e, double s0, double s1,
+                  const ImpostorOptions& opt, CaptureRig& rig) {
+  CellView v;
+  v.s0 = s0, v.s1 = s1;
+  v.P = pointAt(g, e, s0);
+  v.Q = pointAt(g, e, s1);
+  const std::vector<double> hd = runHeadings(g, e, s0, s1);
+  glm::dvec2 fwd = v.Q - v.P;
+  if (glm::length(fwd) < 1.0 && !hd.empty())
+    fwd = {std::sin(glm::radians(hd[0])), std::cos(glm::radians(hd[0]))};
+  fwd = glm::length(fwd) > 0 ? glm::normalize(fwd) : glm::dvec2(0, 1);
+  v.heading_deg = headingOf(fwd);
+  // Pulled back less, or moved into the run, where the eye would be inside
+  // a building (a short cell ending at a corner, a street under a building):
+  // a capture from inside sees only back faces.
+  const double len = s1 - s0;
+  for (double s : {-opt.pullback_m, -0.5 * opt.pullback_m, 0.0, 0.25 * len, 0.5 * len}) {
+    const glm::dvec2 eye2 = s < 0 ? v.P + fwd * s : pointAt(g, e, s0 + s);
+    v.eye_enu = {eye2.x, eye2.y, kEyeHeight};
+    if (!rig.insideGeometry(v.eye_enu)) break;
+  }
+  double a = 0, lo = 0, hi = 0;
+  for (size_t i = 0; i < hd.size(); ++i) {
+    a = i == 0 ? wrap180(hd[0] - v.heading_deg) : a + wrap180(hd[i] - hd[i - 1]);
+    lo = std::min(lo, a), hi = std::max(hi, a);
+  }
+  // A driver turns into the next street before the cell ends (and out of the
+  // last one after it begins): the neighbours' headings at the shared ends,
+  // U-turns aside, are looked along from the first and last runs too.
+  const uint32_t h = uint32_t(&e - g.halfedges.data());
+  auto turnTo = [&](double from, double to, double base) {
+    const double t = wrap180(to - from);
+    if (std::abs(t) <= kMaxNeighbourTurnDeg) lo = std::min(lo, base + t), hi = std::max(hi, base + t);
+  };
+  if (!hd.empty() && s1 >= e.length - 1e-6)
+    for (const uint32_t* q = g.successors.begin(h); q != g.successors.end(h); ++q)
+      turnTo(hd.back(), edgeHeading(g, *q, true), a);
+  if (!hd.empty() && s0 <= 1e-6)
+    for (const uint32_t* p = g.predecessors.begin(h); p != g.predecessors.end(h); ++p)
+      turnTo(hd.front(), edgeHeading(g, *p, false), wrap180(hd.front() - v.heading_deg));
+  const double half = 0.5 * displayFovX(opt) + opt.view_margin_deg;
+  v.az_lo = lo - half, v.az_hi = hi + half;
+  if (v.az_hi - v.az_lo >= 360.0) v.az_lo = -180.0, v.az_hi = 180.0;
+  return v;
+}
+
+// D99 §4.2's layers of the far blocks for one run's viewing segment, capped
+// at max_layers (the report says how much parallax error a merge admitted).
+std::vector<std::vector<uint32_t>> layerBlocks(const CellView& view, const std::vector<uint32_t>& far,
+                                               const std::vector<BlockInfo>& info, const ImpostorOptions& opt,
+                                               double T, ImpostorBakeResult& res) {
+  std::vector<LayerObject> objs;
+  for (uint32_t b : far)
+    objs.push_back({b, info[b].hull, info[b].top >= opt.landmark_height_m ? opt.landmark_scale : 1.0});
+  LayerAssignment la = assignLayers(view.P, view.Q, objs, T);
+  if (la.layers.size() > size_t(opt.max_layers)) {
+    ++res.capped_cells;
+    res.capped_worst_px = std::max(res.capped_worst_px, capLayers(la, objs.size(), opt.max_layers) / T * opt.threshold_px);
+  }
+  std::vector<std::vector<uint32_t>> out;
+  for (const auto& layer : la.layers) {
+    std::vector<uint32_t> blocks;
+    for (uint32_t i : layer) blocks.push_back(far[i]);
+    std::sort(blocks.begin(), blocks.end());
+    out.push_back(std::move(blocks));
+  }
+  return out;
+}
+
+// All of a cell's captures scaled to one density so that together they hold
+// at most opt.cell_texels texels (where they would hold more at one texel
+// per display pixel); counted in `res` for the bake report.
+void fitTexelBudget(std::vector<std::vector<CaptureShot>>& plans, const ImpostorOptions& opt,
+                    const CapturePlanOptions& popt, ImpostorBakeResult& res) {
+  uint64_t full = 0;
+  for (const auto& p : plans)
+    for (const CaptureShot& s : p) full += fullDensityTexels(s, popt);
+  if (full == 0 || full <= uint64_t(opt.cell_texels)) return;
+  const double density = std::sqrt(double(opt.cell_texels) / double(full));
+  for (auto& p : plans)
+    for (CaptureShot& s : p) sizeCapture(s, density, popt);
+  ++res.budget_cells;
+  res.budget_min_density = std::min(res.budget_min_density, density);
+}
+
+// Shrinks a layer's captures until their images pack into one atlas of at
+// most texture_max on a side (each step 15 % fewer texels per side).
+AtlasLayout layoutAtlas(std::vector<CaptureShot>& shots, const CapturePlanOptions& popt) {
+  AtlasLayout layout;
+  for (;;) {
+    std::vector<std::pair<int, int>> sizes;
+    for (const CaptureShot& s : shots) sizes.emplace_back(s.cam.width, s.cam.height);
+    if (packAtlas(sizes, popt.texture_max, kAtlasGutter, layout)) return layout;
+    for (CaptureShot& s : shots) sizeCapture(s, 0.85 * s.density, popt);
+  }
+}
+
+// A layer's captures made into one textured depth mesh blob (S97 §4.2): each
+// capture's depth mesh, its texture coordinates moved into the atlas, and the
+// atlas as the texture. False when nothing survives (nothing covered, or Draco
+// kept nothing).
+bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::vector<uint32_t>& blocks,
+                  const ImpostorOptions& opt, const CapturePlanOptions& popt, package::PackageWriter& writer,
+                  graph::ImpostorLayer& il, ImpostorRecord& rec) {
+  const auto tl = Clock::now();
+  const AtlasLayout layout = layoutAtlas(shots, popt);
+  CaptureImage atlas;
+  atlas.width = layout.width, atlas.height = layout.height;
+  atlas.rgba.assign(size_t(layout.width) * layout.height * 4, 0);
+  atlas.mask.assign(size_t(layout.width) * layout.height, 0);
+  geo::MeshData mesh;
+  rec.density = 1.0;
+  for (size_t k = 0; k < shots.size(); ++k) {
+    CaptureImage img;
+    PinholeCamera pin;
+    rig.capture(shots[k].cam, blocks, img, pin);
+    DepthMeshOptions dopt;
+    dopt.grid_spacing_px = opt.grid_px;
+    geo::MeshData part;
+    std::string why;
+    if (!buildDepthMesh(img, pin, dopt, part, nullptr, why)) {
+      BLVD_LOG_DEBUG("cell %u layer %u capture %zu: nothing (%s)", rec.cell, rec.layer, k, why.c_str());
+      continue;
+    }
+    const auto [x0, y0] = layout.at[k];
+    for (int y = 0; y < img.height; ++y) {
+      const size_t src = size_t(y) * img.width, dst = size_t(y0 + y) * atlas.width + x0;
+      std::copy_n(&img.rgba[src * 4], size_t(img.width) * 4, &atlas.rgba[dst * 4]);
+      std::copy_n(&img.mask[src], size_t(img.width), &atlas.mask[dst]);
+    }
+    for (size_t t = 0; t + 1 < part.texcoords.size(); t += 2) {
+      part.texcoords[t] = float((x0 + part.texcoords[t] * img.width) / atlas.width);
+      part.texcoords[t + 1] = float((y0 + part.texcoords[t + 1] * img.height) / atlas.height);
+    }
+    mesh.append(part);
+    rec.density = std::min(rec.density, shots[k].density);
+    ++rec.shot;
+  }
+  if (mesh.indices.empty()) return false;
+  mesh.image = encodeTextureJpeg(atlas, opt.jpeg_quality);
+  mesh.image_mime = "image/jpeg";
+  package::GlbOptions glb_opt;
+  glb_opt.normal_bits = 0;
+  package::GlbMeshCounts counts;
+  std::vector<uint8_t> glb = package::encodeGlb(mesh, glb_opt, &counts);
+  if (counts.triangles == 0) {
+    BLVD_LOG_DEBUG("cell %u layer %u: no impostor (Draco kept no triangle)", rec.cell, rec.layer);
+    return false;
+  }
+  il.triangles = counts.triangles;
+  il.vertices = counts.vertices;
+  il.texture_width = static_cast<uint16_t>(atlas.width);
+  il.texture_height = static_cast<uint16_t>(atlas.height);
+  il.blocks = blocks;
+  rec.triangles = il.triangles;
+  rec.bytes = static_cast<uint32_t>(glb.size());
+  rec.blocks = static_cast<uint32_t>(blocks.size());
+  rec.texture_width = atlas.width;
+  rec.texture_height = atlas.height;
+  rec.jpeg = mesh.image;
+  il.blob = writer.addBlob(std::move(glb));
+  rec.seconds = since(tl);
+  return true;
+}
 
 }  // namespace
 
@@ -160,8 +388,10 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
   res.tables.display_height = static_cast<uint16_t>(opt.display_height);
   if (opt.mode == ImpostorMode::None) return res;
   const double T = pixelsToRadians(opt.threshold_px, opt.display_width, fov_x_display);
-  package::GlbOptions glb_opt;
-  glb_opt.normal_bits = 0;
+  CapturePlanOptions popt;
+  popt.texture_max = opt.texture_max;
+  popt.max_span_deg = opt.max_span_deg;
+  popt.display_ppr = ppr;
   done = 0;
   size_t todo = 0;
   for (uint32_t h = 0; h < H; ++h) todo += want[h];
@@ -175,119 +405,40 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
     if (progress) progress("impostors (capture + depth mesh)", double(++done), double(todo));
     if (far.empty()) continue;
 
-    // Vantage point and frustum (K06 §4.4.4, S97 §4.2). The camera sits at the
-    // cell's start looking along its chord, pulled back so a viewer anywhere
-    // across the carriageway stays inside the captured cone. Its horizontal
-    // field covers the display's plus twice the largest heading change along
-    // the cell, plus 10° of slack; its vertical field and pitch span every far
-    // block's top and bottom as seen from the eye, so tall far geometry is
-    // never clipped.
-    const glm::dvec2 P = g.points[e.pts_begin], Q = g.points[e.pts_begin + e.pts_count - 1];
-    glm::dvec2 fwd = Q - P;
-    if (glm::length(fwd) < 1.0) fwd = g.points[e.pts_begin + 1] - P;
-    fwd = glm::normalize(fwd);
-    double turn = 0;
-    for (uint32_t i = 1; i < e.pts_count; ++i) {
-      const glm::dvec2 d = g.points[e.pts_begin + i] - g.points[e.pts_begin + i - 1];
-      if (glm::length(d) < 1e-6) continue;
-      turn = std::max(turn, std::acos(std::clamp(glm::dot(glm::normalize(d), fwd), -1.0, 1.0)));
-    }
-    const double fov_x = std::min(140.0, fov_x_display + 2.0 * glm::degrees(turn) + 10.0);
-    const glm::dvec2 eye2 = P - fwd * opt.pullback_m;
-    const glm::dvec3 eye_gl(eye2.x, kEyeHeight, -eye2.y);
-    double el_lo = 0, el_hi = 0;
-    for (uint32_t b : far) {
-      for (int k = 0; k < 8; ++k) {
-        const glm::dvec3 c((k & 1) ? info[b].hi.x : info[b].lo.x, (k & 2) ? info[b].hi.y : info[b].lo.y,
-                           (k & 4) ? info[b].hi.z : info[b].lo.z);
-        const glm::dvec2 rel(c.x - eye_gl.x, -c.z - eye2.y);
-        const double ahead = glm::dot(rel, fwd);
-        if (ahead < 1.0) continue;
-        const double el = glm::degrees(std::atan2(c.y - eye_gl.y, glm::length(rel)));
-        el_lo = std::min(el_lo, el);
-        el_hi = std::max(el_hi, el);
+    // Per run (cellRuns): layers (D99 §4.2), or one layer for S97's single
+    // impostor, each planned from the run's vantage point.
+    struct Job {
+      bool single;
+      float run_from;
+      std::vector<uint32_t> blocks;
+    };
+    std::vector<Job> jobs;
+    std::vector<std::vector<CaptureShot>> plans;
+    for (const auto& [s0, s1] : cellRuns(g, e, opt)) {
+      const CellView view = cellView(g, e, s0, s1, opt, rig);
+      std::vector<Job> run;
+      if (opt.mode == ImpostorMode::Layered || opt.mode == ImpostorMode::Both)
+        for (auto& blocks : layerBlocks(view, far, info, opt, T, res)) run.push_back({false, float(s0), blocks});
+      if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both) run.push_back({true, float(s0), far});
+      for (Job& j : run) {
+        plans.push_back(planCaptures(rig, view.eye_enu, view.heading_deg, view.az_lo, view.az_hi, j.blocks, popt));
+        jobs.push_back(std::move(j));
       }
     }
-    el_lo = std::max(el_lo - 2.0, -50.0);
-    el_hi = std::min(el_hi + 2.0, 70.0);
-    render::Camera cam;
-    cam.eye_enu = {eye2.x, eye2.y, kEyeHeight};
-    cam.heading_deg = glm::degrees(std::atan2(fwd.x, fwd.y));
-    cam.pitch_deg = 0.5 * (el_hi + el_lo);
-    cam.fov_y_deg = std::max(10.0, el_hi - el_lo);
-    cam.near_m = 0.5;
-    cam.far_m = 6000.0;
-    const double tx = std::tan(glm::radians(fov_x) * 0.5), ty = std::tan(glm::radians(cam.fov_y_deg) * 0.5);
-    double W = 2 * tx * ppr, Hh = 2 * ty * ppr;
-    const double scale = std::min(1.0, opt.texture_max / std::max(W, Hh));
-    cam.width = std::max(16, static_cast<int>(W * scale) / 4 * 4);
-    cam.height = std::max(16, static_cast<int>(Hh * scale) / 4 * 4);
-
-    // Layers (D99 §4.2), or one layer for S97's single impostor.
-    std::vector<LayerObject> objs;
-    for (uint32_t b : far)
-      objs.push_back({b, info[b].hull, info[b].top >= opt.landmark_height_m ? opt.landmark_scale : 1.0});
-    std::vector<std::pair<bool, std::vector<uint32_t>>> jobs;  // (single?, blocks)
-    if (opt.mode == ImpostorMode::Layered || opt.mode == ImpostorMode::Both) {
-      LayerAssignment la = assignLayers(P, Q, objs, T);
-      if (la.layers.size() > size_t(opt.max_layers)) {
-        // Each layer costs a texture and a capture; past max_layers the
-        // extra layers merge where they add the least parallax error, and
-        // the report says how much that was.
-        ++res.capped_cells;
-        res.capped_worst_px = std::max(res.capped_worst_px, capLayers(la, objs.size(), opt.max_layers) / T * opt.threshold_px);
-      }
-      for (const auto& layer : la.layers) {
-        std::vector<uint32_t> blocks;
-        for (uint32_t i : layer) blocks.push_back(far[i]);
-        std::sort(blocks.begin(), blocks.end());
-        jobs.emplace_back(false, blocks);
-      }
-    }
-    if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both) jobs.emplace_back(true, far);
-
+    // Every capture of the cell planned first, then sized to the cell's texel budget.
+    fitTexelBudget(plans, opt, popt, res);
     uint32_t layer_index = 0;
-    for (const auto& [single, blocks] : jobs) {
-      const auto tl = Clock::now();
-      CaptureImage img;
-      PinholeCamera pin;
-      rig.capture(cam, blocks, img, pin);
-      DepthMeshOptions dopt;
-      dopt.grid_spacing_px = opt.grid_px;
-      geo::MeshData mesh;
-      DepthMeshStats st;
-      std::string why;
-      if (!buildDepthMesh(img, pin, dopt, mesh, &st, why)) {
-        BLVD_LOG_DEBUG("cell %u layer %u: no impostor (%s)", h, layer_index, why.c_str());
-        continue;
-      }
-      mesh.image = encodeTextureJpeg(img, opt.jpeg_quality);
-      mesh.image_mime = "image/jpeg";
-      package::GlbMeshCounts counts;
-      std::vector<uint8_t> glb = package::encodeGlb(mesh, glb_opt, &counts);
-      if (counts.triangles == 0) {
-        BLVD_LOG_DEBUG("cell %u layer %u: no impostor (Draco kept no triangle)", h, layer_index);
-        continue;
-      }
-      graph::ImpostorLayer il;
-      il.triangles = counts.triangles;
-      il.vertices = counts.vertices;
-      il.texture_width = static_cast<uint16_t>(img.width);
-      il.texture_height = static_cast<uint16_t>(img.height);
-      il.blocks = blocks;
+    for (size_t j = 0; j < jobs.size(); ++j) {
+      if (plans[j].empty()) continue;
       ImpostorRecord rec;
       rec.cell = h;
-      rec.single = single;
+      rec.single = jobs[j].single;
       rec.layer = layer_index++;
-      rec.triangles = il.triangles;
-      rec.bytes = static_cast<uint32_t>(glb.size());
-      rec.blocks = static_cast<uint32_t>(blocks.size());
-      rec.texture_width = img.width;
-      rec.texture_height = img.height;
-      rec.jpeg = mesh.image;
-      il.blob = writer.addBlob(std::move(glb));
-      rec.seconds = since(tl);
-      (single ? res.tables.impostors[h].single : res.tables.impostors[h].layered).push_back(std::move(il));
+      rec.run_from_m = jobs[j].run_from;
+      graph::ImpostorLayer il;
+      il.run_from_m = jobs[j].run_from;
+      if (!captureLayer(rig, plans[j], jobs[j].blocks, opt, popt, writer, il, rec)) continue;
+      (rec.single ? res.tables.impostors[h].single : res.tables.impostors[h].layered).push_back(std::move(il));
       res.records.push_back(std::move(rec));
     }
   }

@@ -2,9 +2,10 @@
 //  1. PVS and coverage: item buffers all around from sample points along each
 //     street (Décoret 99 §5.3), with every block's pixel share kept as its
 //     Average Coverage Hint (Marvie: positions along the cell × 6 directions).
-//  2. Vantage point and frustum per cell (Kmoch 06 §4.4.4, Sillion 97 §4.2).
+//  2. Vantage point per cell and the captures' frusta fitted to what each
+//     layer covers (Kmoch 06 §4.4.4, Sillion 97 §4.2; capture_plan.h).
 //  3. Far blocks grouped into layers by visibility events (Décoret 99 §4.1–4.2).
-//  4. One textured depth mesh per layer (Sillion 97 §4.2).
+//  4. One textured depth mesh per layer and capture (Sillion 97 §4.2).
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -31,9 +32,15 @@ struct ImpostorOptions {
   int positions_per_cell = 8;     // item-buffer positions along a street, ends included (Marvie: 8 × 6 directions)
   int item_resolution = 128;      // item buffer size per direction (square, 90°)
   double pullback_m = 6.0;        // capture eye behind the cell start
+  double max_span_deg = 45.0;     // widest azimuth one capture holds (capture_plan.h)
+  double view_margin_deg = 10.0;  // azimuths covered past half the display's field, each side
+  int cell_texels = 163840;       // texel budget of a cell's captures together (capture_plan.h)
+  double run_length_m = 100.0;    // a longer cell gets several runs (vantage points) ...
+  double run_turn_deg = 90.0;     // ... and so does one turning more than this
+  int max_runs = 4;
   double landmark_height_m = 60.0;  // blocks with a building at least this tall ...
   double landmark_scale = 2.0;      // ... get their D99 weights scaled by this
-  int jpeg_quality = 85;
+  int jpeg_quality = 75;
   std::vector<uint32_t> only_cells; // bake impostors only for these cells (empty: all)
 };
 
@@ -42,6 +49,9 @@ struct ImpostorRecord {
   uint32_t cell = 0;
   bool single = false;
   uint32_t layer = 0;
+  float run_from_m = 0.f;         // the run of the cell it serves (arc length of its start)
+  uint32_t shot = 0;              // captures in the layer's atlas (capture_plan.h: one per piece of azimuth)
+  double density = 1.0;           // lowest texels per display pixel of its captures (< 1: a cap bit)
   uint32_t triangles = 0, bytes = 0, blocks = 0;
   int texture_width = 0, texture_height = 0;
   double seconds = 0;
@@ -55,6 +65,8 @@ struct ImpostorBakeResult {
   size_t samples = 0;
   size_t capped_cells = 0;          // cells whose D99 layering needed more than max_layers
   double capped_worst_px = 0;       // largest weight a merge admitted, in display pixels
+  size_t budget_cells = 0;          // cells whose captures the texel budget scaled down
+  double budget_min_density = 1.0;  // the lowest density it left (texels per display pixel)
 };
 
 // block_meshes: per block (face) its full geometry, glTF axes. Blobs go into

@@ -34,7 +34,19 @@ std::vector<uint8_t> padTexture(const CaptureImage& img, int iterations) {
     filled = next;
     if (!changed) break;
   }
-  for (size_t i = 0; i < filled.size(); ++i) rgba[i * 4 + 3] = 255;
+  // Whatever the iterations did not reach (an atlas's unused corners) takes
+  // the mean colour: flat, so JPEG spends nearly nothing on it.
+  uint64_t sum[3] = {0, 0, 0}, n = 0;
+  for (size_t i = 0; i < filled.size(); ++i)
+    if (filled[i]) {
+      for (int c = 0; c < 3; ++c) sum[c] += rgba[i * 4 + c];
+      ++n;
+    }
+  for (size_t i = 0; i < filled.size(); ++i) {
+    if (!filled[i] && n)
+      for (int c = 0; c < 3; ++c) rgba[i * 4 + c] = static_cast<uint8_t>(sum[c] / n);
+    rgba[i * 4 + 3] = 255;
+  }
   return rgba;
 }
 

@@ -521,7 +521,16 @@ void Runtime::chooseLevels(const CellSlot& slot) {
   for (size_t j = 0; j < nv; ++j) level_[visible_[j]] = visible_level_[j];
 }
 
-void Runtime::buildDrawList(uint32_t cell) {
+// The start of the run that holds arc length `arc_m` (the last run starting
+// at or before it; the first when the list is empty or arc_m is before all).
+float Runtime::activeRun(const std::vector<graph::ImpostorLayer>& layers, double arc_m) {
+  float run = layers.empty() ? 0.f : layers.front().run_from_m;
+  for (const graph::ImpostorLayer& l : layers)
+    if (double(l.run_from_m) <= arc_m) run = l.run_from_m;
+  return run;
+}
+
+void Runtime::buildDrawList(uint32_t cell, double arc_m) {
   draw_.clear();
   draw_items_.clear();
   impostors_drawn_ = 0;
@@ -572,10 +581,18 @@ void Runtime::buildDrawList(uint32_t cell) {
       }
       if (mode_ == BLVD_MODE_LOCAL) break;
       // ... plus the cell's impostors for the rest; the blocks they stand
-      // for are never drawn with them (K06 §3.1.2): they are not local.
-      for (render::MeshHandle h : mode_ == BLVD_MODE_SINGLE ? slot->single : slot->layered) {
-        draw_.push_back(h);
-        draw_items_.push_back(BLVD_ITEM_IMPOSTOR | ++impostors_drawn_);
+      // for are never drawn with them (K06 §3.1.2): they are not local. A
+      // long or bending cell has a set per run: the viewer's run's.
+      const bool single = mode_ == BLVD_MODE_SINGLE;
+      const auto& handles = single ? slot->single : slot->layered;
+      const auto& ci = city_.cellTables().impostors[slot->cell];
+      const auto& layers = single ? ci.single : ci.layered;
+      const float run = activeRun(layers, slot->cell == cell ? arc_m : 0.0);
+      for (size_t i = 0; i < handles.size() && i < layers.size(); ++i) {
+        if (layers[i].run_from_m != run) continue;
+        draw_.push_back(handles[i]);
+        draw_items_.push_back(BLVD_ITEM_IMPOSTOR | uint32_t(i + 1));
+        ++impostors_drawn_;
       }
       break;
     }
@@ -674,7 +691,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   const uint32_t cell = currentCell(arc_m, speed);
   if (mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS) ensureReferenceBlocks();
   else stream(cell, arc_m, speed, desc_.upload_budget_ms);
-  buildDrawList(cell);
+  buildDrawList(cell, arc_m);
   render::FrameStats fs;
   render::RenderOptions ro;
   ro.scale = budget_ ? budget_->scale() : 1.0;

@@ -99,7 +99,8 @@ class Runtime {
   // Gives back the copy sources' references of a slot's pending copies.
   void dropCopies(CellSlot& slot);
   void finishSlot(CellSlot& slot);
-  void buildDrawList(uint32_t cell);
+  void buildDrawList(uint32_t cell, double arc_m);
+  static float activeRun(const std::vector<graph::ImpostorLayer>& layers, double arc_m);
   void ensureReferenceBlocks();
   const CellSlot* residentSlot(uint32_t cell) const;
   // Level of detail per block of `slot` into level_: Marvie's budget when a

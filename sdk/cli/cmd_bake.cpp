@@ -72,6 +72,19 @@ void addBake(CLI::App& app, Runner& run) {
       ->capture_default_str()->check(CLI::IsMember({"layered", "single", "both", "none"}));
   cmd->add_option("--texture", o->bake.impostor.texture_max, "largest impostor texture side, pixels")
       ->capture_default_str()->check(CLI::Range(32, 4096));
+  cmd->add_option("--jpeg-quality", o->bake.impostor.jpeg_quality, "impostor texture JPEG quality")
+      ->capture_default_str()->check(CLI::Range(10, 100));
+  cmd->add_option("--cell-texels", o->bake.impostor.cell_texels,
+                  "texel budget of one cell's impostor captures together (docs/decisions/0010)")
+      ->capture_default_str()->check(CLI::Range(4096, 1 << 26));
+  cmd->add_option("--run-length", o->bake.impostor.run_length_m,
+                  "a cell longer than this gets several impostor runs (vantage points), metres")
+      ->capture_default_str()->check(CLI::Range(10.0, 100000.0));
+  cmd->add_option("--max-runs", o->bake.impostor.max_runs, "most impostor runs a cell gets")
+      ->capture_default_str()->check(CLI::Range(1, 16));
+  cmd->add_option("--max-span", o->bake.impostor.max_span_deg,
+                  "widest azimuth one impostor capture holds, degrees (docs/decisions/0010)")
+      ->capture_default_str()->check(CLI::Range(10.0, 120.0));
   cmd->add_option("--threshold-px", o->bake.impostor.threshold_px,
                   "layer threshold T in pixels at the display (Decoret 99 section 4.2)")
       ->capture_default_str()->check(CLI::Range(0.5, 500.0));

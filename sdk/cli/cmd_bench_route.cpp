@@ -92,12 +92,10 @@ FarInputs farInputs(const stream::City& city, uint32_t cell, blvd_render_mode mo
   if ((mode == BLVD_MODE_BLVD || mode == BLVD_MODE_SINGLE) && cell < city.cellTables().impostors.size()) {
     const auto& ci = city.cellTables().impostors[cell];
     const auto* layers = mode == BLVD_MODE_SINGLE ? &ci.single : &ci.layered;
-    in.layer_of = [layers](uint32_t b) {
-      for (size_t k = 0; k < layers->size(); ++k) {
-        const auto& bl = (*layers)[k].blocks;
-        if (std::binary_search(bl.begin(), bl.end(), b)) return int(k);
-      }
-      return -1;
+    in.layer_holds = [layers](uint32_t layer, uint32_t b) {
+      if (layer >= layers->size()) return false;
+      const auto& bl = (*layers)[layer].blocks;
+      return std::binary_search(bl.begin(), bl.end(), b);
     };
   }
   return in;
@@ -119,29 +117,46 @@ void keepWorst(std::vector<Kept>& worst, Kept k) {
   if (worst.size() > kWorstFrames) worst.pop_back();
 }
 
-nlohmann::json modeSummary(const std::vector<Sample>& v, bool reference, uint64_t frame_px) {
-  auto col = [&](double Sample::*f) {
+// `scored[i]`: pose i's cell was baked with visibility and impostors (a
+// package baked with --impostor-route has them on the route's cells only,
+// and at a junction the runtime may take a neighbour); the far metrics are
+// over those poses, the frame times and whole-frame metrics over all.
+nlohmann::json modeSummary(const std::vector<Sample>& v, const std::vector<bool>& scored, bool reference,
+                           uint64_t frame_px) {
+  auto col = [&](double Sample::*f, bool only_scored) {
     std::vector<double> x;
-    for (const Sample& s : v) x.push_back(s.*f);
+    for (size_t i = 0; i < v.size(); ++i)
+      if (!only_scored || scored[i]) x.push_back(v[i].*f);
     return x;
   };
   auto mx = [](const std::vector<double>& x) { return x.empty() ? 0.0 : *std::max_element(x.begin(), x.end()); };
-  const auto holes = col(&Sample::holes), spur = col(&Sample::spurious);
+  const auto holes = col(&Sample::holes, true), spur = col(&Sample::spurious, true);
+  const auto vis = col(&Sample::vis_px, true);
   std::vector<double> far_bad;
-  for (const Sample& s : v)
-    if (double(s.far_px) >= kFarBadMinShare * double(frame_px)) far_bad.push_back(s.far_bad);
   size_t missing_poses = 0;
-  for (const Sample& s : v) missing_poses += s.missing > 0;
-  return {{"frame_ms_p50", pct(col(&Sample::ms), 50)},   {"frame_ms_p95", pct(col(&Sample::ms), 95)},
-          {"triangles_p50", pct(col(&Sample::tris), 50)}, {"ssim_p50", pct(col(&Sample::ssim), 50)},
-          {"ssim_p5", pct(col(&Sample::ssim), 5)},        {"psnr_p50", reference ? NAN : pct(col(&Sample::psnr), 50)},
-          {"bad_pixels_p50", pct(col(&Sample::bad), 50)}, {"far_bad_p50", pct(far_bad, 50)},
-          {"far_bad_p95", pct(far_bad, 95)},              {"far_bad_max", mx(far_bad)},
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (!scored[i]) continue;
+    if (double(v[i].far_px) >= kFarBadMinShare * double(frame_px)) far_bad.push_back(v[i].far_bad);
+    missing_poses += v[i].missing > 0;
+  }
+  return {{"frame_ms_p50", pct(col(&Sample::ms, false), 50)},
+          {"frame_ms_p95", pct(col(&Sample::ms, false), 95)},
+          {"triangles_p50", pct(col(&Sample::tris, false), 50)},
+          {"ssim_p50", pct(col(&Sample::ssim, false), 50)},
+          {"ssim_p5", pct(col(&Sample::ssim, false), 5)},
+          {"psnr_p50", reference ? NAN : pct(col(&Sample::psnr, false), 50)},
+          {"bad_pixels_p50", pct(col(&Sample::bad, false), 50)},
+          {"far_bad_p50", pct(far_bad, 50)},
+          {"far_bad_p95", pct(far_bad, 95)},
+          {"far_bad_max", mx(far_bad)},
           {"far_bad_poses", far_bad.size()},
-          {"holes_p95", pct(holes, 95)},                  {"holes_max", mx(holes)},
-          {"spurious_p95", pct(spur, 95)},                {"spurious_max", mx(spur)},
-          {"missing_objects_poses", missing_poses},       {"visibility_error_px_p95", pct(col(&Sample::vis_px), 95)},
-          {"visibility_error_px_p50", pct(col(&Sample::vis_px), 50)}};
+          {"holes_p95", pct(holes, 95)},
+          {"holes_max", mx(holes)},
+          {"spurious_p95", pct(spur, 95)},
+          {"spurious_max", mx(spur)},
+          {"missing_objects_poses", missing_poses},
+          {"visibility_error_px_p95", pct(vis, 95)},
+          {"visibility_error_px_p50", pct(vis, 50)}};
 }
 
 class RouteBench {
@@ -157,6 +172,17 @@ class RouteBench {
   nlohmann::json summary() const;
   void writeHtml(const nlohmann::json& j);
   void writeWorst(HtmlPage& page);
+  // The bake made this cell's impostors, or it has none to make (no far
+  // block in its PVS). A twin of a baked cell shares its PVS, not its impostors.
+  bool baked(uint32_t cell) const {
+    const auto& t = city_.cellTables();
+    if (cell >= t.visibility.size() || t.visibility[cell].blocks.empty()) return false;
+    if (!t.impostors[cell].layered.empty() || !t.impostors[cell].single.empty()) return true;
+    const graph::StreetGraph& g = city_.graph();
+    for (uint32_t b : t.visibility[cell].blocks)
+      if (std::find(g.local_blocks.begin(cell), g.local_blocks.end(cell), b) == g.local_blocks.end(cell)) return false;
+    return true;
+  }
 
   const RouteBenchOpts& o_;
   int w_ = 0, h_ = 0;
@@ -192,6 +218,8 @@ void RouteBench::open() {
   blvd_runtime* rt = nullptr;
   check(blvd_runtime_create(&desc, &rt), nullptr, "create runtime");
   rt_.reset(rt);
+  // The route lets the runtime follow it at junctions, as a navigating host's would.
+  check(blvd_set_route(rt, route_.data(), route_.size()), rt, "route");
   info_.struct_size = sizeof info_;
   check(blvd_runtime_get_info(rt, &info_), rt, "info");
   const size_t px = size_t(w_) * h_;
@@ -242,7 +270,7 @@ Sample RouteBench::measureMode(size_t i, size_t m, uint32_t& cell) {
   FarMetrics f = measureFar(in);
   s.far_bad = f.far_bad, s.holes = f.holes, s.spurious = f.spurious;
   s.vis_px = f.visibility_error_px, s.missing = f.missing_objects, s.far_px = f.far_px;
-  if (m == kBlvd && !o_.html_dir.empty()) {
+  if (m == kBlvd && !o_.html_dir.empty() && baked(fs.cell)) {
     Kept k;
     k.pose = i;
     const bool counts = double(f.far_px) >= kFarBadMinShare * double(w_) * double(h_);
@@ -299,7 +327,12 @@ nlohmann::json RouteBench::summary() const {
                           {"edge_tolerance_px", FarInputs{}.edge_tolerance_px},
                           {"far_bad_min_far_share", kFarBadMinShare},
                           {"visibility_error_px", "95th percentile of far-silhouette displacement per pose"}};
-  for (size_t m = 0; m < kNumModes; ++m) j["modes"][kModes[m].key] = modeSummary(samples_[m], m == 0, uint64_t(w_) * uint64_t(h_));
+  std::vector<bool> scored(poses_.size());
+  size_t n_scored = 0;
+  for (size_t i = 0; i < poses_.size(); ++i) n_scored += scored[i] = baked(samples_[kBlvd][i].cell);
+  j["far_scored_poses"] = n_scored;
+  for (size_t m = 0; m < kNumModes; ++m)
+    j["modes"][kModes[m].key] = modeSummary(samples_[m], scored, m == 0, uint64_t(w_) * uint64_t(h_));
   const double full50 = j["modes"]["full"]["frame_ms_p50"], blvd50 = j["modes"]["blvd"]["frame_ms_p50"];
   j["speedup_p50"] = blvd50 > 0 ? full50 / blvd50 : NAN;
   j["triangle_ratio_p50"] =
@@ -315,20 +348,22 @@ nlohmann::json RouteBench::summary() const {
   j["worst_blvd_poses"] = worst;
   // Per pose, blvd's far metrics: where the route's figures come from.
   nlohmann::json per = nlohmann::json::array();
-  size_t off_route = 0, bare = 0;
+  size_t off_route = 0, bare = 0;  // poses on another cell than the route's; on a cell not baked
   for (size_t i = 0; i < poses_.size(); ++i) {
     const Sample& s = samples_[kBlvd][i];
-    const bool has = s.cell < city_.cellTables().impostors.size() &&
-                     !city_.cellTables().impostors[s.cell].layered.empty();
+    const bool has = baked(s.cell);
     off_route += s.cell != poses_[i].cell;
     bare += !has;
-    per.push_back({{"route_cell", poses_[i].cell}, {"cell", s.cell}, {"impostors", has}, {"far_px", s.far_px},
+    double lat = 0, lon = 0, hgt = 0;
+    city_.frame().reverse({poses_[i].x, poses_[i].y, 0.0}, lat, lon, hgt);
+    per.push_back({{"lat", lat}, {"lon", lon}, {"heading", poses_[i].heading_deg},
+                   {"route_cell", poses_[i].cell}, {"cell", s.cell}, {"baked", has}, {"far_px", s.far_px},
                    {"far_bad", s.far_bad}, {"holes", s.holes}, {"spurious", s.spurious},
                    {"visibility_error_px", s.vis_px}, {"missing_objects", s.missing}});
   }
   j["blvd_poses"] = per;
   j["poses_off_route_cell"] = off_route;
-  j["poses_without_impostors"] = bare;
+  j["poses_not_baked"] = bare;
   j["cell_mismatches"] = cell_mismatches_;
   return j;
 }

@@ -94,7 +94,7 @@ bool drawnFar(uint32_t id, const FarInputs& in) {
 // Does test id `t` stand for far block `b` (its impostor layer, or itself)?
 bool standsFor(uint32_t t, uint32_t b, const FarInputs& in) {
   if (t == 0) return false;
-  if (t & kItemImpostor) return in.layer_of && in.layer_of(b) >= 0 && (t & ~kItemImpostor) == uint32_t(in.layer_of(b) + 1);
+  if (t & kItemImpostor) return in.layer_holds && (t & ~kItemImpostor) >= 1 && in.layer_holds((t & ~kItemImpostor) - 1, b);
   return t - 1 == b;
 }
 
@@ -151,6 +151,7 @@ FarMetrics measureFar(const FarInputs& in) {
   m.missing_objects = uint32_t(m.missing.size());
 
   const std::vector<uint8_t> bF = boundary(F, in.w, in.h), bD = boundary(D, in.w, in.h);
+  for (uint8_t b : bF) m.silhouette_px += b;
   const float diag = std::sqrt(float(in.w) * in.w + float(in.h) * in.h);
   std::vector<float> dist;
   silhouetteDistances(bF, bD, in.w, in.h, diag, dist);

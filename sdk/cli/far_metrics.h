@@ -9,8 +9,8 @@
 //   - test_items: the mode's object-id buffer: block + 1 for geometry,
 //     BLVD_ITEM_IMPOSTOR | (layer + 1) for an impostor layer, 0 for nothing;
 //   - is_local(block): the cell's local model;
-//   - layer_of(block): the impostor layer that stands for a far block in this
-//     cell (0-based), or -1 when no layer holds it.
+//   - layer_holds(layer, block): impostor layer `layer` (0-based, in the
+//     order drawn) stands for far block `block`.
 //
 // Definitions (the bench's JSON keys, docs/benchmarks.md):
 //   far mask F      ref_items shows a non-local block;
@@ -50,7 +50,7 @@ struct FarInputs {
   const uint32_t* ref_items = nullptr;
   const uint32_t* test_items = nullptr;
   std::function<bool(uint32_t block)> is_local;
-  std::function<int(uint32_t block)> layer_of;  // may be empty: no impostors
+  std::function<bool(uint32_t layer, uint32_t block)> layer_holds;  // may be empty: no impostors
   double threshold = 0.10;        // colour error of a bad pixel (render::pixelError)
   int edge_tolerance_px = 2;      // spurious pixels this close to F are silhouette error
   uint32_t min_object_px = 200;   // missing objects: blocks at least this large in F
@@ -64,6 +64,7 @@ struct FarMetrics {
   uint32_t missing_objects = 0;
   std::vector<uint32_t> missing;  // their block ids
   double visibility_error_px = 0; // 95th percentile of silhouette displacement
+  uint64_t silhouette_px = 0;     // boundary pixels of F
   // Per pixel, for the error overlay: 0 outside F and fine, 1 in F and
   // fine, 2 in F and bad or a hole, 3 spurious.
   std::vector<uint8_t> classes;

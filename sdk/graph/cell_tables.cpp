@@ -6,8 +6,9 @@
 
 namespace blvd::graph {
 namespace {
-// 2 since package format 2.0: layers carry their vertex count.
-constexpr uint32_t kImpostorTableVersion = 2;
+// 2 since package format 2.0: layers carry their vertex count; 3 since 3.0:
+// and the run of the cell they serve (run_from_m).
+constexpr uint32_t kImpostorTableVersion = 3;
 
 void putLayers(core::ByteWriter& w, const std::vector<ImpostorLayer>& layers) {
   w.put<uint32_t>(static_cast<uint32_t>(layers.size()));
@@ -17,13 +18,16 @@ void putLayers(core::ByteWriter& w, const std::vector<ImpostorLayer>& layers) {
     w.put(l.vertices);
     w.put(l.texture_width);
     w.put(l.texture_height);
+    w.put(l.run_from_m);
     w.put<uint32_t>(static_cast<uint32_t>(l.blocks.size()));
     for (uint32_t b : l.blocks) w.put(b);
   }
 }
 
-void getLayers(core::ByteReader& r, std::vector<ImpostorLayer>& layers, uint32_t blocks, uint32_t blobs) {
-  layers.resize(r.getCount(20));
+// `length`: the cell's length; runs start inside it, in order.
+void getLayers(core::ByteReader& r, std::vector<ImpostorLayer>& layers, uint32_t blocks, uint32_t blobs, float length) {
+  layers.resize(r.getCount(24));
+  float last_run = 0.f;
   for (ImpostorLayer& l : layers) {
     const size_t at = r.pos();
     l.blob = r.get<uint32_t>();
@@ -31,6 +35,12 @@ void getLayers(core::ByteReader& r, std::vector<ImpostorLayer>& layers, uint32_t
     l.vertices = r.get<uint32_t>();
     l.texture_width = r.get<uint16_t>();
     l.texture_height = r.get<uint16_t>();
+    l.run_from_m = r.get<float>();
+    if (!(l.run_from_m >= last_run && l.run_from_m <= length))
+      r.fail("impostor run start " + std::to_string(l.run_from_m) + " m is not in order within the cell's " +
+                 std::to_string(length) + " m",
+             at);
+    last_run = l.run_from_m;
     if (l.blob >= blobs) r.fail("impostor blob index out of range", at);
     if (l.triangles == 0 || l.vertices == 0 || l.triangles > (1u << 24) || l.vertices > (1u << 24))
       r.fail("impostor layer counts outside 1..2^24", at);
@@ -92,8 +102,9 @@ void parseVisibility(const uint8_t* data, size_t size, uint64_t file_offset, uin
   }
 }
 
-void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
-                    uint32_t blobs, CellTables& t) {
+void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, const std::vector<float>& lengths,
+                    uint32_t blocks, uint32_t blobs, CellTables& t) {
+  const uint32_t cells = static_cast<uint32_t>(lengths.size());
   core::ByteReader r(data, size, "impostor section IMPO", file_offset);
   if (const uint32_t v = r.get<uint32_t>(); v != kImpostorTableVersion)
     r.fail("impostor table version " + std::to_string(v) + ", this build reads " + std::to_string(kImpostorTableVersion),
@@ -105,9 +116,9 @@ void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, uint
   const uint32_t n = r.get<uint32_t>();
   if (n != cells) r.fail("impostors list " + std::to_string(n) + " cells, the graph has " + std::to_string(cells));
   t.impostors.resize(n);
-  for (CellImpostors& c : t.impostors) {
-    getLayers(r, c.layered, blocks, blobs);
-    getLayers(r, c.single, blocks, blobs);
+  for (size_t c = 0; c < t.impostors.size(); ++c) {
+    getLayers(r, t.impostors[c].layered, blocks, blobs, lengths[c]);
+    getLayers(r, t.impostors[c].single, blocks, blobs, lengths[c]);
   }
 }
 

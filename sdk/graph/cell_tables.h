@@ -20,6 +20,10 @@ struct ImpostorLayer {
   uint32_t vertices = 0;         // exactly what decoding gives (the mesh has no normals: 3 per triangle)
   uint16_t texture_width = 0, texture_height = 0;  // of the image in the GLB; RGBA8 takes w × h × 4 bytes
   std::vector<uint32_t> blocks;  // the far blocks it stands for (never drawn with it, K06 §3.1.2)
+  // The run of the cell it serves: drawn while the viewer's arc length along
+  // the cell is at least this and below the next run's start (a long or
+  // bending cell has several vantage points; docs/decisions/0010).
+  float run_from_m = 0.f;
 };
 
 struct CellImpostors {
@@ -41,7 +45,9 @@ std::vector<uint8_t> serializeImpostors(const CellTables& t);
 // checked against cells / blocks / blobs.
 void parseVisibility(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
                      CellTables& t);
-void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
-                    uint32_t blobs, CellTables& t);
+// `lengths`: per cell its length (metres); a layer's run_from_m must lie in
+// [0, length] and not decrease along the cell's list.
+void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, const std::vector<float>& lengths,
+                    uint32_t blocks, uint32_t blobs, CellTables& t);
 
 }  // namespace blvd::graph

@@ -30,9 +30,10 @@ constexpr uint32_t fourcc(char a, char b, char c, char d) {
 
 inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
 // 2.0: BLCK records carry the levels of detail, IMPO layers their vertex
-// counts, the header the pool sizing fields (docs/package-format.md).
-inline constexpr uint16_t kVersionMajor = 2;  // a reader opens only its own major
-inline constexpr uint16_t kVersionMinor = 1;  // minors add, never change (see spec)
+// counts, the header the pool sizing fields; 3.0: IMPO layers the run of the
+// cell they serve (docs/package-format.md).
+inline constexpr uint16_t kVersionMajor = 3;  // a reader opens only its own major
+inline constexpr uint16_t kVersionMinor = 0;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
 inline constexpr uint32_t kSectionSpatialIndex = fourcc('S', 'I', 'D', 'X');  // graph spatial index

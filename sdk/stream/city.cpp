@@ -9,6 +9,14 @@
 #include "package/glb.h"
 
 namespace blvd::stream {
+namespace {
+std::vector<float> cellLengths(const graph::StreetGraph& g) {
+  std::vector<float> v;
+  for (const graph::HalfEdge& e : g.halfedges) v.push_back(static_cast<float>(e.length));
+  return v;
+}
+}  // namespace
+
 
 core::Status City::open(const std::string& path, std::string& err) {
   core::Status st = package::PackageReader::open(path, reader_, err);
@@ -37,7 +45,7 @@ core::Status City::open(const std::string& path, std::string& err) {
       st = reader_.checkedSection(tag, s, err);
       if (st != core::Status::Ok) return st;
       if (tag == package::kSectionVisibility) graph::parseVisibility(s.data, s.size, s.offset, cells, nblocks, tables_);
-      else graph::parseImpostors(s.data, s.size, s.offset, cells, nblocks, reader_.blobCount(), tables_);
+      else graph::parseImpostors(s.data, s.size, s.offset, cellLengths(graph_), nblocks, reader_.blobCount(), tables_);
       reader_.dropPages(s);
     }
   } catch (const core::Error& e) {

@@ -48,7 +48,7 @@ struct Pair {
     in.ref_rgba = ref.data(), in.test_rgba = test.data();
     in.ref_items = ref_ids.data(), in.test_items = test_ids.data();
     in.is_local = [](uint32_t b) { return b == kLocal; };
-    in.layer_of = [](uint32_t b) { return b == kFarA ? 0 : b == kFarB ? 1 : -1; };
+    in.layer_holds = [](uint32_t layer, uint32_t b) { return (layer == 0 && b == kFarA) || (layer == 1 && b == kFarB); };
     return measureFar(in);
   }
 };

@@ -71,24 +71,33 @@ TEST(GraphSerialize, CellTablesRoundTripAndRejectBadIndices) {
   layer.texture_width = 512;
   layer.texture_height = 128;
   layer.blocks = {0};
-  t.impostors[2].layered = {layer};
+  t.impostors[2].layered = {layer, layer};
+  t.impostors[2].layered[1].run_from_m = 40.f;  // a second run, 40 m into the cell
   t.impostors[4].single = {layer};
+  const std::vector<float> len(6, 100.f);
   const auto vb = graph::serializeVisibility(t), ib = graph::serializeImpostors(t);
   graph::CellTables r;
   graph::parseVisibility(vb.data(), vb.size(), 0, 6, 2, r);
-  graph::parseImpostors(ib.data(), ib.size(), 0, 6, 2, 4, r);
+  graph::parseImpostors(ib.data(), ib.size(), 0, len, 2, 4, r);
   EXPECT_EQ(r.visibility[2].blocks, t.visibility[2].blocks);
   EXPECT_EQ(r.visibility[2].ach, t.visibility[2].ach);
-  ASSERT_EQ(r.impostors[2].layered.size(), 1u);
+  ASSERT_EQ(r.impostors[2].layered.size(), 2u);
+  EXPECT_EQ(r.impostors[2].layered[1].run_from_m, 40.f);
   EXPECT_EQ(r.impostors[2].layered[0].triangles, 77u);
   EXPECT_EQ(r.impostors[2].layered[0].vertices, 231u);
   EXPECT_EQ(r.impostors[4].single[0].texture_width, 512);
   EXPECT_EQ(r.threshold_px, 10.f);
   // A blob index past the package's blobs, a block past its blocks, and every truncation.
-  EXPECT_THROW(graph::parseImpostors(ib.data(), ib.size(), 0, 6, 2, 3, r), core::Error);
+  EXPECT_THROW(graph::parseImpostors(ib.data(), ib.size(), 0, len, 2, 3, r), core::Error);
+  // A run past the cell's end, or out of order.
+  const std::vector<float> short_cells(6, 30.f);
+  EXPECT_THROW(graph::parseImpostors(ib.data(), ib.size(), 0, short_cells, 2, 4, r), core::Error);
+  t.impostors[2].layered = {t.impostors[2].layered[1], layer};
+  const auto unordered = graph::serializeImpostors(t);
+  EXPECT_THROW(graph::parseImpostors(unordered.data(), unordered.size(), 0, len, 2, 4, r), core::Error);
   EXPECT_THROW(graph::parseVisibility(vb.data(), vb.size(), 0, 6, 1, r), core::Error);
   EXPECT_THROW(graph::parseVisibility(vb.data(), vb.size(), 0, 7, 2, r), core::Error);
-  for (size_t n = 0; n < ib.size(); ++n) EXPECT_THROW(graph::parseImpostors(ib.data(), n, 0, 6, 2, 4, r), core::Error);
+  for (size_t n = 0; n < ib.size(); ++n) EXPECT_THROW(graph::parseImpostors(ib.data(), n, 0, len, 2, 4, r), core::Error);
   for (size_t n = 0; n < vb.size(); ++n) EXPECT_THROW(graph::parseVisibility(vb.data(), n, 0, 6, 2, r), core::Error);
 }
 

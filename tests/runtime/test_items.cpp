@@ -91,7 +91,7 @@ TEST(Items, EachModeShowsWhatItDraws) {
     if (id & BLVD_ITEM_IMPOSTOR) ++impostor_px, top = std::max(top, id & ~BLVD_ITEM_IMPOSTOR);
   EXPECT_GT(impostor_px, 0u);
   EXPECT_GE(top, 1u);
-  EXPECT_LE(top, fs.impostor_layers);
+  EXPECT_LE(top, city.cellTables().impostors[fs.cell].layered.size());  // the package's layer numbers
 
   const std::vector<uint32_t> full = r.frame(BLVD_MODE_FULL, fs);
   size_t far = 0;

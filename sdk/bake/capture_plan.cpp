@@ -1,0 +1,166 @@
+// Capture planning for a cell's impostors; the rule is in capture_plan.h.
+#include "bake/capture_plan.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
+
+namespace blvd::bake {
+namespace {
+
+constexpr double kMaxScoutSpanDeg = 90.0;
+constexpr int kGapBins = 15;  // covered azimuths closer than this (1° bins) stay one interval
+
+// Horizontal unit vectors (glTF axes) of a heading, clockwise from north.
+glm::dvec3 forwardOf(double heading_deg) {
+  const double h = glm::radians(heading_deg);
+  return {std::sin(h), 0.0, -std::cos(h)};
+}
+glm::dvec3 rightOf(double heading_deg) {
+  const double h = glm::radians(heading_deg);
+  return {std::cos(h), 0.0, std::sin(h)};
+}
+
+int ceil4(double v) { return (static_cast<int>(std::ceil(v)) + 3) / 4 * 4; }
+
+// The scout: covered pixels of `blocks` over the azimuth range, as rays.
+std::vector<CoveredRay> scout(CaptureRig& rig, const glm::dvec3& eye_enu, double heading_deg, double az_lo,
+                              double az_hi, const std::vector<uint32_t>& blocks, const CapturePlanOptions& opt) {
+  std::vector<CoveredRay> rays;
+  const int k = std::max(1, static_cast<int>(std::ceil((az_hi - az_lo) / kMaxScoutSpanDeg - 1e-9)));
+  const double span = (az_hi - az_lo) / k;
+  const glm::dvec3 f0 = forwardOf(heading_deg), r0 = rightOf(heading_deg);
+  std::vector<uint8_t> mask;
+  for (int j = 0; j < k; ++j) {
+    render::Camera cam;
+    cam.eye_enu = eye_enu;
+    cam.heading_deg = heading_deg + az_lo + (j + 0.5) * span;
+    cam.pitch_deg = 0.5 * (opt.min_elevation_deg + opt.max_elevation_deg);
+    cam.fov_y_deg = opt.max_elevation_deg - opt.min_elevation_deg;
+    const double tx = std::tan(glm::radians(0.5 * span + 1.0)), ty = std::tan(glm::radians(0.5 * cam.fov_y_deg));
+    cam.height = opt.scout_height;
+    cam.width = std::max(16, static_cast<int>(std::lround(opt.scout_height * tx / ty)));
+    cam.near_m = opt.near_m;
+    cam.far_m = opt.far_m;
+    rig.coverage(cam, blocks, mask);
+    const PinholeCamera pin = pinholeOf(cam);
+    for (int y = 0; y < cam.height; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        if (!mask[size_t(y) * cam.width + x]) continue;
+        const glm::dvec3 d = glm::normalize(pin.ray(x + 0.5, y + 0.5));
+        const double az = glm::degrees(std::atan2(glm::dot(d, r0), glm::dot(d, f0)));
+        rays.push_back({az, d});
+      }
+  }
+  return rays;
+}
+
+// Covered azimuth intervals (degrees), split where no ray falls for more than
+// kGapBins one-degree bins.
+std::vector<std::pair<double, double>> coveredIntervals(const std::vector<CoveredRay>& rays, double lo, double hi) {
+  const int n = std::max(1, static_cast<int>(std::ceil(hi - lo)));
+  std::vector<uint8_t> bin(size_t(n), 0);
+  for (const CoveredRay& r : rays) bin[size_t(std::clamp(static_cast<int>(r.azimuth_deg - lo), 0, n - 1))] = 1;
+  std::vector<std::pair<double, double>> out;
+  int start = -1, last = -1;
+  for (int i = 0; i <= n; ++i) {
+    const bool on = i < n && bin[size_t(i)];
+    if (on && start < 0) start = i;
+    if (on) last = i;
+    if (start >= 0 && (i == n || (!on && i - last > kGapBins))) {
+      out.emplace_back(lo + start, std::min(hi, lo + last + 1.0));
+      start = -1;
+    }
+  }
+  return out;
+}
+
+// One capture fitted to `rays` (all inside one piece of azimuth).
+CaptureShot fitOne(const std::vector<const CoveredRay*>& rays, const glm::dvec3& eye_enu, double heading_deg,
+                   const CapturePlanOptions& opt) {
+  double a0 = 1e9, a1 = -1e9, e0 = 1e9, e1 = -1e9;
+  for (const CoveredRay* r : rays) {
+    a0 = std::min(a0, r->azimuth_deg), a1 = std::max(a1, r->azimuth_deg);
+    const double el = glm::degrees(std::asin(std::clamp(r->dir.y, -1.0, 1.0)));
+    e0 = std::min(e0, el), e1 = std::max(e1, el);
+  }
+  render::Camera cam;
+  cam.eye_enu = eye_enu;
+  cam.heading_deg = heading_deg + 0.5 * (a0 + a1);
+  cam.pitch_deg = std::clamp(0.5 * (e0 + e1), -80.0, 80.0);
+  cam.near_m = opt.near_m;
+  cam.far_m = opt.far_m;
+  double tx = 0, ty = 0;
+  for (int pass = 0; pass < 2; ++pass) {  // the second pass centres the pitch on the rays' image rows
+    cam.fov_y_deg = 90.0, cam.width = cam.height = 64;
+    const PinholeCamera pin = pinholeOf(cam);
+    double sy0 = 1e9, sy1 = -1e9;
+    tx = 0;
+    for (const CoveredRay* r : rays) {
+      const double z = glm::dot(r->dir, pin.forward);
+      if (z < 0.05) continue;
+      tx = std::max(tx, std::abs(glm::dot(r->dir, pin.right) / z));
+      const double sy = glm::dot(r->dir, pin.up) / z;
+      sy0 = std::min(sy0, sy), sy1 = std::max(sy1, sy);
+    }
+    ty = std::max(std::abs(sy0), std::abs(sy1));
+    if (pass == 0) cam.pitch_deg = std::clamp(cam.pitch_deg + glm::degrees(std::atan(0.5 * (sy0 + sy1))), -80.0, 80.0);
+  }
+  const double m = std::tan(glm::radians(opt.margin_deg));
+  CaptureShot shot;
+  shot.cam = cam;
+  shot.tan_x = std::min(tx + m, std::tan(glm::radians(80.0)));
+  shot.tan_y = std::min(ty + m, std::tan(glm::radians(80.0)));
+  sizeCapture(shot, 1.0, opt);
+  return shot;
+}
+
+}  // namespace
+
+void sizeCapture(CaptureShot& shot, double density, const CapturePlanOptions& opt) {
+  const double tx = shot.tan_x, ty = shot.tan_y;
+  const double W = 2 * tx * opt.display_ppr, H = 2 * ty * opt.display_ppr;
+  shot.density = std::min(density, opt.texture_max / std::max(W, H));
+  render::Camera& cam = shot.cam;
+  cam.height = std::clamp(ceil4(H * shot.density), 16, opt.texture_max);
+  cam.width = std::clamp(ceil4(cam.height * tx / ty), 16, opt.texture_max);
+  // The rounded size keeps both half-fields covered.
+  const double ty_eff = std::max(ty, tx * cam.height / cam.width);
+  cam.fov_y_deg = 2.0 * glm::degrees(std::atan(ty_eff));
+}
+
+uint64_t fullDensityTexels(const CaptureShot& shot, const CapturePlanOptions& opt) {
+  const double W = 2 * shot.tan_x * opt.display_ppr, H = 2 * shot.tan_y * opt.display_ppr;
+  const double cap = std::min(1.0, opt.texture_max / std::max(W, H));
+  return uint64_t(W * cap * H * cap);
+}
+
+std::vector<CaptureShot> fitCaptures(const std::vector<CoveredRay>& rays, const glm::dvec3& eye_enu,
+                                     double heading_deg, double az_lo_deg, double az_hi_deg,
+                                     const CapturePlanOptions& opt) {
+  std::vector<CaptureShot> shots;
+  if (rays.empty()) return shots;
+  for (const auto& [lo, hi] : coveredIntervals(rays, az_lo_deg, az_hi_deg)) {
+    const int n = std::max(1, static_cast<int>(std::ceil((hi - lo) / opt.max_span_deg - 1e-9)));
+    const double w = (hi - lo) / n;
+    for (int i = 0; i < n; ++i) {
+      const double p0 = lo + i * w, p1 = lo + (i + 1) * w;
+      std::vector<const CoveredRay*> in;
+      for (const CoveredRay& r : rays)
+        if (r.azimuth_deg >= p0 && (r.azimuth_deg < p1 || (i + 1 == n && r.azimuth_deg <= p1))) in.push_back(&r);
+      if (!in.empty()) shots.push_back(fitOne(in, eye_enu, heading_deg, opt));
+    }
+  }
+  return shots;
+}
+
+std::vector<CaptureShot> planCaptures(CaptureRig& rig, const glm::dvec3& eye_enu, double heading_deg,
+                                      double az_lo_deg, double az_hi_deg, const std::vector<uint32_t>& blocks,
+                                      const CapturePlanOptions& opt) {
+  const std::vector<CoveredRay> rays = scout(rig, eye_enu, heading_deg, az_lo_deg, az_hi_deg, blocks, opt);
+  return fitCaptures(rays, eye_enu, heading_deg, az_lo_deg, az_hi_deg, opt);
+}
+
+}  // namespace blvd::bake

@@ -1,0 +1,77 @@
+// Where a cell's impostor captures look, and at what resolution.
+//
+// Sillion 97 §4.2 captures the far model with one frustum "looking down the
+// street"; Kmoch 06 §4.4.4 places the camera and cuts its sides to what the
+// impostor must show. A street that bends needs more than one planar frustum
+// can hold undistorted, and a layer's blocks cover only part of any frustum,
+// so the rule here is (docs/decisions/0010):
+//
+//  1. The azimuths a viewer anywhere along the cell can look at, seen from
+//     the vantage point: every heading the street takes, plus half the
+//     display's field and a margin on each side (up to the full circle).
+//  2. A scout render of the layer's blocks over that range (low resolution,
+//     -50° to +80° of elevation) tells which directions the blocks really
+//     cover: geometry, not bounding boxes (a large block whose box corners are
+//     far may hold a building beside the vantage point).
+//  3. The covered azimuths, split at gaps, are cut into pieces of at most
+//     `max_span_deg`, and each piece gets one planar capture fitted to the
+//     covered rays inside it (heading, pitch and both half-fields), so no
+//     capture is wider than a display and none is stretched by a wide-angle
+//     projection.
+//  4. Each capture is sized for one texel per display pixel at the vantage
+//     point (the display's pixels per radian at its centre), scaled down to
+//     `texture_max` on its longer side where that caps it, and all of a
+//     cell's captures together scaled down to the cell's texel budget (the
+//     package's size); the density kept is reported.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "bake/capture.h"
+#include "render/camera.h"
+
+namespace blvd::bake {
+
+struct CapturePlanOptions {
+  double max_span_deg = 45.0;       // widest piece of azimuth one capture holds
+  int texture_max = 512;            // longest texture side
+  double display_ppr = 579.4;       // display pixels per unit of tan at its centre (800x480, 45°)
+  double margin_deg = 1.5;          // added around the covered directions
+  double min_elevation_deg = -50.0, max_elevation_deg = 80.0;  // the scout's vertical reach
+  int scout_width = 192, scout_height = 256;                    // per scout view (<= 90° wide)
+  double near_m = 0.5, far_m = 6000.0;
+};
+
+struct CaptureShot {
+  render::Camera cam;
+  double density = 1.0;  // texels per display pixel at the capture's centre (< 1: a cap bit)
+  double tan_x = 0, tan_y = 0;  // the half-fields the capture must hold (tangents)
+};
+
+// Sizes a capture for `density` texels per display pixel at its centre (at
+// most 1, and less where texture_max caps its longer side): width, height
+// and the vertical field that keeps both half-fields inside.
+void sizeCapture(CaptureShot& shot, double density, const CapturePlanOptions& opt);
+
+// Texels of the capture at one texel per display pixel (or texture_max).
+uint64_t fullDensityTexels(const CaptureShot& shot, const CapturePlanOptions& opt);
+
+// Captures for `blocks` from `eye_enu`, covering azimuths [az_lo_deg,
+// az_hi_deg] relative to `heading_deg` (clockwise positive; the span at most
+// 360°). Empty when the blocks cover nothing in that range.
+std::vector<CaptureShot> planCaptures(CaptureRig& rig, const glm::dvec3& eye_enu, double heading_deg,
+                                      double az_lo_deg, double az_hi_deg, const std::vector<uint32_t>& blocks,
+                                      const CapturePlanOptions& opt);
+
+// One covered direction as the planner sees it (exposed for tests).
+struct CoveredRay {
+  double azimuth_deg;  // relative to the reference heading, clockwise positive
+  glm::dvec3 dir;      // unit, glTF axes
+};
+
+// Step 3 and 4 on given rays: the pieces and their cameras.
+std::vector<CaptureShot> fitCaptures(const std::vector<CoveredRay>& rays, const glm::dvec3& eye_enu,
+                                     double heading_deg, double az_lo_deg, double az_hi_deg,
+                                     const CapturePlanOptions& opt);
+
+}  // namespace blvd::bake
