@@ -77,6 +77,13 @@ void writeBakeReport(const std::string& dir, const std::string& source, const gr
   rows.push_back({"mean bake time per impostor, ms", fmt(1000 * secs / n, 1)});
   rows.push_back({"cells whose layering exceeded the cap (merged)", std::to_string(r.capped_cells)});
   rows.push_back({"largest visibility-event weight admitted by a merge, px", fmt(r.capped_worst_px, 1)});
+  // Where a cap bit the texture density (docs/decisions/0010).
+  size_t dense = 0, capped = 0;
+  for (const auto& rec : r.records) (rec.density >= 0.999 ? dense : capped)++;
+  rows.push_back({"impostors at one texel per display pixel (at the vantage point)", std::to_string(dense)});
+  rows.push_back({"impostors below it (--texture or --cell-texels bit; see \"density\" below)", std::to_string(capped)});
+  rows.push_back({"cells the texel budget scaled down (--cell-texels)", std::to_string(r.budget_cells)});
+  rows.push_back({"lowest density the budget left, texels per display pixel", fmt(r.budget_min_density, 2)});
   for (const auto& [layers, cells] : layer_hist)
     rows.push_back({"cells with " + std::to_string(layers) + " layer(s)", std::to_string(cells)});
   page.table(rows);
@@ -105,11 +112,14 @@ void writeBakeReport(const std::string& dir, const std::string& source, const gr
   }
   page.imageGrid(figs, 4);
   page.h2("Every impostor");
-  std::vector<std::vector<std::string>> all = {{"cell", "kind", "layer", "blocks", "triangles", "bytes", "texture", "ms"}};
+  std::vector<std::vector<std::string>> all = {
+      {"cell", "kind", "layer", "run from, m", "captures", "blocks", "triangles", "bytes", "texture", "density", "ms"}};
   for (const auto& rec : r.records)
     all.push_back({std::to_string(rec.cell), rec.single ? "single" : "layered", std::to_string(rec.layer),
-                   std::to_string(rec.blocks), std::to_string(rec.triangles), std::to_string(rec.bytes),
-                   std::to_string(rec.texture_width) + "x" + std::to_string(rec.texture_height), fmt(1000 * rec.seconds, 1)});
+                   fmt(rec.run_from_m, 0), std::to_string(rec.shot), std::to_string(rec.blocks),
+                   std::to_string(rec.triangles), std::to_string(rec.bytes),
+                   std::to_string(rec.texture_width) + "x" + std::to_string(rec.texture_height), fmt(rec.density, 2),
+                   fmt(1000 * rec.seconds, 1)});
   page.table(all);
   std::string err;
   if (!page.write(dir + "/index.html", err)) throw core::Error(core::Status::Io, err);
