@@ -88,6 +88,17 @@ assert b[:8] == b"\x89PNG\r\n\x1a\n"
 w, h = struct.unpack(">II", b[16:24])
 assert (w, h) == (320, 200), (w, h)
 PY
+# pack cell: one cell as JSON; a cell that does not exist is named.
+"$blvd" pack cell "$pkg" 0 | python3 -c 'import json,sys; j=json.load(sys.stdin); assert j["cell"] == 0 and "local_blocks" in j and j["length_m"] > 0, j'
+set +e
+err=$("$blvd" pack cell "$pkg" 99999999 2>&1); rc=$?
+set -e
+[ "$rc" != 0 ] && grep -q "cell 99999999 does not exist" <<< "$err" || fail "pack cell of a missing cell: $err"
+# view: a drive with the full model beside each frame; the page flips between them.
+"$blvd" view "$pkg" --path auto:2 --seed 7 --step 20 --size 160x96 --with-full -o "$work/drive" > /dev/null
+[ -f "$work/drive/frame_0000.png" ] && [ -f "$work/drive/frame_0000_full.png" ] || fail "view --with-full wrote no full-model frame"
+n_frames=$(ls "$work/drive" | grep -c '^frame_[0-9]*\.png$')
+[ "$(grep -c 'data-full="frame_' "$work/drive/index.html")" = "$n_frames" ] || fail "index.html does not flip every frame"
 set +e
 "$blvd" view "$pkg" --lat 43.7 --size 12x3 -o "$work/x.png" > /dev/null 2>&1; rc=$?
 set -e
