@@ -1,6 +1,7 @@
 #include "bake/capture.h"
 
 #include <cmath>
+#include <string>
 
 #include <glm/trigonometric.hpp>
 
@@ -46,6 +47,14 @@ CaptureRig::CaptureRig(const std::vector<geo::MeshData>& block_meshes, int max_w
 
 CaptureRig::~CaptureRig() = default;
 
+void CaptureRig::drawIds(const render::Camera& cam, const char* what) {
+  render::RenderOptions opt;
+  opt.pass = render::Pass::ItemBuffer;
+  opt.item_ids = ids_.data();
+  if (!renderer_->render(cam, list_.data(), list_.size(), nullptr, opt) || !renderer_->readPixels(pixels_.data()))
+    throw core::Error(core::Status::Internal, std::string(what) + ": " + renderer_->lastError());
+}
+
 void CaptureRig::itemBuffer(const render::Camera& cam, std::vector<uint32_t>& counts) {
   list_.clear();
   ids_.clear();
@@ -54,11 +63,7 @@ void CaptureRig::itemBuffer(const render::Camera& cam, std::vector<uint32_t>& co
     list_.push_back(handles_[b]);
     ids_.push_back(static_cast<uint32_t>(b + 1));
   }
-  render::RenderOptions opt;
-  opt.pass = render::Pass::ItemBuffer;
-  opt.item_ids = ids_.data();
-  if (!renderer_->render(cam, list_.data(), list_.size(), nullptr, opt) || !renderer_->readPixels(pixels_.data()))
-    throw core::Error(core::Status::Internal, "bake item buffer: " + renderer_->lastError());
+  drawIds(cam, "bake item buffer");
   const size_t n = size_t(cam.width) * cam.height;
   for (size_t i = 0; i < n; ++i) {
     const uint8_t* p = &pixels_[i * 4];
@@ -73,11 +78,7 @@ void CaptureRig::coverage(const render::Camera& cam, const std::vector<uint32_t>
   ids_.clear();
   for (uint32_t b : blocks)
     if (b < handles_.size() && handles_[b].id != 0) list_.push_back(handles_[b]), ids_.push_back(1);
-  render::RenderOptions opt;
-  opt.pass = render::Pass::ItemBuffer;
-  opt.item_ids = ids_.data();
-  if (!renderer_->render(cam, list_.data(), list_.size(), nullptr, opt) || !renderer_->readPixels(pixels_.data()))
-    throw core::Error(core::Status::Internal, "bake coverage: " + renderer_->lastError());
+  drawIds(cam, "bake coverage");
   const size_t n = size_t(cam.width) * cam.height;
   mask.resize(n);
   for (size_t i = 0; i < n; ++i) mask[i] = pixels_[i * 4 + 3] != 0;

@@ -45,6 +45,9 @@ class CaptureRig {
   size_t blockCount() const { return handles_.size(); }
 
  private:
+  // Draws list_ with ids_ in an item-buffer pass and reads it into pixels_.
+  void drawIds(const render::Camera& cam, const char* what);
+
   std::unique_ptr<render::Context> ctx_;
   std::unique_ptr<render::Renderer> renderer_;
   std::vector<render::MeshHandle> handles_;  // per block (id 0 when empty)

@@ -6,6 +6,7 @@
 #include <limits>
 #include <unordered_map>
 
+#include "cli/bench_util.h"
 #include "render/metrics.h"
 
 namespace blvd::cli {
@@ -70,19 +71,11 @@ std::vector<uint8_t> boundary(const std::vector<uint8_t>& m, int w, int h) {
 
 // Distances from every boundary pixel of `a` to the nearest of `b` (and the
 // other way) appended to `out`, capped at `cap`.
-void silhouetteDistances(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, int w, int h, float cap,
-                         std::vector<float>& out) {
+void silhouetteDistances(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, int w, int h, double cap,
+                         std::vector<double>& out) {
   const std::vector<float> db = distanceTransform2(b, w, h);
   for (size_t i = 0; i < a.size(); ++i)
-    if (a[i]) out.push_back(std::min(cap, std::sqrt(db[i])));
-}
-
-double percentile(std::vector<float>& v, double p) {
-  if (v.empty()) return 0;
-  size_t k = size_t(std::ceil(p / 100.0 * double(v.size())));  // nearest rank
-  k = std::min(v.size() - 1, k > 0 ? k - 1 : 0);
-  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
-  return v[k];
+    if (a[i]) out.push_back(std::min(cap, std::sqrt(double(db[i]))));
 }
 
 bool drawnFar(uint32_t id, const FarInputs& in) {
@@ -152,11 +145,11 @@ FarMetrics measureFar(const FarInputs& in) {
 
   const std::vector<uint8_t> bF = boundary(F, in.w, in.h), bD = boundary(D, in.w, in.h);
   for (uint8_t b : bF) m.silhouette_px += b;
-  const float diag = std::sqrt(float(in.w) * in.w + float(in.h) * in.h);
-  std::vector<float> dist;
+  const double diag = std::sqrt(double(in.w) * in.w + double(in.h) * in.h);
+  std::vector<double> dist;
   silhouetteDistances(bF, bD, in.w, in.h, diag, dist);
   silhouetteDistances(bD, bF, in.w, in.h, diag, dist);
-  m.visibility_error_px = percentile(dist, 95.0);
+  m.visibility_error_px = dist.empty() ? 0.0 : pct(std::move(dist), 95.0);
   return m;
 }
 
