@@ -1,4 +1,4 @@
-// gnss_replay: an NMEA log in, frames out (issue 6).
+// gnss_replay: an NMEA log in, frames out.
 //
 //   NMEA 0183 log -> adapters/replay (adapters/gnss parser) -> blvd_feed_gnss
 //     -> per tick of the log's clock: blvd_get_pose (poses.jsonl),

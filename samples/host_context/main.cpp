@@ -1,5 +1,5 @@
 // host_context: a host that owns its GL context and framebuffer and lets blvd
-// draw the street view into it between two passes of its own (issue 6).
+// draw the street view into it between two passes of its own.
 //
 // 1. The host creates a surfaceless EGL display, a GLES 3 context and an
 //    offscreen framebuffer (a window system's surface works the same way).

@@ -1,4 +1,4 @@
-// sim_feed: a vehicle simulator for blvd (issue 6). It drives a seeded route
+// sim_feed: a vehicle simulator for blvd. It drives a seeded route
 // through a package's street graph and writes what the car's devices would:
 // NMEA 0183 (RMC+GGA+GST) to a file, a pty or TCP; CAN frames encoded with a
 // vehicle DBC (Toyota by default) to a candump file or a SocketCAN interface;

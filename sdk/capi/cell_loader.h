@@ -1,4 +1,4 @@
-// The loader thread (issue 4, "Streaming"): reads a cell's blobs from the
+// The loader thread ("Streaming"): reads a cell's blobs from the
 // mapped package, decodes GLB/Draco and images, and writes the renderer's GPU
 // layout into one of kStagingSlots fixed arenas. The render thread then copies
 // a ready slot into a GL slab within its upload budget and hands it back.

@@ -1,4 +1,4 @@
-// The runtime's memory plan (issue 4): every pool's size, worked out from the
+// The runtime's memory plan: every pool's size, worked out from the
 // package's tables and the descriptor before anything is allocated, so that
 // blvd_memory_required() and blvd_runtime_create() agree to the byte.
 //

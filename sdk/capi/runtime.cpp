@@ -402,7 +402,7 @@ void Runtime::dropCopies(CellSlot& slot) {
   slot.staged = false;
 }
 
-// Residency for this frame (issue 4): ask for what is wanted, most wanted
+// Residency for this frame: ask for what is wanted, most wanted
 // first, into free or releasable slots; never wait for a load.
 void Runtime::stream(uint32_t cell, double arc_m, double speed_mps, double upload_budget_ms) {
   residency_->update({cell, arc_m, speed_mps});

@@ -1,4 +1,4 @@
-// The tracking benchmark of issue 5, shared by `blvd bench track` (cmd_bench_track.cpp)
+// The tracking benchmark, shared by `blvd bench track` (cmd_bench_track.cpp)
 // and its CTests (which run the CLI):
 //
 //   fusion_err_m_p50   comma2k19 RAV4 minute: u-blox fixes (stamped on arrival, no

@@ -1,4 +1,4 @@
-// `blvd bench budget PKG`: the frame-time budget (issue 4, Marvie seed 004)
+// `blvd bench budget PKG`: the frame-time budget (Marvie seed 004)
 // on a route, measured side by side in one run (the runs take turns every 64
 // poses, so that a shared machine's drifting speed reaches them all alike):
 //   0. blvd under a target it cannot meet: every block at its coarsest level

@@ -2,7 +2,7 @@
 // a larger one (Monaco and Monaco tiled 2×2 by `blvd bake --tile 2x2`) in two
 // fresh child processes of this binary, one after the other, and compares
 // their peak resident memory (VmHWM) and the heap allocations each frame makes
-// on the render thread after warm-up (issue 4: resident memory independent of
+// on the render thread after warm-up (resident memory independent of
 // city size, zero allocations per frame).
 //
 // The child, `blvd bench memory-drive`, prints one JSON line; it is a

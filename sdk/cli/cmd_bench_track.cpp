@@ -1,4 +1,4 @@
-// `blvd bench track`: the tracking benchmark of issue 5 (cli/bench_track.h).
+// `blvd bench track`: the tracking benchmark (cli/bench_track.h).
 //
 //   blvd bench track --json                       bundled data, from the repository
 //   blvd bench track --package monaco.blvd --data tests/data --check

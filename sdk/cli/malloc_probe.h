@@ -1,7 +1,7 @@
 // Used by the runtime tests and `blvd bench memory`.
 //
 // Counts every malloc-family call made on the calling thread while a
-// ThreadMallocCounter is alive on it: blvd's own and the GL driver's (issue 4:
+// ThreadMallocCounter is alive on it: blvd's own and the GL driver's (the
 // "zero heap allocations per frame on the render thread"). The counting
 // malloc/calloc/realloc/memalign/posix_memalign/aligned_alloc replace glibc's
 // in the executable that links it (malloc_probe.cpp) and forward to glibc's __libc_*

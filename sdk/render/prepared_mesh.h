@@ -1,5 +1,5 @@
 // A mesh converted to the renderer's GPU vertex layout on any thread, without
-// GL, into memory the caller owns (issue 4: the loader thread decodes and
+// GL, into memory the caller owns (the loader thread decodes and
 // prepares; the render thread only copies bytes into buffers made at create).
 //
 // Memory: prepareMesh() writes only into the StagingArena it is given, a bump

@@ -54,7 +54,7 @@ struct MeshHandle {
   bool operator!=(const MeshHandle& o) const { return id != o.id; }
 };
 
-// A fixed GPU arena (issue 4): one vertex buffer, one index buffer, `meshes`
+// A fixed GPU arena: one vertex buffer, one index buffer, `meshes`
 // vertex arrays and `textures` RGBA8 textures of texture_width × texture_height
 // with their mip chains, all allocated by createSlab. Meshes are then placed
 // into it in order with uploadToSlab (glBufferSubData / glTexSubImage2D only:
@@ -71,7 +71,7 @@ struct SlabHandle {
 };
 
 // A mesh copied into a slab over several calls, so that a frame's uploads
-// stay within its time budget (issue 4): beginSlabUpload reserves the mesh's
+// stay within its time budget: beginSlabUpload reserves the mesh's
 // bytes and texture in the slab, continueSlabUpload copies the vertices, the
 // indices and the texture's mip levels (whole rows) a chunk at a time. The
 // PreparedMesh must stay valid until the upload finishes; resetSlab abandons

@@ -1,4 +1,4 @@
-// A frame-time budget shared by coverage (issue 4, "Frame budget"), after
+// A frame-time budget shared by coverage ("Frame budget"), after
 // Marvie, Perret and Bouatouch, "Remote Interactive Walkthrough of City
 // Models" (seed 004), panel "Using LODs and ACHs to match a target frame
 // rate":

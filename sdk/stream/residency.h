@@ -1,5 +1,5 @@
 // Which cells should be resident, in priority order, and which resident cell
-// to release first (issue 4, "Streaming"). Pure: no GL, no I/O, no heap after
+// to release first ("Streaming"). Pure: no GL, no I/O, no heap after
 // construction, so the runtime can call it every frame on the render thread.
 //
 // The current cell comes first. With a route set, the route's next cells

@@ -1,4 +1,4 @@
-// Google Benchmark of the tracker's update cost (issue 5: median <= 20 us per
+// Google Benchmark of the tracker's update cost (median <= 20 us per
 // update). Drives on the fixture package (sdk/track/sim.h, 1 Hz fixes at
 // sigma 5 m, 50 Hz odometry) are tracked once to record the map matcher's
 // observations; then

@@ -1,4 +1,4 @@
-// Slab uploads in chunks (issue 4: a frame's GL uploads stay within its
+// Slab uploads in chunks (a frame's GL uploads stay within its
 // budget): the mip chain is made on the preparing thread, an upload spread
 // over many small steps draws the same picture as one copied whole, and a
 // slab reset abandons an unfinished upload. A slab mesh copied GPU-side into

@@ -1,4 +1,4 @@
-// The loader's two threads (issue 4, "Streaming"; docs/decisions/0008):
+// The loader's two threads ("Streaming"; docs/decisions/0008):
 // predictions decode on a SCHED_IDLE thread, which a busy CPU starves. When a
 // prediction becomes the current cell while that thread decodes it, promote()
 // must get the cell decoded anyway: an urgent copy at normal priority takes

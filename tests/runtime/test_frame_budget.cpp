@@ -1,6 +1,6 @@
 // The budget controller against simulated cost models (geometry-bound and
 // fill-bound, where the render scale takes over), and the ACH share with
-// leftovers passed on (issue 4, Marvie seed 004).
+// leftovers passed on (Marvie seed 004).
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// The frame budget's second knob through the C API (issue 4, decision 0008):
+// The frame budget's second knob through the C API (decision 0008):
 // with min_render_scale < 1 a target the coarsest levels cannot meet makes
 // blvd draw fewer pixels and stretch them; the frame read back is still the
 // full frame and close to the unscaled one; bad scales are refused; without

@@ -1,4 +1,4 @@
-// Residency order and eviction on a hand-made junction (issue 4: "unit tests
+// Residency order and eviction on a hand-made junction ("unit tests
 // of residency and eviction order").
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Create-time failures of the fixed-memory runtime (issue 4, "Tests"): a
+// Create-time failures of the fixed-memory runtime ("Tests"): a
 // budget one byte short fails with the numbers, and a host allocator that
 // fails at its Nth call gives BLVD_ERR_NOMEM and leaks nothing. CI runs this
 // file under AddressSanitizer + LeakSanitizer too (label asan), so a leak of

@@ -1,4 +1,4 @@
-// The fixed-memory runtime through the C API (issue 4): the plan equals what
+// The fixed-memory runtime through the C API: the plan equals what
 // create carves, a drive stays within its slots with stats
 // that add up, and after warm-up a frame makes no heap allocation on the
 // render thread while cells keep streaming in.

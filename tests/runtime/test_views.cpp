@@ -1,4 +1,4 @@
-// Several views in one frame (issue 4): a rear-view mirror is the scene behind
+// Several views in one frame: a rear-view mirror is the scene behind
 // flipped left-right, a stereo pair differs by its eye offset only, and views
 // outside the frame are refused.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// The check of issue 5: decoding the comma2k19 RAV4 candump with the Toyota DBC
+// The check of decoding the comma2k19 RAV4 candump with the Toyota DBC
 // reproduces comma's reference CSV exactly, every one of its 4,974 rows.
 //
 // Each CSV row belongs to one WHEEL_SPEEDS (0xAA) frame on can0 and carries its
