@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bash packaging/scripts/deps.sh
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DBLVD_BUILD_TESTS=OFF
+bash packaging/scripts/configure.sh demo build
 cmake --build build --target blvd_cli
 mkdir -p out
 ./build/sdk/cli/blvd bake data/osm/monaco-geofabrik-2026.osm.pbf -o out/monaco.blvd --report out/bake-report

@@ -8,7 +8,7 @@ bash packaging/scripts/deps.sh
 jobs=$(nproc)
 
 # 1. Everything, warnings as errors.
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBLVD_WERROR=ON > /dev/null
+bash packaging/scripts/configure.sh test build
 cmake --build build -j"$jobs"
 
 # 2. Sanitizers on the code that reads untrusted bytes (packages, GLB, graph,
