@@ -597,6 +597,70 @@ BLVD_API blvd_status blvd_can_profile_decode(blvd_can_profile* profile, const bl
  * blvd_can_profile_decode. */
 BLVD_API blvd_status blvd_feed_can_frame(blvd_runtime* rt, blvd_can_profile* profile, const blvd_can_frame* frame);
 
+/* ---- Tracking without a renderer -------------------------------------------------
+ * A tracker follows the vehicle on a package's street graph from GNSS fixes,
+ * odometry and CAN frames, with no GL context and without reading the
+ * package's render data (blocks, impostors): for a head unit's navigation
+ * logic, a cluster display, a logger or a test bench. It is the tracker a
+ * runtime holds (sdk/track): the same feeds give the same poses as
+ * blvd_get_pose. Typical use:
+ *   blvd_tracker_desc td = {sizeof td};  td.package_path = "monaco.blvd";
+ *   blvd_tracker_create(&td, &tr);
+ *   any thread:        blvd_tracker_feed_gnss(tr, &fix);  blvd_tracker_feed_odometry(tr, &odo);
+ *   tracking thread:   blvd_tracker_get_pose(tr, t, &pose);
+ *   at the end:        blvd_tracker_destroy(tr);
+ * "Tracking thread" is one thread of the host's choice, the same for every
+ * such call on a tracker. */
+typedef struct blvd_tracker blvd_tracker; /* opaque */
+
+typedef struct blvd_tracker_desc {
+  uint32_t struct_size;          /* sizeof(blvd_tracker_desc); 0 is treated as the current size */
+  const char* package_path;      /* the package whose street graph poses are matched on; NULL:
+                                  * no map matching (fusion and dead reckoning only) */
+  double origin_lat, origin_lon; /* without a package: the origin of the local x/y frame
+                                  * (WGS 84 degrees); ignored with one (the package's origin) */
+  float eye_height_m;            /* blvd_pose.camera_z above the street; 0 means 1.5 */
+  uint32_t ring_capacity;        /* feeds held until the next get_pose; 0 means 512 */
+} blvd_tracker_desc;
+
+/* Opens the package's street graph (CRC-checked; nothing else is read) and
+ * carves the tracker's memory. Ownership: the caller frees *out with
+ * blvd_tracker_destroy. Thread: any. Memory: allocates here, never while
+ * feeding or tracking. Errors (*out NULL, blvd_last_error(NULL) says why, naming
+ * the file and offset): BLVD_ERR_MISUSE for a NULL desc or out;
+ * BLVD_ERR_INVALID_ARG for an origin or field out of range; BLVD_ERR_IO,
+ * BLVD_ERR_CORRUPT, BLVD_ERR_UNSUPPORTED for the package. */
+BLVD_API blvd_status blvd_tracker_create(const blvd_tracker_desc* desc, blvd_tracker** out);
+
+/* Frees a tracker. NULL is a no-op. No feed may be using it. */
+BLVD_API void blvd_tracker_destroy(blvd_tracker* tr);
+
+/* Why the tracker's last call on the tracking thread failed (empty when none);
+ * blvd_last_error(NULL) for a failed create. Tracking thread. */
+BLVD_API const char* blvd_tracker_last_error(const blvd_tracker* tr);
+
+/* Queue a GNSS fix, an odometry sample, or what a CAN frame carries through a
+ * profile (as blvd_feed_gnss, blvd_feed_odometry, blvd_feed_can_frame). Any
+ * thread; no allocation; a full queue drops its oldest entry. Errors:
+ * BLVD_ERR_MISUSE for a NULL tracker (or profile); BLVD_ERR_INVALID_ARG for
+ * a NULL fix, sample or frame, or a frame no CAN bus carries. */
+BLVD_API blvd_status blvd_tracker_feed_gnss(blvd_tracker* tr, const blvd_gnss_fix* fix);
+BLVD_API blvd_status blvd_tracker_feed_odometry(blvd_tracker* tr, const blvd_odometry* odo);
+BLVD_API blvd_status blvd_tracker_feed_can_frame(blvd_tracker* tr, blvd_can_profile* profile,
+                                                 const blvd_can_frame* frame);
+
+/* Processes what was fed up to time t and returns the tracked pose (x/y in
+ * the package's local frame, or the origin's without one). Tracking thread.
+ * Errors: BLVD_ERR_MISUSE for a NULL tracker; BLVD_ERR_INVALID_ARG for a NULL
+ * pose or a non-finite t. */
+BLVD_API blvd_status blvd_tracker_get_pose(blvd_tracker* tr, double t, blvd_pose* pose);
+
+/* As blvd_get_odometry_calibration, blvd_set_odometry_calibration and
+ * blvd_set_start_pose, on a tracker. Tracking thread. */
+BLVD_API blvd_status blvd_tracker_get_odometry_calibration(blvd_tracker* tr, blvd_odometry_calibration* cal);
+BLVD_API blvd_status blvd_tracker_set_odometry_calibration(blvd_tracker* tr, const blvd_odometry_calibration* cal);
+BLVD_API blvd_status blvd_tracker_set_start_pose(blvd_tracker* tr, const blvd_start_pose* sp);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

@@ -6,51 +6,16 @@
 #include <string>
 
 #include "blvd/blvd.h"
-#include "capi/create_error.h"
-#include "capi/runtime.h"
-#include "capi/sized.h"
+#include "capi/binding.h"
+#include "core/sized.h"
 #include "core/status.h"
 
-struct blvd_runtime {
-  blvd::capi::Runtime* impl;
-};
-
 namespace blvd::capi {
-thread_local std::string t_create_error;  // blvd_last_error(NULL); capi/create_error.h
+thread_local std::string t_create_error;  // blvd_last_error(NULL)
 }  // namespace blvd::capi
+using blvd::capi::guarded;
+using blvd::capi::misuse;
 using blvd::capi::t_create_error;
-
-namespace {
-
-blvd_status toStatus(blvd::core::Status s) { return static_cast<blvd_status>(static_cast<int>(s)); }
-
-// Runs f, converting exceptions into a status and rt's last error.
-template <typename F>
-blvd_status guarded(blvd_runtime* rt, F&& f) {
-  std::string* err = rt ? &rt->impl->last_error : &t_create_error;
-  try {
-    f();
-    return BLVD_OK;
-  } catch (const blvd::core::Error& e) {
-    *err = e.what();
-    return toStatus(e.status());
-  } catch (const std::bad_alloc&) {
-    *err = "out of memory";
-    return BLVD_ERR_NOMEM;
-  } catch (const std::exception& e) {
-    *err = std::string("internal error: ") + e.what();
-    return BLVD_ERR_INTERNAL;
-  } catch (...) {
-    *err = "internal error: unknown exception";
-    return BLVD_ERR_INTERNAL;
-  }
-}
-
-blvd_status misuse(blvd_runtime* rt, const char* what) {
-  (rt ? rt->impl->last_error : t_create_error) = what;
-  return BLVD_ERR_MISUSE;
-}
-}  // namespace
 
 extern "C" {
 
@@ -146,16 +111,16 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
     t_create_error = "blvd_runtime_create: allocator needs both alloc and free, or neither";
     return BLVD_ERR_INVALID_ARG;
   }
-  if (!knownMode(blvd::capi::rawEnum(d.mode))) {
+  if (!knownMode(blvd::core::rawEnum(d.mode))) {
     t_create_error = "blvd_runtime_create: unknown render mode";
     return BLVD_ERR_INVALID_ARG;
   }
-  if (blvd::capi::rawEnum(d.backend) < 0 || blvd::capi::rawEnum(d.backend) > BLVD_CONTEXT_SHARED) {
+  if (blvd::core::rawEnum(d.backend) < 0 || blvd::core::rawEnum(d.backend) > BLVD_CONTEXT_SHARED) {
     t_create_error = "blvd_runtime_create: unknown backend";
     return BLVD_ERR_INVALID_ARG;
   }
-  blvd::capi::Runtime* impl = nullptr;
-  const blvd_status st = guarded(nullptr, [&] { impl = new blvd::capi::Runtime(d); });
+  blvd::runtime::Runtime* impl = nullptr;
+  const blvd_status st = guarded(nullptr, [&] { impl = new blvd::runtime::Runtime(d); });
   if (st != BLVD_OK) return st;
   *out = new (std::nothrow) blvd_runtime{impl};
   if (!*out) {
@@ -181,7 +146,7 @@ blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const char* pack
     std::string err;
     const blvd::core::Status st = city.open(d.package_path, err);
     if (st != blvd::core::Status::Ok) throw blvd::core::Error(st, err);
-    const blvd::capi::MemoryPlan plan = blvd::capi::planMemory(d, city);
+    const blvd::runtime::MemoryPlan plan = blvd::runtime::planMemory(d, city);
     *cpu_bytes = plan.cpu_bytes;
     if (gpu_bytes) *gpu_bytes = plan.gpu_bytes;
   });
@@ -218,7 +183,7 @@ blvd_status blvd_set_pose_local(blvd_runtime* rt, double x, double y, float head
 
 blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mode, float radius_m) {
   if (!rt) return misuse(nullptr, "blvd_set_render_mode: rt is NULL");
-  const int32_t m = blvd::capi::rawEnum(mode);
+  const int32_t m = blvd::core::rawEnum(mode);
   if (!knownMode(m)) {
     rt->impl->last_error = "blvd_set_render_mode: unknown render mode " + std::to_string(m);
     return BLVD_ERR_INVALID_ARG;
@@ -246,50 +211,6 @@ blvd_status blvd_wait_resident(blvd_runtime* rt, double timeout_ms) {
 blvd_status blvd_set_route(blvd_runtime* rt, const uint32_t* cells, size_t n) {
   if (!rt) return misuse(nullptr, "blvd_set_route: rt is NULL");
   return guarded(rt, [&] { rt->impl->setRoute(cells, n); });
-}
-
-blvd_status blvd_feed_gnss(blvd_runtime* rt, const blvd_gnss_fix* fix) {
-  if (!rt) return BLVD_ERR_MISUSE;  // no last error: feeds may run on any thread
-  if (!fix) return BLVD_ERR_INVALID_ARG;
-  try {
-    return rt->impl->feedGnss(*fix);
-  } catch (...) {
-    return BLVD_ERR_INTERNAL;
-  }
-}
-
-blvd_status blvd_feed_odometry(blvd_runtime* rt, const blvd_odometry* odo) {
-  if (!rt) return BLVD_ERR_MISUSE;
-  if (!odo) return BLVD_ERR_INVALID_ARG;
-  try {
-    return rt->impl->feedOdometry(*odo);
-  } catch (...) {
-    return BLVD_ERR_INTERNAL;
-  }
-}
-
-blvd_status blvd_get_pose(blvd_runtime* rt, double t, blvd_pose* pose) {
-  if (!rt) return misuse(nullptr, "blvd_get_pose: rt is NULL");
-  if (!pose) return misuse(rt, "blvd_get_pose: pose is NULL");
-  return guarded(rt, [&] { rt->impl->getPose(t, pose); });
-}
-
-blvd_status blvd_get_odometry_calibration(blvd_runtime* rt, blvd_odometry_calibration* cal) {
-  if (!rt) return misuse(nullptr, "blvd_get_odometry_calibration: rt is NULL");
-  if (!cal) return misuse(rt, "blvd_get_odometry_calibration: cal is NULL");
-  return guarded(rt, [&] { rt->impl->getCalibration(cal); });
-}
-
-blvd_status blvd_set_odometry_calibration(blvd_runtime* rt, const blvd_odometry_calibration* cal) {
-  if (!rt) return misuse(nullptr, "blvd_set_odometry_calibration: rt is NULL");
-  if (!cal) return misuse(rt, "blvd_set_odometry_calibration: cal is NULL");
-  return guarded(rt, [&] { rt->impl->setCalibration(*cal); });
-}
-
-blvd_status blvd_set_start_pose(blvd_runtime* rt, const blvd_start_pose* sp) {
-  if (!rt) return misuse(nullptr, "blvd_set_start_pose: rt is NULL");
-  if (!sp) return misuse(rt, "blvd_set_start_pose: sp is NULL");
-  return guarded(rt, [&] { rt->impl->setStartPose(*sp); });
 }
 
 blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats) {

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "blvd/blvd.h"
-#include "capi/create_error.h"
-#include "capi/sized.h"
+#include "capi/binding.h"
+#include "core/sized.h"
 #include "vehicle/dbc.h"
 #include "vehicle/profile.h"
 
@@ -39,7 +39,7 @@ blvd_status fail(blvd_status st, std::string why) {
 // The C frame as the profile's Frame. BLVD_ERR_INVALID_ARG for a length or id
 // that no CAN bus can carry.
 blvd_status toFrame(const blvd_can_frame& in, vehicle::Frame& f) {
-  const blvd_can_frame c = blvd::capi::sized(in);
+  const blvd_can_frame c = blvd::core::sized(in);
   f.t = c.t;
   f.extended = (c.flags & BLVD_CAN_EXTENDED) != 0;
   f.rtr = (c.flags & BLVD_CAN_RTR) != 0;
@@ -101,9 +101,9 @@ blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_
   if (!out) return fail(BLVD_ERR_MISUSE, "blvd_can_profile_create: out is NULL");
   *out = nullptr;
   if (!desc) return fail(BLVD_ERR_MISUSE, "blvd_can_profile_create: desc is NULL");
-  const blvd_can_profile_desc d = blvd::capi::sized(*desc);
+  const blvd_can_profile_desc d = blvd::core::sized(*desc);
   if (!d.dbc_path || !*d.dbc_path) return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: desc.dbc_path is required");
-  using blvd::capi::rawEnum;
+  using blvd::core::rawEnum;
   if (rawEnum(d.vehicle) < 0 || rawEnum(d.vehicle) > BLVD_VEHICLE_HYUNDAI)
     return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: unknown vehicle " + std::to_string(rawEnum(d.vehicle)));
   if (rawEnum(d.speed) < 0 || rawEnum(d.speed) > BLVD_CAN_SPEED_VEHICLE)

@@ -2,22 +2,35 @@
 // the C API's (toBlvd). Used by the runtime's
 // feeds and by `blvd bench track`, which tracks what the adapters produce for a
 // host (blvd_gnss_fix / blvd_odometry) without a runtime. The flag bits are the
-// same values (runtime.cpp checks them at compile time).
+// same values (checked below at compile time).
 #pragma once
 
 #include <algorithm>
 #include <cstring>
 
 #include "blvd/blvd.h"
-#include "capi/sized.h"
+#include "core/sized.h"
 #include "geo/local_frame.h"
 #include "track/ekf.h"
 #include "track/types.h"
 
 namespace blvd::capi {
 
+// The C flags are the tracker's bits, so they pass through unchanged.
+static_assert(BLVD_GNSS_HAS_LATLON == track::kGnssHasLatLon && BLVD_GNSS_HAS_HACC == track::kGnssHasHAcc &&
+                  BLVD_GNSS_HAS_TRACK == track::kGnssHasTrack && BLVD_GNSS_HAS_HDOP == track::kGnssHasHdop,
+              "GNSS flag bits");
+static_assert(BLVD_ODO_SPEED == track::kOdoSpeed && BLVD_ODO_YAW_RATE == track::kOdoYawRate &&
+                  BLVD_ODO_WHEEL_SPEEDS == track::kOdoWheelSpeeds && BLVD_ODO_GEAR == track::kOdoGear &&
+                  BLVD_ODO_HEADING == track::kOdoHeading,
+              "odometry flag bits");
+static_assert(BLVD_POSE_VALID == track::kPoseValid && BLVD_POSE_MATCHED == track::kPoseMatched &&
+                  BLVD_POSE_DEAD_RECKONING == track::kPoseDeadReckoning &&
+                  BLVD_POSE_HEADING_VALID == track::kPoseHeadingValid,
+              "pose flag bits");
+
 inline track::GnssFix toTrack(const blvd_gnss_fix& in) {
-  const blvd_gnss_fix f = sized(in);
+  const blvd_gnss_fix f = core::sized(in);
   track::GnssFix g;
   g.t = f.t;
   g.lat = f.lat;
@@ -33,7 +46,7 @@ inline track::GnssFix toTrack(const blvd_gnss_fix& in) {
 }
 
 inline track::Odometry toTrack(const blvd_odometry& in) {
-  const blvd_odometry o = sized(in);
+  const blvd_odometry o = core::sized(in);
   track::Odometry d;
   d.t = o.t;
   d.speed_mps = o.speed_mps;

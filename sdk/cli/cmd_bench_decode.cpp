@@ -16,7 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "capi/memory_plan.h"
+#include "runtime/memory_plan.h"
 #include "cli/bench_util.h"
 #include "cli/commands.h"
 #include "render/prepared_mesh.h"
@@ -85,7 +85,7 @@ int runDecode(const DecodeOpts& o) {
     if (::stat(path.c_str(), &sb) == 0) p->bytes = uint64_t(sb.st_size);
     blvd_runtime_desc d{};
     d.struct_size = sizeof d;
-    arena_size = std::max(arena_size, capi::planMemory(d, p->city).staging_arena_bytes);
+    arena_size = std::max(arena_size, runtime::planMemory(d, p->city).staging_arena_bytes);
     pkgs.push_back(std::move(p));
   }
   // One arena as the loader carves it (a whole cell's meshes fit), reset per mesh.

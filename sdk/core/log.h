@@ -1,5 +1,5 @@
-// Minimal leveled logger. The sink is replaceable (the C API forwards it to the
-// host's logger hook); the default writes to stderr.
+// Minimal leveled logger. The sink is replaceable (setLogSink: the CLI and
+// tests use it; the C API has no logger hook yet); the default writes to stderr.
 #pragma once
 #include <cstdarg>
 

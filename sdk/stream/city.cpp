@@ -18,12 +18,14 @@ std::vector<float> cellLengths(const graph::StreetGraph& g) {
 }  // namespace
 
 
-core::Status City::open(const std::string& path, std::string& err) {
+core::Status City::open(const std::string& path, std::string& err, Tables tables) {
   core::Status st = package::PackageReader::open(path, reader_, err);
   if (st != core::Status::Ok) return st;
+  const bool graph_only = tables == Tables::Graph;
   try {
     package::Span s;
     for (uint32_t tag : {package::kSectionGraph, package::kSectionCells, package::kSectionBlocks}) {
+      if (graph_only && tag == package::kSectionBlocks) continue;
       st = reader_.checkedSection(tag, s, err);
       if (st != core::Status::Ok) {
         if (st == core::Status::NotFound) {
@@ -38,6 +40,12 @@ core::Status City::open(const std::string& path, std::string& err) {
       reader_.dropPages(s);  // parsed: the tables hold it now
     }
     // Optional sections: present when the bake made impostors.
+    if (graph_only) {
+      const auto& h = reader_.header();
+      frame_ = geo::LocalFrame(h.origin_lat, h.origin_lon, h.origin_h);
+      grid_.build(graph_);
+      return core::Status::Ok;
+    }
     const uint32_t cells = static_cast<uint32_t>(graph_.halfedges.size());
     const uint32_t nblocks = static_cast<uint32_t>(blocks_.size());
     for (uint32_t tag : {package::kSectionVisibility, package::kSectionImpostors}) {

@@ -24,7 +24,10 @@ class City {
   // Opens and validates `path`: the package container, then the GRPH, CELL and
   // BLCK sections (CRC-checked and parsed with bounds checks). Returns
   // Io/Corrupt/Unsupported with a message naming the file and offset.
-  core::Status open(const std::string& path, std::string& err);
+  // Tables::Graph reads the graph and cells only (tracking without render
+  // data): blocks() and cellTables() stay empty.
+  enum class Tables { All, Graph };
+  core::Status open(const std::string& path, std::string& err, Tables tables = Tables::All);
 
   const package::PackageReader& package() const { return reader_; }
   const package::PackageHeader& header() const { return reader_.header(); }

@@ -7,15 +7,8 @@
 #include <string.h>
 
 #include "blvd/blvd.h"
+#include "expect.h"
 
-static int failures = 0;
-#define EXPECT(cond)                                                  \
-  do {                                                                \
-    if (!(cond)) {                                                    \
-      fprintf(stderr, "%s:%d: expected %s\n", __FILE__, __LINE__, #cond); \
-      ++failures;                                                     \
-    }                                                                 \
-  } while (0)
 
 int main(int argc, char** argv) {
   blvd_runtime_desc desc;

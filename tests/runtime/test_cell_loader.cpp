@@ -18,11 +18,11 @@
 #include <vector>
 
 #include "blvd/blvd.h"
-#include "capi/cell_loader.h"
+#include "runtime/cell_loader.h"
 #include "runtime_fixture.h"
-#include "capi/frame_clock.h"
-#include "capi/memory_plan.h"
-#include "capi/prefetch_share.h"
+#include "runtime/frame_clock.h"
+#include "runtime/memory_plan.h"
+#include "runtime/prefetch_share.h"
 #include "stream/city.h"
 
 namespace {
@@ -32,23 +32,23 @@ using Clock = std::chrono::steady_clock;
 
 struct Loader {
   stream::City city;
-  capi::MemoryPlan plan;
-  std::unique_ptr<capi::CellLoader> loader;
+  runtime::MemoryPlan plan;
+  std::unique_ptr<runtime::CellLoader> loader;
   explicit Loader(bool low_prefetch = false, bool pace_to_frames = false) {
     std::string err;
     EXPECT_EQ(city.open(BLVD_TEST_PACKAGE, err), core::Status::Ok) << err;
     blvd_runtime_desc d{};
     d.struct_size = sizeof d;
     d.max_resident_cells = 4;
-    plan = capi::planMemory(d, city);
-    loader = std::make_unique<capi::CellLoader>(city, capi::Allocator{}, plan.staging_arena_bytes, plan.staging_meshes,
+    plan = runtime::planMemory(d, city);
+    loader = std::make_unique<runtime::CellLoader>(city, runtime::Allocator{}, plan.staging_arena_bytes, plan.staging_meshes,
                                                 blvd_executor{}, low_prefetch, pace_to_frames);
   }
   // Waits up to `s` seconds for a finished slot of `cell`; releases others.
-  capi::Staging* waitFinished(uint32_t cell, double s) {
+  runtime::Staging* waitFinished(uint32_t cell, double s) {
     const auto end = Clock::now() + std::chrono::duration<double>(s);
     while (Clock::now() < end) {
-      if (capi::Staging* st = loader->finished()) {
+      if (runtime::Staging* st = loader->finished()) {
         if (st->cell == cell) return st;
         loader->release(st);
       }
@@ -68,8 +68,8 @@ TEST(CellLoader, PredictionAndUrgentRequestsBothFinish) {
   std::vector<uint32_t> done;
   const auto end = Clock::now() + std::chrono::seconds(120);
   while (done.size() < 2 && Clock::now() < end) {
-    if (capi::Staging* st = l.loader->finished()) {
-      EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+    if (runtime::Staging* st = l.loader->finished()) {
+      EXPECT_EQ(st->state, runtime::Staging::Ready) << st->error;
       EXPECT_GT(st->mesh_count, 0u);
       EXPECT_EQ(st->target, st->cell == a ? 0u : 1u);
       done.push_back(st->cell);
@@ -98,14 +98,14 @@ TEST(CellLoader, StagingUsedAndHighWaterCountBothSlots) {
   while (l.loader->loads() < 2 && Clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   ASSERT_EQ(l.loader->loads(), 2u);
   const uint64_t both = l.loader->stagingUsed();
-  capi::Staging* first = l.loader->finished();
+  runtime::Staging* first = l.loader->finished();
   ASSERT_NE(first, nullptr);
-  ASSERT_EQ(first->state, capi::Staging::Ready) << first->error;
+  ASSERT_EQ(first->state, runtime::Staging::Ready) << first->error;
   const uint64_t first_bytes = first->arena.used;
   l.loader->release(first);
-  capi::Staging* second = l.loader->finished();
+  runtime::Staging* second = l.loader->finished();
   ASSERT_NE(second, nullptr);
-  ASSERT_EQ(second->state, capi::Staging::Ready) << second->error;
+  ASSERT_EQ(second->state, runtime::Staging::Ready) << second->error;
   EXPECT_NE(second->cell, first->cell);
   EXPECT_GT(first_bytes, 0u);
   EXPECT_GT(second->arena.used, 0u);
@@ -128,16 +128,16 @@ TEST(CellLoader, ShareHoldsPredictionsButNeverTheCurrentCell) {
   blvd_runtime_desc d{};
   d.struct_size = sizeof d;
   d.max_resident_cells = 4;
-  const capi::MemoryPlan plan = capi::planMemory(d, city);
+  const runtime::MemoryPlan plan = runtime::planMemory(d, city);
   const double share = 0.2;
-  capi::CellLoader loader(city, capi::Allocator{}, plan.staging_arena_bytes, plan.staging_meshes, blvd_executor{},
+  runtime::CellLoader loader(city, runtime::Allocator{}, plan.staging_arena_bytes, plan.staging_meshes, blvd_executor{},
                           false, false, 0, share);
   auto finish = [&](uint32_t cell, bool urgent) {
     const auto t0 = Clock::now();
     EXPECT_TRUE(loader.request(cell, 0, urgent));
     for (;;) {
-      if (capi::Staging* st = loader.finished()) {
-        EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+      if (runtime::Staging* st = loader.finished()) {
+        EXPECT_EQ(st->state, runtime::Staging::Ready) << st->error;
         loader.release(st);
         return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       }
@@ -147,13 +147,13 @@ TEST(CellLoader, ShareHoldsPredictionsButNeverTheCurrentCell) {
   };
   // 10 ms of debt (the bucket starts with its 0.25 ms burst): at 20 % the
   // first predicted mesh waits about (10 - 0.25) / 0.2 ≈ 49 ms.
-  capi::prefetch_share::charge(10000000, share);
+  runtime::prefetch_share::charge(10000000, share);
   const double predicted_ms = finish(plan.largest_cell, false);
   EXPECT_GE(predicted_ms, 30.0);
   EXPECT_GE(loader.shareWaits(), 1u);
   EXPECT_GE(loader.shareWaitMs(), 30.0);
   const uint64_t waits = loader.shareWaits();
-  capi::prefetch_share::charge(10000000, share);
+  runtime::prefetch_share::charge(10000000, share);
   EXPECT_LT(finish(plan.largest_cell == 0 ? 1 : 0, true), 1e9);
   EXPECT_EQ(loader.shareWaits(), waits) << "the current cell waited for tokens";
 }
@@ -179,19 +179,19 @@ TEST(CellLoader, PromotedWhileDecodingInBackgroundFinishesOnBusyCores) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   const bool caught = l.loader->decodingInBackground(cell);
   l.loader->promote(cell);
-  capi::Staging* st = l.waitFinished(cell, 120);
+  runtime::Staging* st = l.waitFinished(cell, 120);
   stop = true;
   for (std::thread& t : spin) t.join();
   ASSERT_TRUE(caught) << "the background thread never started the job";
   ASSERT_NE(st, nullptr) << "the current cell never finished";
-  EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+  EXPECT_EQ(st->state, runtime::Staging::Ready) << st->error;
   EXPECT_TRUE(st->urgent) << "the starved background copy finished first: no urgent copy was made";
   EXPECT_EQ(st->target, 3u);
   l.loader->release(st);
   // The background copy, abandoned, gives its slot back once it runs again.
   const auto drain = Clock::now() + std::chrono::seconds(60);
   while (l.loader->pending(cell) && Clock::now() < drain) {
-    if (capi::Staging* other = l.loader->finished()) l.loader->release(other);
+    if (runtime::Staging* other = l.loader->finished()) l.loader->release(other);
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   EXPECT_FALSE(l.loader->pending(cell));
@@ -207,29 +207,29 @@ TEST(CellLoader, PromotedWhileDecodingInBackgroundFinishesOnBusyCores) {
 TEST(CellLoader, PacedPredictionWaitsForGapsAndStillFinishes) {
   for (bool pace : {true, false}) {
     Loader l(false, pace);
-    capi::FrameClock* clock = capi::FrameClocks::acquire();
+    runtime::FrameClock* clock = runtime::FrameClocks::acquire();
     ASSERT_NE(clock, nullptr);
     std::atomic<bool> stop{false};
     std::thread host([&] {
       const int64_t period = 16666667, draw = 8000000;
-      int64_t tick = capi::monoNs();
+      int64_t tick = runtime::monoNs();
       while (!stop.load()) {
-        clock->begin(capi::monoNs());
+        clock->begin(runtime::monoNs());
         std::this_thread::sleep_for(std::chrono::nanoseconds(draw));
-        clock->end(capi::monoNs());
+        clock->end(runtime::monoNs());
         tick += period;
-        std::this_thread::sleep_for(std::chrono::nanoseconds(std::max<int64_t>(0, tick - capi::monoNs())));
+        std::this_thread::sleep_for(std::chrono::nanoseconds(std::max<int64_t>(0, tick - runtime::monoNs())));
       }
     });
     std::this_thread::sleep_for(std::chrono::milliseconds(400));  // the clock learns the period
     const uint32_t cell = l.plan.largest_cell;
     ASSERT_TRUE(l.loader->request(cell, 0, false));
-    capi::Staging* st = l.waitFinished(cell, 120);
+    runtime::Staging* st = l.waitFinished(cell, 120);
     stop = true;
     host.join();
-    capi::FrameClocks::release(clock);
+    runtime::FrameClocks::release(clock);
     ASSERT_NE(st, nullptr) << "pace " << pace;
-    EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+    EXPECT_EQ(st->state, runtime::Staging::Ready) << st->error;
     EXPECT_GT(st->mesh_count, 1u);
     l.loader->release(st);
     if (pace) EXPECT_GT(l.loader->gapWaits(), 0u) << "no mesh of " << st->mesh_count << " waited for a gap";
@@ -306,9 +306,9 @@ TEST(CellLoader, PredictionThreadKeepsOffTheRenderThreadsCpu) {
   // Still decodes.
   const uint32_t cell = 0;
   ASSERT_TRUE(l.loader->request(cell, 0, false));
-  capi::Staging* st = l.waitFinished(cell, 120);
+  runtime::Staging* st = l.waitFinished(cell, 120);
   ASSERT_NE(st, nullptr);
-  EXPECT_EQ(st->state, capi::Staging::Ready) << st->error;
+  EXPECT_EQ(st->state, runtime::Staging::Ready) << st->error;
   l.loader->release(st);
 }
 

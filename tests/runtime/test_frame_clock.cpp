@@ -6,12 +6,12 @@
 #include <chrono>
 #include <cstdint>
 
-#include "capi/frame_clock.h"
+#include "runtime/frame_clock.h"
 
 namespace {
 
-using blvd::capi::FrameClock;
-using blvd::capi::FrameClocks;
+using blvd::runtime::FrameClock;
+using blvd::runtime::FrameClocks;
 
 constexpr int64_t kMs = 1000000;
 
@@ -32,8 +32,8 @@ struct Held {
 
 // The render thread stamps frames from its steady_clock reads: the same clock.
 TEST(FrameClock, SteadyClockIsMonotonicNs) {
-  const int64_t a = blvd::capi::monoNs(std::chrono::steady_clock::now());
-  const int64_t b = blvd::capi::monoNs();
+  const int64_t a = blvd::runtime::monoNs(std::chrono::steady_clock::now());
+  const int64_t b = blvd::runtime::monoNs();
   EXPECT_LE(a, b);
   EXPECT_LT(b - a, 50 * kMs);
 }
@@ -135,9 +135,9 @@ TEST(FrameClocks, TableFullMeansUnregistered) {
 TEST(FrameClocks, WaitForGapEndsOnCancelAndOnItsBound) {
   Held h;
   // A frame that started now and "draws" for ever: every decision says wait.
-  const int64_t now = blvd::capi::monoNs();
+  const int64_t now = blvd::runtime::monoNs();
   drive(*h.c, now - 40 * 16 * kMs, 16 * kMs, 5 * kMs, 40);
-  h.c->begin(blvd::capi::monoNs());
+  h.c->begin(blvd::runtime::monoNs());
   const int64_t waited = FrameClocks::waitForGap(kMs, 20 * kMs, nullptr, nullptr);
   EXPECT_GE(waited, 20 * kMs);
   EXPECT_LT(waited, 200 * kMs);

@@ -4,12 +4,12 @@
 
 #include <cstdint>
 
-#include "capi/frame_clock.h"
-#include "capi/prefetch_share.h"
+#include "runtime/frame_clock.h"
+#include "runtime/prefetch_share.h"
 
 namespace {
 
-using blvd::capi::ShareBucket;
+using blvd::runtime::ShareBucket;
 constexpr int64_t kMs = 1000000;
 constexpr int64_t kBurst = 2 * kMs;
 
@@ -70,7 +70,7 @@ TEST(ShareBucket, NoShareMeansNoBound) {
 // take about 50 ms of wall time (less the bucket's burst), and a cancelled wait
 // returns at once.
 TEST(PrefetchShare, ProcessWideWaitPacesUnits) {
-  using namespace blvd::capi;
+  using namespace blvd::runtime;
   const int64_t t0 = monoNs();
   for (int i = 0; i < 10; ++i) {
     prefetch_share::wait(kMs, 0.2, 1000 * kMs, nullptr, nullptr);

@@ -18,7 +18,7 @@
 #pragma once
 #include <cstdint>
 
-namespace blvd::capi {
+namespace blvd::runtime {
 
 class ShareBucket {
  public:
@@ -48,4 +48,4 @@ int64_t wait(int64_t cost_ns, double share, int64_t max_wait_ns, bool (*cancel)(
 void charge(int64_t cpu_ns, double share);
 }  // namespace prefetch_share
 
-}  // namespace blvd::capi
+}  // namespace blvd::runtime

@@ -15,11 +15,11 @@
 #include <string>
 
 #include "blvd/blvd.h"
-#include "capi/cell_loader.h"
+#include "runtime/cell_loader.h"
 #include "render/renderer.h"
 #include "stream/city.h"
 
-namespace blvd::capi {
+namespace blvd::runtime {
 
 // What one cell needs resident: every level of each local block and every
 // impostor layer, with the exact vertex and triangle counts the BLCK and IMPO
@@ -55,4 +55,4 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city);
 // plan exceeds a budget of `desc`; empty when it fits.
 std::string budgetError(const blvd_runtime_desc& desc, const MemoryPlan& plan);
 
-}  // namespace blvd::capi
+}  // namespace blvd::runtime

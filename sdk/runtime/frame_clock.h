@@ -22,7 +22,7 @@
 #include <chrono>
 #include <cstdint>
 
-namespace blvd::capi {
+namespace blvd::runtime {
 
 int64_t monoNs();  // CLOCK_MONOTONIC in nanoseconds
 // A steady_clock time in the same nanoseconds (libstdc++'s steady_clock is
@@ -88,4 +88,4 @@ class FrameClocks {
   static int64_t decide(int64_t now, int64_t cost_ns);
 };
 
-}  // namespace blvd::capi
+}  // namespace blvd::runtime

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <cstring>
 
-namespace blvd::capi {
+namespace blvd::core {
 
 template <typename T>
 T sized(const T& in) {
@@ -26,4 +26,4 @@ int32_t rawEnum(const E& e) {
   return v;
 }
 
-}  // namespace blvd::capi
+}  // namespace blvd::core

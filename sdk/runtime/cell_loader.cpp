@@ -1,4 +1,4 @@
-#include "capi/cell_loader.h"
+#include "runtime/cell_loader.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -12,11 +12,11 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
-#include "capi/frame_clock.h"
-#include "capi/prefetch_share.h"
+#include "runtime/frame_clock.h"
+#include "runtime/prefetch_share.h"
 #include "core/status.h"
 
-namespace blvd::capi {
+namespace blvd::runtime {
 namespace {
 constexpr int kBackgroundNice = 19;
 // The longest a background mesh waits for a gap: a bound, so that a host whose
@@ -424,4 +424,4 @@ bool CellLoader::decode(Staging& s) {
   return true;
 }
 
-}  // namespace blvd::capi
+}  // namespace blvd::runtime

@@ -1,13 +1,13 @@
-#include "capi/memory_plan.h"
+#include "runtime/memory_plan.h"
 
 #include <algorithm>
 #include <cstdio>
 
-#include "capi/cell_loader.h"
+#include "runtime/cell_loader.h"
 #include "core/status.h"
 #include "track/tracker.h"
 
-namespace blvd::capi {
+namespace blvd::runtime {
 namespace {
 
 // Index bytes of a mesh of v vertices and t triangles, plus the 4-byte
@@ -107,4 +107,4 @@ std::string budgetError(const blvd_runtime_desc& desc, const MemoryPlan& p) {
   return {};
 }
 
-}  // namespace blvd::capi
+}  // namespace blvd::runtime

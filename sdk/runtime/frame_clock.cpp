@@ -1,11 +1,11 @@
-#include "capi/frame_clock.h"
+#include "runtime/frame_clock.h"
 
 #include <algorithm>
 #include <cerrno>
 
 #include <time.h>
 
-namespace blvd::capi {
+namespace blvd::runtime {
 namespace {
 
 // A decode started this close to a frame's expected start is one the frame
@@ -119,4 +119,4 @@ int64_t FrameClocks::waitForGap(int64_t cost_ns, int64_t max_wait_ns, bool (*can
   return sleepUntilClear(decideFor, &cost_ns, max_wait_ns, 0, cancel, user);
 }
 
-}  // namespace blvd::capi
+}  // namespace blvd::runtime

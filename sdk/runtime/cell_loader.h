@@ -23,7 +23,7 @@
 #include "render/prepared_mesh.h"
 #include "stream/city.h"
 
-namespace blvd::capi {
+namespace blvd::runtime {
 
 inline constexpr uint32_t kStagingSlots = 2;
 // Blocks a request may name as not to be decoded (the runtime copies them
@@ -200,4 +200,4 @@ class CellLoader {
   std::atomic<uint64_t> decode_high_water_{0}, staging_used_{0}, staging_high_water_{0};
 };
 
-}  // namespace blvd::capi
+}  // namespace blvd::runtime

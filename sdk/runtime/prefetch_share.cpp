@@ -1,12 +1,12 @@
-#include "capi/prefetch_share.h"
+#include "runtime/prefetch_share.h"
 
 #include <algorithm>
 #include <mutex>
 
 
-#include "capi/frame_clock.h"
+#include "runtime/frame_clock.h"
 
-namespace blvd::capi {
+namespace blvd::runtime {
 
 void ShareBucket::accrue(int64_t now, double share, int64_t burst_ns) {
   if (last_ == 0) tokens_ = double(burst_ns);
@@ -57,4 +57,4 @@ void charge(int64_t cpu_ns, double share) {
 }
 
 }  // namespace prefetch_share
-}  // namespace blvd::capi
+}  // namespace blvd::runtime

@@ -1,0 +1,38 @@
+#include "runtime/cell_choice.h"
+
+namespace blvd::runtime {
+
+uint32_t CellChoice::choose(glm::dvec2 p, double heading_deg, double& arc_m) {
+  double cost = 0;
+  uint32_t cell = city_.nearestCell(p, heading_deg, &arc_m, &cost);
+  if (cell != graph::kNone) cell = continued(cell, cost, p, heading_deg, arc_m);
+  last_cell_ = cell;
+  return cell;
+}
+
+uint32_t CellChoice::continued(uint32_t cell, double cost, glm::dvec2 p, double heading_deg, double& arc_m) const {
+  if (last_cell_ == graph::kNone || last_cell_ >= city_.graph().cellCount() || cell == last_cell_) return cell;
+  double arc = 0;
+  bool at_end = false;
+  if (city_.cellCost(last_cell_, p, heading_deg, &arc, &at_end) <= cost + kStickM && !at_end) {
+    arc_m = arc;
+    return last_cell_;
+  }
+  uint32_t pick = graph::kNone;
+  double pick_cost = cost + kStickM, pick_arc = 0;
+  auto consider = [&](uint32_t c) {
+    double a = 0;
+    const double k = city_.cellCost(c, p, heading_deg, &a, nullptr);
+    if (k <= pick_cost) pick = c, pick_cost = k, pick_arc = a;
+  };
+  const uint32_t next = residency_.nextOnRoute(last_cell_);
+  if (next != graph::kNone) consider(next);
+  const graph::StreetGraph& g = city_.graph();
+  if (pick == graph::kNone)
+    for (const uint32_t* s = g.successors.begin(last_cell_); s != g.successors.end(last_cell_); ++s) consider(*s);
+  if (pick == graph::kNone) return cell;
+  arc_m = pick_arc;
+  return pick;
+}
+
+}  // namespace blvd::runtime

@@ -1,0 +1,158 @@
+// One frame: which cell, streaming within the upload budget, the draw list,
+// the render (whole frame or views), the frame budget's next step, and the
+// read-backs of the frame (pixels, object ids).
+#include <sched.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "core/sized.h"
+#include "runtime/runtime.h"
+
+namespace blvd::runtime {
+using core::Error;
+using core::Status;
+
+void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n) {
+  if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
+  const auto t_frame = std::chrono::steady_clock::now();
+  if (clock_) clock_->begin(monoNs(t_frame));
+  loader_->keepOffCpu(::sched_getcpu());
+  double arc_m, speed;
+  const uint32_t cell = currentCell(arc_m, speed);
+  if (referenceMode()) {
+    draw_->ensureReferenceBlocks(*renderer_);
+  } else {
+    const uint64_t errors = slots_->counters().load_errors;
+    slots_->stream(*residency_, cell, arc_m, speed, desc_.upload_budget_ms);
+    if (slots_->counters().load_errors != errors) last_error = slots_->lastError();  // blvd_stats.load_errors
+  }
+  draw_->build(mode_, radius_m_, cell, arc_m, cam_, *slots_, budget_.get());
+  render::FrameStats fs;
+  render::RenderOptions ro;
+  ro.scale = budget_ ? budget_->scale() : 1.0;
+  uint64_t full_pixels = 0;
+  if (!views) {
+    full_pixels = uint64_t(cam_.width) * uint64_t(cam_.height);
+    if (!renderer_->render(cam_, draw_->meshes(), draw_->size(), &fs, ro))
+      throw Error(Status::Internal, "render failed: " + renderer_->lastError());
+  } else {
+    renderViews(views, n, ro, fs, full_pixels);
+  }
+  rendered_ = true;
+  items_drawn_ = false;
+  const auto t_drawn = std::chrono::steady_clock::now();
+  if (clock_) clock_->end(monoNs(t_drawn));
+  // The whole call counts against the target: streaming and uploads too.
+  afterFrame(std::chrono::duration<double, std::milli>(t_drawn - t_frame).count(), fs, full_pixels, ro.scale);
+  if (stats) writeFrameStats(stats, fs, cell);
+}
+
+// One draw list for every view (Yilmaz et al. §3.4); each view only changes
+// the camera.
+void Runtime::renderViews(const blvd_view* views, uint32_t n, const render::RenderOptions& ro,
+                          render::FrameStats& fs, uint64_t& full_pixels) {
+  for (uint32_t i = 0; i < n; ++i) {
+    const render::Camera c = viewCamera(core::sized(views[i]), i);
+    render::FrameStats one;
+    if (!renderer_->render(c, draw_->meshes(), draw_->size(), &one, ro))
+      throw Error(Status::Internal, "render failed: " + renderer_->lastError());
+    full_pixels += uint64_t(c.width) * uint64_t(c.height);
+    fs.pixels += one.pixels;
+    fs.frame_ms += one.frame_ms;
+    fs.triangles += one.triangles;
+    fs.draw_calls += one.draw_calls;
+  }
+  renderer_->setReadSize(int(desc_.width), int(desc_.height));
+}
+
+// View i's camera: the frame's camera turned, tilted, moved right of the
+// heading and clipped to the view's rectangle of the frame.
+render::Camera Runtime::viewCamera(const blvd_view& v, uint32_t i) const {
+  const uint32_t W = desc_.width, H = desc_.height;
+  const uint32_t w = v.width ? v.width : W, h = v.height ? v.height : H;
+  if (v.x >= W || v.y >= H || w > W - v.x || h > H - v.y)
+    throw Error(Status::InvalidArg, "view " + std::to_string(i) + " lies outside the " + std::to_string(W) + "x" +
+                                        std::to_string(H) + " frame");
+  if (!std::isfinite(v.yaw_offset_deg) || !std::isfinite(v.pitch_offset_deg) || !std::isfinite(v.eye_offset_right_m) ||
+      !(v.fov_y_deg == 0 || (v.fov_y_deg > 1 && v.fov_y_deg < 179)))
+    throw Error(Status::InvalidArg, "view " + std::to_string(i) + " has an angle or offset out of range");
+  render::Camera c = cam_;
+  c.width = int(w);
+  c.height = int(h);
+  c.viewport_x = int(v.x);
+  c.viewport_y = int(H - v.y - h);  // GL counts rows from the bottom
+  c.heading_deg = std::fmod(cam_.heading_deg + v.yaw_offset_deg + 720.0, 360.0);
+  c.pitch_deg = std::clamp(cam_.pitch_deg + v.pitch_offset_deg, -89.0, 89.0);
+  if (v.fov_y_deg > 0) c.fov_y_deg = v.fov_y_deg;
+  const double hr = cam_.heading_deg * 3.14159265358979323846 / 180.0;
+  c.eye_enu.x += std::cos(hr) * v.eye_offset_right_m;  // right of the heading
+  c.eye_enu.y -= std::sin(hr) * v.eye_offset_right_m;
+  c.mirror = (v.flags & BLVD_VIEW_MIRROR) != 0;
+  return c;
+}
+
+void Runtime::afterFrame(double frame_ms, const render::FrameStats& fs, uint64_t full_pixels, double scale) {
+  if (budget_ && !referenceMode()) {
+    budget_->next(frame_ms, draw_->blockTriangles(), draw_->floorTriangles(), fs.pixels, full_pixels);
+    stats_.polygon_budget = budget_->polygonBudget();
+    stats_.frame_aim_ms = float(budget_->aim());
+    stats_.budget_unreachable = budget_->unreachable() ? 1 : 0;
+  }
+  stats_.render_scale = float(scale);
+  stats_.block_triangles = draw_->blockTriangles();
+  ++stats_.frames;
+  stats_.frame_ms = fs.frame_ms;
+  stats_.triangles = fs.triangles;
+}
+
+void Runtime::writeFrameStats(blvd_frame_stats* out, const render::FrameStats& fs, uint32_t cell) const {
+  const uint32_t size = out->struct_size ? out->struct_size : sizeof(blvd_frame_stats);
+  blvd_frame_stats s{};
+  s.struct_size = size;
+  s.frame_ms = fs.frame_ms;
+  s.triangles = fs.triangles;
+  s.draw_calls = fs.draw_calls;
+  s.cell = cell;
+  s.impostor_layers = draw_->impostors();
+  s.blocks_drawn = draw_->blocks();
+  s.flags = draw_->degraded() ? BLVD_FRAME_DEGRADED : 0;
+  std::memcpy(out, &s, std::min<size_t>(size, sizeof s));
+}
+
+void Runtime::readPixels(void* rgba, size_t bytes) {
+  if (!rendered_) throw Error(Status::Misuse, "blvd_read_pixels before blvd_render");
+  if (items_drawn_)
+    throw Error(Status::Misuse, "blvd_read_pixels after blvd_read_items: the ids replaced the frame; render again");
+  const size_t need = static_cast<size_t>(renderer_->lastWidth()) * renderer_->lastHeight() * 4;
+  if (bytes < need)
+    throw Error(Status::InvalidArg, "pixel buffer holds " + std::to_string(bytes) + " bytes, the frame needs " +
+                                        std::to_string(need));
+  if (!renderer_->readPixels(static_cast<uint8_t*>(rgba))) throw Error(Status::Internal, renderer_->lastError());
+}
+
+void Runtime::readItems(uint32_t* ids, size_t count) {
+  if (!rendered_) throw Error(Status::Misuse, "blvd_read_items before blvd_render");
+  const size_t need = size_t(cam_.width) * size_t(cam_.height);
+  if (count < need)
+    throw Error(Status::InvalidArg, "id buffer holds " + std::to_string(count) + " ids, the frame needs " +
+                                        std::to_string(need));
+  if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
+  render::RenderOptions ro;
+  ro.pass = render::Pass::ItemBuffer;
+  ro.item_ids = draw_->items();
+  if (!renderer_->render(cam_, draw_->meshes(), draw_->size(), nullptr, ro))
+    throw Error(Status::Internal, "item buffer failed: " + renderer_->lastError());
+  items_drawn_ = true;
+  // The RGBA read-back is unpacked in place: 4 bytes a pixel, one id a pixel.
+  auto* px = reinterpret_cast<uint8_t*>(ids);
+  if (!renderer_->readPixels(px)) throw Error(Status::Internal, renderer_->lastError());
+  for (size_t i = 0; i < need; ++i) {
+    const uint8_t* p = px + 4 * i;
+    ids[i] = p[3] ? uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 : 0u;
+  }
+}
+
+}  // namespace blvd::runtime

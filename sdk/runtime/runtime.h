@@ -1,0 +1,107 @@
+// The object behind blvd_runtime*: a package's city, the GL context and
+// renderer, the resident-cell slots, the draw list, the tracker and the
+// camera. sdk/capi maps the C API onto it. Files, in the order a frame walks:
+//   runtime.cpp      create (memory plan first, then every pool), settings, stats
+//   tracking.cpp     feeds, the tracked pose, and which cell the camera is on
+//   cell_slots.*     the slots' state machine, uploads (slot_upload.cpp), block reuse (block_copy.cpp)
+//   draw_list.*      what to draw, levels of detail (lod_choice.cpp)
+//   frame.cpp        one frame: stream, draw list, render (views), frame budget, read-back
+// Errors are thrown as core::Error; the C binding turns them into a status
+// and last_error.
+#pragma once
+#include <atomic>
+#include <memory>
+#include <string>
+
+#include "blvd/blvd.h"
+#include "render/camera.h"
+#include "render/context.h"
+#include "render/renderer.h"
+#include "runtime/cell_choice.h"
+#include "runtime/cell_loader.h"
+#include "runtime/cell_slots.h"
+#include "runtime/draw_list.h"
+#include "runtime/frame_clock.h"
+#include "runtime/memory_plan.h"
+#include "stream/city.h"
+#include "stream/frame_budget.h"
+#include "stream/residency.h"
+#include "track/tracker.h"
+
+namespace blvd::runtime {
+
+class Runtime {
+ public:
+  // `desc` has its defaults applied and its fields checked (sdk/capi).
+  // Throws core::Error naming what failed (Budget when the memory plan
+  // exceeds a budget, NoMem when the host allocator fails).
+  explicit Runtime(const blvd_runtime_desc& desc);
+  ~Runtime();
+
+  // The host places the camera (finite values, pitch within (-90, 90)).
+  void setPoseLocal(double x, double y, double heading_deg, double pitch_deg);
+  void setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg);
+  void setMode(blvd_render_mode mode, float radius_m);
+  void setRoute(const uint32_t* cells, size_t n);
+  void waitResident(double timeout_ms);
+
+  // One frame of the current pose: the whole frame, or `n` views of it.
+  void render(blvd_frame_stats* stats, const blvd_view* views = nullptr, uint32_t n = 0);
+  void readPixels(void* rgba, size_t bytes);
+  // The last frame's draw list again as an object-id buffer (blvd_read_items).
+  void readItems(uint32_t* ids, size_t count);
+  void info(blvd_runtime_info* out) const;
+  void stats(blvd_stats* out) const;
+
+  // Tracking. The feeds are safe from any thread and never touch last_error
+  // (another thread may be reading it); pose() runs on the render thread.
+  // A feed or a start pose hands the camera to the tracker until the host
+  // sets a pose again.
+  void feedGnss(const track::GnssFix& fix);
+  void feedOdometry(const track::Odometry& odo);
+  const track::Pose& pose(double t);
+  // False when the start pose is impossible (track::Tracker::setStartPose).
+  bool setStartPose(const track::StartPose& sp);
+  track::Tracker& tracker() { return *tracker_; }
+  const geo::LocalFrame& frame() const { return city_.frame(); }
+
+  std::string last_error;
+
+ private:
+  // The camera from the tracker when it drives, then the current cell.
+  uint32_t currentCell(double& arc_m, double& speed_mps);
+  void noteFeed(double t);
+  bool referenceMode() const { return mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS; }
+  // frame.cpp
+  void renderViews(const blvd_view* views, uint32_t n, const render::RenderOptions& ro, render::FrameStats& fs,
+                   uint64_t& full_pixels);
+  render::Camera viewCamera(const blvd_view& v, uint32_t i) const;
+  void afterFrame(double frame_ms, const render::FrameStats& fs, uint64_t full_pixels, double scale);
+  void writeFrameStats(blvd_frame_stats* out, const render::FrameStats& fs, uint32_t cell) const;
+
+  blvd_runtime_desc desc_;
+  stream::City city_;
+  MemoryPlan plan_;
+  std::unique_ptr<CellLoader> loader_;
+  std::unique_ptr<render::Context> ctx_;
+  std::unique_ptr<render::Renderer> renderer_;
+  std::unique_ptr<stream::Residency> residency_;
+  std::unique_ptr<CellSlots> slots_;
+  std::unique_ptr<DrawList> draw_;
+  std::unique_ptr<CellChoice> choice_;
+  std::unique_ptr<stream::FrameBudget> budget_;  // with target_frame_ms
+  FrameClock* clock_ = nullptr;  // this runtime's frames, for the loaders' gap scheduling
+  render::Camera cam_;
+  blvd_render_mode mode_ = BLVD_MODE_BLVD;
+  float radius_m_ = 250.f;
+  bool rendered_ = false;
+  bool items_drawn_ = false;  // readItems drew over the frame
+  blvd_stats stats_{};        // the frame's own figures; the pools' are read in stats()
+  // The tracker drives the camera once it has a pose, until the host places
+  // the camera itself (blvd_set_pose_*); the next feed hands it back.
+  std::unique_ptr<track::Tracker> tracker_;
+  std::atomic<bool> manual_pose_{true};
+  std::atomic<double> last_feed_t_{0.0};
+};
+
+}  // namespace blvd::runtime
