@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite, as CI runs it: install dependencies, build with
 # warnings as errors, run the parser/corruption and runtime-failure tests
-# under ASan+UBSan, then every test. The last line printed is CTest's summary.
+# under ASan+UBSan, the threaded tests under ThreadSanitizer, then every test. The last line printed is CTest's summary.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bash packaging/scripts/deps.sh
@@ -23,7 +23,17 @@ cmake --build build-asan -j"$jobs" --target test_package test_graph_serialize te
 cp build/test-monaco.blvd build-asan/test-monaco.blvd
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" -L "asan|fuzz" -FS monaco_package)
 
-# 3. Every test.
+# 3. ThreadSanitizer on the tests that share data across threads: the cell
+#    loader's two decoding threads and its frame clock and prefetch share,
+#    the tracker's feeds from any thread, the C API's CAN feeds.
+cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBLVD_TSAN=ON -DBLVD_WERROR=ON \
+  -DBLVD_BUILD_SAMPLES=OFF > /dev/null
+cmake --build build-tsan -j"$jobs" --target test_residency test_cell_loader test_track test_capi_can
+cp build/test-monaco.blvd build-tsan/test-monaco.blvd
+(cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
+  ctest --output-on-failure -j"$jobs" -L tsan -FS monaco_package)
+
+# 4. Every test.
 cd build
 set +e
 ctest --output-on-failure -j"$jobs" --timeout 900 2>&1 | tee ctest.log

@@ -32,7 +32,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "cli/route.h"
-#include "render/metrics.h"
+#include "imaging/metrics.h"
 #include "stream/city.h"
 
 namespace blvd::cli {
@@ -308,7 +308,7 @@ int runBudget(const BudgetOpts& o) {
   const double free_p50 = pct(times(unbudgeted.frames, -1), 50);
   std::vector<double> ssim;
   for (size_t i = 0; i < std::min(unbudgeted.images.size(), budgeted.images.size()); ++i)
-    ssim.push_back(render::compareImages(unbudgeted.images[i].data(), budgeted.images[i].data(), w, h).ssim);
+    ssim.push_back(imaging::compareImages(unbudgeted.images[i].data(), budgeted.images[i].data(), w, h).ssim);
 
   const std::vector<double> all = times(budgeted.frames, -1);
   const double p50 = pct(all, 50), p95 = pct(all, 95);

@@ -21,8 +21,8 @@
 #include "cli/report.h"
 #include "cli/route.h"
 #include "core/status.h"
-#include "render/image.h"
-#include "render/metrics.h"
+#include "imaging/image.h"
+#include "imaging/metrics.h"
 #include "stream/city.h"
 
 namespace blvd::cli {
@@ -261,7 +261,7 @@ Sample RouteBench::measureMode(size_t i, size_t m, uint32_t& cell) {
     cell = fs.cell;
     return s;
   }
-  const render::ImageMetrics q = render::compareImages(ref_.data(), img_.data(), w_, h_);
+  const imaging::ImageMetrics q = imaging::compareImages(ref_.data(), img_.data(), w_, h_);
   s.ssim = q.ssim, s.psnr = q.psnr, s.bad = q.bad_pixels;
   FarInputs in = farInputs(city_, cell, kModes[m].mode);
   in.w = w_, in.h = h_;
@@ -290,15 +290,15 @@ void RouteBench::writePictures(size_t i, size_t m, const Sample& s) {
   std::string err;
   char name[96];
   std::snprintf(name, sizeof name, "frames/pose%04zu_%s.png", i, kModes[m].key);
-  if (!render::writePng(o_.html_dir + "/" + name, w_, h_, (m == 0 ? ref_ : img_).data(), err))
+  if (!imaging::writePng(o_.html_dir + "/" + name, w_, h_, (m == 0 ? ref_ : img_).data(), err))
     throw core::Error(core::Status::Io, err);
   figures_.push_back({name, std::string(kModes[m].key) + ", pose " + std::to_string(i) + ", cell " +
                                 std::to_string(poses_[i].cell) + ": " + std::to_string(int(s.ms)) + " ms" +
                                 (m ? ", SSIM " + fmt(s.ssim, 3) : "")});
   if (m == 0) return;
-  render::diffImage(ref_.data(), img_.data(), w_, h_, diff_.data());
+  imaging::diffImage(ref_.data(), img_.data(), w_, h_, diff_.data());
   std::snprintf(name, sizeof name, "frames/pose%04zu_diff.png", i);
-  if (!render::writePng(o_.html_dir + "/" + name, w_, h_, diff_.data(), err)) throw core::Error(core::Status::Io, err);
+  if (!imaging::writePng(o_.html_dir + "/" + name, w_, h_, diff_.data(), err)) throw core::Error(core::Status::Io, err);
   figures_.push_back({name, "difference (red: off by more than 10 %), bad " + fmt(100 * s.bad, 2) + " %"});
 }
 
@@ -379,7 +379,7 @@ void RouteBench::writeWorst(HtmlPage& page) {
     for (int c = 0; c < 3; ++c) {
       char name[96];
       std::snprintf(name, sizeof name, "frames/worst%04zu_%s.png", k.pose, kinds[c]);
-      if (!render::writePng(o_.html_dir + "/" + name, w_, h_, imgs[c]->data(), err))
+      if (!imaging::writePng(o_.html_dir + "/" + name, w_, h_, imgs[c]->data(), err))
         throw core::Error(core::Status::Io, err);
       const Sample& s = samples_[kBlvd][k.pose];
       std::string cap;

@@ -12,7 +12,7 @@
 #include "cli/commands.h"
 #include "cli/route.h"
 #include "core/status.h"
-#include "render/image.h"
+#include "imaging/image.h"
 #include "stream/city.h"
 
 namespace blvd::cli {
@@ -57,7 +57,7 @@ blvd_backend parseBackendName(const std::string& s) {
 void writeFrame(blvd_runtime* rt, int w, int h, const std::string& path, std::vector<uint8_t>& rgba) {
   check(blvd_read_pixels(rt, rgba.data(), rgba.size()), rt, "read pixels");
   std::string err;
-  if (!render::writePng(path, w, h, rgba.data(), err)) throw core::Error(core::Status::Io, err);
+  if (!imaging::writePng(path, w, h, rgba.data(), err)) throw core::Error(core::Status::Io, err);
 }
 
 const char* fullName(char (&buf)[64], size_t i) {

@@ -7,7 +7,7 @@
 #include <unordered_map>
 
 #include "cli/bench_util.h"
-#include "render/metrics.h"
+#include "imaging/metrics.h"
 
 namespace blvd::cli {
 namespace {
@@ -112,7 +112,7 @@ FarMetrics measureFar(const FarInputs& in) {
     const uint32_t r = in.ref_items[i];
     F[i] = r != 0 && !(r & kItemImpostor) && !in.is_local(r - 1);
     D[i] = drawnFar(in.test_items[i], in);
-    bad[i] = render::pixelError(in.ref_rgba + 4 * i, in.test_rgba + 4 * i) > in.threshold;
+    bad[i] = imaging::pixelError(in.ref_rgba + 4 * i, in.test_rgba + 4 * i) > in.threshold;
   }
   // Spurious pixels lie farther than the tolerance from F.
   const std::vector<float> dF = distanceTransform2(F, in.w, in.h);

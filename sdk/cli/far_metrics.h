@@ -51,7 +51,7 @@ struct FarInputs {
   const uint32_t* test_items = nullptr;
   std::function<bool(uint32_t block)> is_local;
   std::function<bool(uint32_t layer, uint32_t block)> layer_holds;  // may be empty: no impostors
-  double threshold = 0.10;        // colour error of a bad pixel (render::pixelError)
+  double threshold = 0.10;        // colour error of a bad pixel (imaging::pixelError)
   int edge_tolerance_px = 2;      // spurious pixels this close to F are silhouette error
   uint32_t min_object_px = 200;   // missing objects: blocks at least this large in F
 };

@@ -300,7 +300,7 @@ void CellLoader::run(bool background) {
 
 void CellLoader::waitForGap(Staging& s, bool impostor, double units) {
   if (s.urgent || executor_.submit) return;
-  const int64_t cost = int64_t(rate_ns_[impostor] * units * kCostMargin);
+  const int64_t cost = int64_t(rate_ns_[impostor].load(std::memory_order_relaxed) * units * kCostMargin);
   auto cancel = [](void* p) { return static_cast<Staging*>(p)->abandon.load(std::memory_order_relaxed); };
   auto count = [](int64_t waited, std::atomic<uint64_t>& n, std::atomic<uint64_t>& ns) {
     if (waited <= 200000) return;  // not more than the check itself
@@ -327,8 +327,13 @@ void CellLoader::measured(const Staging& s, bool impostor, double units, int64_t
   if (!s.urgent) prefetch_share::charge(cpu_ns, share_);
   if (executor_.submit && cpu_ns > 0) task_cpu_ns_[s.urgent ? 0 : 1].fetch_add(uint64_t(cpu_ns), std::memory_order_relaxed);
   if (units <= 0) return;
+  // An exponential average both threads update: compare-and-swap, so neither
+  // overwrites the other's sample with a stale average.
   const double r = double(cpu_ns) / units;
-  rate_ns_[impostor] = rate_ns_[impostor] > 0 ? 0.8 * rate_ns_[impostor] + 0.2 * r : r;
+  std::atomic<double>& rate = rate_ns_[impostor];
+  double old = rate.load(std::memory_order_relaxed);
+  while (!rate.compare_exchange_weak(old, old > 0 ? 0.8 * old + 0.2 * r : r, std::memory_order_relaxed)) {
+  }
 }
 
 bool CellLoader::decode(Staging& s) {

@@ -185,8 +185,9 @@ class CellLoader {
   bool low_prefetch_ = false;
   bool pace_to_frames_ = false;
   double share_ = 0;  // of the wall time, for the process's predictions together (0: no bound)
-  // Background thread only: decode CPU nanoseconds per unit, by kind (0 until measured).
-  double rate_ns_[2] = {0, 0};
+  // Decode CPU nanoseconds per unit, by kind (0 until measured): written by
+  // both decoding threads (measured), read by the background one (waitForGap).
+  std::atomic<double> rate_ns_[2] = {};
   std::atomic<uint64_t> gap_waits_{0}, gap_wait_ns_{0}, share_waits_{0}, share_wait_ns_{0};
   std::atomic<uint64_t> task_cpu_ns_[2] = {};  // host executor: its meshes' CPU, urgent / prediction
   clockid_t cpu_clock_[2] = {};                 // the threads' CPU clocks (thread_, background_)

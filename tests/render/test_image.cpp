@@ -4,10 +4,11 @@
 #include <cmath>
 #include <vector>
 
-#include "render/image.h"
+#include "imaging/image.h"
 #include "scene.h"
 
-namespace blvd::render {
+namespace blvd::imaging {
+namespace test = render::test;
 namespace {
 
 std::vector<uint8_t> gradient(int w, int h) {
@@ -71,4 +72,4 @@ TEST(Png, ErrorsNameTheFile) {
 }
 
 }  // namespace
-}  // namespace blvd::render
+}  // namespace blvd::imaging

@@ -7,9 +7,9 @@
 #include <random>
 #include <vector>
 
-#include "render/metrics.h"
+#include "imaging/metrics.h"
 
-namespace blvd::render {
+namespace blvd::imaging {
 namespace {
 
 using Image = std::vector<uint8_t>;
@@ -302,4 +302,4 @@ TEST(CompareImages, BundlesTheThreeMetrics) {
 }
 
 }  // namespace
-}  // namespace blvd::render
+}  // namespace blvd::imaging

@@ -8,7 +8,7 @@
 #include <set>
 
 #include "render/context.h"
-#include "render/image.h"
+#include "imaging/image.h"
 #include "render/renderer.h"
 #include "scene.h"
 
@@ -16,6 +16,9 @@ namespace blvd::render {
 namespace {
 
 using test::Rgb;
+using imaging::psnr;
+using imaging::readPng;
+using imaging::writePng;
 
 constexpr int kW = 160, kH = 120;
 constexpr uint8_t kRed[4] = {200, 40, 40, 255};

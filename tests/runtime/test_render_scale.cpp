@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "blvd/blvd.h"
-#include "render/metrics.h"
+#include "imaging/metrics.h"
 #include "runtime_fixture.h"
 
 namespace {
@@ -58,8 +58,8 @@ TEST(RenderScale, AnUnreachableTargetScalesDownToTheMinimum) {
   EXPECT_NEAR(s.frame_aim_ms, 0.92f * 0.01f, 1e-5f);
   const std::vector<uint8_t> half = frame(scaled.rt, d);
   // The whole frame was written (stretched), and it is the same street.
-  const blvd::render::ImageMetrics m =
-      blvd::render::compareImages(reference.data(), half.data(), int(d.width), int(d.height));
+  const blvd::imaging::ImageMetrics m =
+      blvd::imaging::compareImages(reference.data(), half.data(), int(d.width), int(d.height));
   RecordProperty("ssim", std::to_string(m.ssim));
   EXPECT_GT(m.ssim, 0.7) << "scaled frame is not the same view";
   EXPECT_LT(m.ssim, 0.999) << "a frame drawn at half the pixels cannot be identical";

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "blvd/blvd.h"
-#include "render/metrics.h"
+#include "imaging/metrics.h"
 
 namespace {
 
@@ -63,8 +63,8 @@ TEST(Views, RearMirrorIsTheSceneBehindFlipped) {
   fs.struct_size = sizeof fs;
   ASSERT_EQ(blvd_render_views(r.rt, &mirror, 1, &fs), BLVD_OK) << blvd_last_error(r.rt);
   const std::vector<uint8_t> seen = r.pixels();
-  const double same = blvd::render::psnr(seen.data(), flipped(behind).data(), seen.size() / 4);
-  const double unflipped = blvd::render::psnr(seen.data(), behind.data(), seen.size() / 4);
+  const double same = blvd::imaging::psnr(seen.data(), flipped(behind).data(), seen.size() / 4);
+  const double unflipped = blvd::imaging::psnr(seen.data(), behind.data(), seen.size() / 4);
   EXPECT_GE(same, 30.0);
   EXPECT_LT(unflipped, same - 5.0) << "the mirror view must actually be flipped";
   EXPECT_GT(fs.triangles, 0u);
@@ -115,7 +115,7 @@ TEST(Views, MainViewWithAMirrorInsetAndAStereoPair) {
         left[(y * kW / 2 + x) * 4 + c] = pair[(y * kW + x) * 4 + c];
         right[(y * kW / 2 + x) * 4 + c] = pair[(y * kW + kW / 2 + x) * 4 + c];
       }
-  const double ssim = blvd::render::ssim(left.data(), right.data(), kW / 2, kH);
+  const double ssim = blvd::imaging::ssim(left.data(), right.data(), kW / 2, kH);
   EXPECT_GT(ssim, 0.8);
   EXPECT_LT(ssim, 1.0) << "the eyes must be apart";
 }

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "blvd/blvd.h"
-#include "render/image.h"
-#include "render/metrics.h"
+#include "imaging/image.h"
+#include "imaging/metrics.h"
 #include "cli/far_metrics.h"
 #include "stream/city.h"
 
@@ -64,17 +64,17 @@ std::vector<uint8_t> renderView(const View& v, blvd_backend backend, blvd_render
 void compareWithGolden(const std::vector<uint8_t>& px, const std::string& golden_path, const std::string& actual) {
   ASSERT_EQ(px.size(), size_t(kW * kH * 4));
   std::string err;
-  ASSERT_TRUE(blvd::render::writePng(actual, kW, kH, px.data(), err)) << err;
+  ASSERT_TRUE(blvd::imaging::writePng(actual, kW, kH, px.data(), err)) << err;
   if (std::getenv("BLVD_UPDATE_GOLDEN")) {
-    ASSERT_TRUE(blvd::render::writePng(golden_path, kW, kH, px.data(), err)) << err;
+    ASSERT_TRUE(blvd::imaging::writePng(golden_path, kW, kH, px.data(), err)) << err;
     GTEST_SKIP() << "golden image rewritten: " << golden_path;
   }
   int w = 0, h = 0;
   std::vector<uint8_t> golden;
-  ASSERT_TRUE(blvd::render::readPng(golden_path, w, h, golden, err)) << err;
+  ASSERT_TRUE(blvd::imaging::readPng(golden_path, w, h, golden, err)) << err;
   ASSERT_EQ(w, kW);
   ASSERT_EQ(h, kH);
-  const double psnr = blvd::render::psnr(px.data(), golden.data(), size_t(kW) * kH);
+  const double psnr = blvd::imaging::psnr(px.data(), golden.data(), size_t(kW) * kH);
   ::testing::Test::RecordProperty("psnr_db", std::to_string(psnr));
   EXPECT_GE(psnr, 35.0) << "see " << actual;
 }
@@ -127,7 +127,7 @@ TEST(GoldenView, BlvdIsCloseToTheFullModelWithFarFewerTriangles) {
   const std::vector<uint8_t> a = renderView(kView, BLVD_BACKEND_AUTO, BLVD_MODE_FULL, &full);
   const std::vector<uint8_t> b = renderView(kView, BLVD_BACKEND_AUTO, BLVD_MODE_BLVD, &fast);
   ASSERT_EQ(a.size(), b.size());
-  EXPECT_GE(blvd::render::ssim(a.data(), b.data(), kW, kH), 0.9);
+  EXPECT_GE(blvd::imaging::ssim(a.data(), b.data(), kW, kH), 0.9);
   EXPECT_LT(fast.triangles * 5, full.triangles);
   // Never an impostor together with the blocks it stands for (K06 §3.1.2):
   // blvd draws the local blocks only, as local mode does.
@@ -143,7 +143,7 @@ TEST(GoldenView, OsmesaAgreesWithEgl) {
   const std::vector<uint8_t> osm = renderView(kView, BLVD_BACKEND_OSMESA);
   ASSERT_EQ(egl.size(), osm.size());
   ASSERT_FALSE(egl.empty());
-  EXPECT_GE(blvd::render::psnr(egl.data(), osm.data(), size_t(kW) * kH), 35.0);
+  EXPECT_GE(blvd::imaging::psnr(egl.data(), osm.data(), size_t(kW) * kH), 35.0);
 }
 
 TEST(GoldenView, ViewIsNotBlankAndShowsBuildings) {

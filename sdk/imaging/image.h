@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace blvd::render {
+namespace blvd::imaging {
 
 // Writes an RGBA8 PNG. False with `err` set when the file cannot be written.
 bool writePng(const std::string& path, int width, int height, const uint8_t* rgba,
@@ -22,4 +22,4 @@ bool readPng(const std::string& path, int& width, int& height, std::vector<uint8
 // are equal (also for pixels == 0).
 double psnr(const uint8_t* a, const uint8_t* b, size_t pixels);
 
-}  // namespace blvd::render
+}  // namespace blvd::imaging

@@ -1,5 +1,5 @@
 // PNG I/O and PSNR. The stb implementation lives in stb_impl.cpp.
-#include "render/image.h"
+#include "imaging/image.h"
 
 #include <cmath>
 #include <cstring>
@@ -7,7 +7,7 @@
 #include <stb_image.h>
 #include <stb_image_write.h>
 
-namespace blvd::render {
+namespace blvd::imaging {
 
 bool writePng(const std::string& path, int width, int height, const uint8_t* rgba,
               std::string& err) {
@@ -52,4 +52,4 @@ double psnr(const uint8_t* a, const uint8_t* b, size_t pixels) {
   return 10.0 * std::log10(255.0 * 255.0 / mse);
 }
 
-}  // namespace blvd::render
+}  // namespace blvd::imaging

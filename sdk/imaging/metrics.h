@@ -12,9 +12,9 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "render/image.h"
+#include "imaging/image.h"
 
-namespace blvd::render {
+namespace blvd::imaging {
 
 // SSIM, Wang, Bovik, Sheikh & Simoncelli 2004, "Image quality assessment: from
 // error visibility to structural similarity", IEEE TIP 13(4), eq. 13 (§III-B)
@@ -82,4 +82,4 @@ struct ImageMetrics {
 ImageMetrics compareImages(const uint8_t* a, const uint8_t* b, int w, int h,
                            double threshold = kBadPixelThreshold);
 
-}  // namespace blvd::render
+}  // namespace blvd::imaging

@@ -1,13 +1,13 @@
 // SSIM (Wang et al. 2004), bad-pixel share and the difference picture. See
 // metrics.h for the exact definitions; the comments here say how.
-#include "render/metrics.h"
+#include "imaging/metrics.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <vector>
 
-namespace blvd::render {
+namespace blvd::imaging {
 namespace {
 
 constexpr int kRadius = kSsimWindow / 2;  // 5
@@ -213,4 +213,4 @@ ImageMetrics compareImages(const uint8_t* a, const uint8_t* b, int w, int h, dou
   return m;
 }
 
-}  // namespace blvd::render
+}  // namespace blvd::imaging
