@@ -19,7 +19,7 @@ inline blvd_gnss_fix toBlvd(const Fix& f) {
   out.track_deg = f.track_deg;
   out.hdop = f.hdop;
   out.h_acc_m = f.h_acc_m;
-  out.mode = f.mode;
+  out.mode = static_cast<blvd_gnss_mode>(f.mode);
   // The first seven FixFlag bits are the BLVD_GNSS_HAS_* bits (fix.h keeps them in step).
   out.flags = f.flags & (BLVD_GNSS_HAS_TIME | BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_ALT | BLVD_GNSS_HAS_SPEED |
                          BLVD_GNSS_HAS_TRACK | BLVD_GNSS_HAS_HDOP | BLVD_GNSS_HAS_HACC);

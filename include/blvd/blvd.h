@@ -14,11 +14,24 @@
  *        then (headless) blvd_read_pixels().
  *   5. blvd_runtime_destroy(rt). destroy(NULL) is a no-op.
  *
- * Conventions:
+ * Conventions (every function follows them; tests/capi checks each from C):
  *   - Every fallible call returns blvd_status; BLVD_OK is 0. The enum only grows.
+ *   - A NULL handle (blvd_runtime*, blvd_tracker*, blvd_can_profile*) is
+ *     BLVD_ERR_MISUSE; a NULL pointer argument is BLVD_ERR_INVALID_ARG. Destroy
+ *     functions take NULL as a no-op.
  *   - blvd_last_error(rt) is text about the last failed call on rt, valid until the
  *     next call on rt. Nothing throws across this boundary.
- *   - Public structs start with struct_size and only grow at the end.
+ *   - Public structs start with struct_size and only grow at the end. Input
+ *     structs: struct_size 0 means this header's size; a host built against an
+ *     older, shorter struct passes its size, and the fields past it take their
+ *     defaults, or, where a struct has no default for a field it misses (the
+ *     odometry calibration, the start pose), the call is refused with
+ *     BLVD_ERR_INVALID_ARG. Output structs: blvd writes struct_size bytes (0:
+ *     this header's size) and nothing past them.
+ *   - Each function says on which thread it may be called: "any thread", the
+ *     "render thread" (the one that created the runtime), or a tracker's
+ *     "tracking thread" (one thread of the host's choice).
+ *   - Every enum has a *_FORCE_32 value so that it is 32 bits wide in every ABI.
  *   - Local frame: metres east (x) and north (y) of the package origin.
  *   - Headings: degrees clockwise from true north. Pitch: degrees, up positive.
  */
@@ -28,7 +41,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#if defined(_WIN32)
+#if defined(_WIN32) && defined(BLVD_BUILDING_LIBRARY)
+#define BLVD_API __declspec(dllexport)
+#elif defined(_WIN32)
 #define BLVD_API __declspec(dllimport)
 #elif defined(__GNUC__)
 #define BLVD_API __attribute__((visibility("default")))
@@ -128,7 +143,8 @@ typedef enum blvd_prefetch_priority {
    * gaps between its frames (drawing at a display's refresh) gets each predicted mesh started in
    * such a gap, when its measured cost fits before the next frame of any runtime in the process;
    * a host that draws back to back is not affected. This value turns that off. */
-  BLVD_PREFETCH_IDLE_ANYTIME = 2
+  BLVD_PREFETCH_IDLE_ANYTIME = 2,
+  BLVD_PREFETCH_FORCE_32 = 0x7fffffff
 } blvd_prefetch_priority;
 
 typedef struct blvd_runtime_desc {
@@ -191,8 +207,8 @@ typedef struct blvd_runtime_desc {
    * held back, and no mesh waits more than 100 ms. No effect with a host executor. */
   float prefetch_share;
 
-  /* Neighbouring cells share most of their local blocks (five sixths of the block triangles a
-   * Monaco drive loads). A block another resident cell already holds is copied GPU to GPU
+  /* Neighbouring cells share most of their local blocks. A block another resident cell already
+   * holds is copied GPU to GPU
    * (glCopyBufferSubData, within upload_budget_ms) into the new cell's slab instead of being read
    * and decoded again; the source cell is not released until the copy is done. 0 or positive: on
    * (the default); negative: off, every cell decodes all its blocks. */
@@ -221,7 +237,9 @@ BLVD_API blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_run
 BLVD_API void blvd_runtime_destroy(blvd_runtime* rt);
 
 /* Text about the last failed call on rt (or, for rt == NULL, the last failed
- * create on this thread). Valid until the next call on rt. Never NULL. */
+ * create on this thread). Valid until the next call on rt. Never NULL. The
+ * thread the failed call was made on (the render thread for rt; feeds set no
+ * text). */
 BLVD_API const char* blvd_last_error(const blvd_runtime* rt);
 
 typedef struct blvd_runtime_info {
@@ -234,27 +252,48 @@ typedef struct blvd_runtime_info {
   uint64_t triangle_count;       /* triangles in the whole package (full model) */
 } blvd_runtime_info;
 
-/* Fills *info. Strings are owned by rt and live as long as it. */
+/* Fills *info up to info->struct_size. Strings are owned by rt and live as
+ * long as it. Render thread. */
 BLVD_API blvd_status blvd_runtime_get_info(blvd_runtime* rt, blvd_runtime_info* info);
 
 /* ---- pose and frames ------------------------------------------------------------ */
 
+/* Who places the camera blvd_render draws from: the host (blvd_set_pose_*,
+ * the default) or the tracker (the pose blvd_get_pose gives for the newest
+ * fed time, once it is valid; until then the camera stays where it was).
+ * Feeding never moves the camera by itself: a host that wants it to follow the
+ * vehicle says so here. */
+typedef enum blvd_camera_source {
+  BLVD_CAMERA_HOST = 0,
+  BLVD_CAMERA_TRACKED = 1,
+  BLVD_CAMERA_FORCE_32 = 0x7fffffff
+} blvd_camera_source;
+
+/* Sets the camera's source. Render thread. Errors: BLVD_ERR_INVALID_ARG for
+ * an unknown source. */
+BLVD_API blvd_status blvd_set_camera_source(blvd_runtime* rt, blvd_camera_source source);
+
 /* Places the eye at lat/lon (WGS84 degrees), eye_height_m above the street,
  * looking along heading_deg (clockwise from north), pitched by pitch_deg.
- * Errors: BLVD_ERR_INVALID_ARG for non-finite or out-of-range values. */
+ * Render thread. Errors: BLVD_ERR_INVALID_ARG for non-finite or out-of-range
+ * values; BLVD_ERR_MISUSE while the camera source is BLVD_CAMERA_TRACKED. */
 BLVD_API blvd_status blvd_set_pose_geo(blvd_runtime* rt, double lat, double lon, float heading_deg,
                                        float pitch_deg);
 
-/* As blvd_set_pose_geo, with x east and y north in metres of the local frame. */
+/* As blvd_set_pose_geo, with x east and y north in metres of the local frame.
+ * Render thread. */
 BLVD_API blvd_status blvd_set_pose_local(blvd_runtime* rt, double x, double y, float heading_deg,
                                          float pitch_deg);
+
+/* No cell: a pose off the street graph, or not matched yet. */
+#define BLVD_NO_CELL 0xffffffffu
 
 typedef struct blvd_frame_stats {
   uint32_t struct_size;
   double frame_ms;    /* CPU+GPU time of the last blvd_render, glFinish included */
   uint64_t triangles; /* triangles submitted by the last blvd_render */
   uint32_t draw_calls;
-  uint32_t cell;            /* the cell the pose was matched to (UINT32_MAX: none) */
+  uint32_t cell;            /* the cell the pose was matched to (BLVD_NO_CELL: none) */
   uint32_t impostor_layers; /* impostor meshes drawn */
   uint32_t blocks_drawn;    /* block meshes submitted (before frustum culling) */
   uint32_t flags;           /* BLVD_FRAME_* */
@@ -312,7 +351,7 @@ typedef struct blvd_stats {
   uint64_t block_levels_copied;   /* ... and their levels of detail, one mesh each */
 } blvd_stats;
 
-/* Fills *stats. Render thread. */
+/* Fills *stats up to stats->struct_size. Render thread. */
 BLVD_API blvd_status blvd_runtime_stats(blvd_runtime* rt, blvd_stats* stats);
 
 /* Blocks until the cell at the current pose is resident (loading and
@@ -355,15 +394,16 @@ typedef struct blvd_view {
 
 /* Renders `n` views (1..16) of the current pose in one frame, in order (later
  * views draw over earlier ones where they overlap). The views share one draw
- * list, the residency step and the LOD choice (Yilmaz et al. §3.4: one draw
- * list for both eyes); each view clips to its own frustum. `stats` sums the
- * views. Errors: BLVD_ERR_INVALID_ARG for a view outside the frame. Render
- * thread only. */
+ * list, the residency step and the LOD choice; each view clips to its own
+ * frustum. `stats` sums the views. Errors: BLVD_ERR_INVALID_ARG for NULL
+ * views, n outside 1..16, or a view outside the frame. Render thread. */
 BLVD_API blvd_status blvd_render_views(blvd_runtime* rt, const blvd_view* views, uint32_t n,
                                        blvd_frame_stats* stats /* may be NULL */);
 
 /* Copies the last frame as tightly packed RGBA8, top row first, into `rgba`
- * (at least width*height*4 bytes). Errors: BLVD_ERR_INVALID_ARG if too small. */
+ * (at least width*height*4 bytes). Render thread. Errors:
+ * BLVD_ERR_INVALID_ARG if NULL or too small; BLVD_ERR_MISUSE before the first
+ * render or after blvd_read_items. */
 BLVD_API blvd_status blvd_read_pixels(blvd_runtime* rt, void* rgba, size_t rgba_bytes);
 
 /* Object ids of the last frame (ground truth for segmentation, and fidelity
@@ -383,10 +423,10 @@ BLVD_API blvd_status blvd_read_items(blvd_runtime* rt, uint32_t* ids, size_t cou
 
 
 /* ---- position tracking ---------------------------------------------------------
- * Feed GNSS fixes and odometry from any thread; blvd fuses them (EKF), matches
- * the vehicle onto the street graph (HMM, fixed-lag Viterbi) and, once a pose
- * is matched, blvd_render() uses it as the camera unless blvd_set_pose_*() was
- * called later. Times are seconds on one clock the host chooses. */
+ * Feed GNSS fixes and odometry from any thread; blvd fuses them (EKF) and
+ * matches the vehicle onto the street graph (HMM, fixed-lag Viterbi). With
+ * blvd_set_camera_source(rt, BLVD_CAMERA_TRACKED), blvd_render() draws from
+ * the tracked pose. Times are seconds on one clock the host chooses. */
 
 /* Bits of blvd_gnss_fix.flags: which fields hold a value. */
 #define BLVD_GNSS_HAS_TIME 0x01u
@@ -397,6 +437,15 @@ BLVD_API blvd_status blvd_read_items(blvd_runtime* rt, uint32_t* ids, size_t cou
 #define BLVD_GNSS_HAS_HDOP 0x20u
 #define BLVD_GNSS_HAS_HACC 0x40u
 
+/* The fix's dimension, as gpsd's TPV "mode". */
+typedef enum blvd_gnss_mode {
+  BLVD_GNSS_MODE_UNKNOWN = 0, /* not reported */
+  BLVD_GNSS_MODE_NO_FIX = 1,
+  BLVD_GNSS_MODE_2D = 2,
+  BLVD_GNSS_MODE_3D = 3,
+  BLVD_GNSS_MODE_FORCE_32 = 0x7fffffff
+} blvd_gnss_mode;
+
 typedef struct blvd_gnss_fix {
   uint32_t struct_size; /* sizeof(blvd_gnss_fix) */
   double t;             /* host clock, seconds, when the position was valid */
@@ -405,7 +454,7 @@ typedef struct blvd_gnss_fix {
   float track_deg;      /* course over ground, degrees true */
   float hdop;
   float h_acc_m;        /* horizontal accuracy (GST), metres */
-  int32_t mode;         /* 1 no fix, 2 2D, 3 3D (as gpsd) */
+  blvd_gnss_mode mode;  /* as gpsd's TPV mode */
   uint32_t flags;       /* BLVD_GNSS_HAS_* */
 } blvd_gnss_fix;
 
@@ -440,7 +489,7 @@ typedef struct blvd_pose {
   double lat, lon;           /* WGS 84 degrees */
   double heading_deg;        /* clockwise from north */
   double speed_mps;
-  uint32_t cell;             /* matched cell (UINT32_MAX: none) */
+  uint32_t cell;             /* matched cell (BLVD_NO_CELL: none) */
   double arc_m;              /* distance along the cell */
   double lateral_m;          /* offset from the cell's centre line, right positive */
   double confidence;         /* posterior probability of the matched cell, 0..1 */
@@ -456,17 +505,20 @@ typedef struct blvd_pose {
   double heading_sigma_deg;
 } blvd_pose;
 
-/* Queues a GNSS fix. Any thread; no allocation. Errors: BLVD_ERR_INVALID_ARG
- * for a NULL fix. A full queue drops its oldest entry (counted). */
+/* Queues a GNSS fix. Any thread; no allocation; sets no last error. Errors:
+ * BLVD_ERR_INVALID_ARG for a NULL fix. A full queue drops its oldest entry
+ * (counted). */
 BLVD_API blvd_status blvd_feed_gnss(blvd_runtime* rt, const blvd_gnss_fix* fix);
 
 /* Queues an odometry sample (speed, yaw rate, wheel speeds, gear, heading from
- * CAN or a simulator). Any thread; no allocation. */
+ * CAN or a simulator). Any thread; no allocation; sets no last error. Errors:
+ * BLVD_ERR_INVALID_ARG for a NULL sample. */
 BLVD_API blvd_status blvd_feed_odometry(blvd_runtime* rt, const blvd_odometry* odo);
 
-/* Processes what was fed up to time t and returns the tracked pose. Call on the
- * render thread (blvd_render calls it with the last fed time when tracking is
- * active). */
+/* Processes what was fed up to time t and writes the tracked pose up to
+ * pose->struct_size. Render thread (blvd_render calls it with the newest fed
+ * time when the camera source is BLVD_CAMERA_TRACKED). Errors:
+ * BLVD_ERR_INVALID_ARG for a NULL pose or a non-finite t. */
 BLVD_API blvd_status blvd_get_pose(blvd_runtime* rt, double t, blvd_pose* pose);
 
 /* The odometry's calibration, which the filter learns from GNSS while driving: the wheel-speed
@@ -509,11 +561,11 @@ typedef struct blvd_start_pose {
 } blvd_start_pose;
 
 /* Starts tracking from `sp` instead of waiting for the first fix (a drive under way is forgotten;
- * what was fed and not yet processed is kept). blvd_render follows the tracked pose from then on.
+ * what was fed and not yet processed is kept); the camera follows it with BLVD_CAMERA_TRACKED.
  * Fixes that disagree with it (the car was moved while parked) are rejected at first and, after
  * five in a row, taken instead. Render thread. Errors: BLVD_ERR_INVALID_ARG for a latitude or
- * longitude out of range, a negative sigma, a non-finite field or a struct_size that does not
- * cover heading_sigma_deg; nothing changes then. */
+ * longitude out of range, a negative sigma, a non-finite field or a nonzero struct_size that does
+ * not cover heading_sigma_deg; nothing changes then. */
 BLVD_API blvd_status blvd_set_start_pose(blvd_runtime* rt, const blvd_start_pose* sp);
 
 /* ---- CAN frames through a vehicle profile ---------------------------------------

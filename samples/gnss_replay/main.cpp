@@ -108,6 +108,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   blvd_runtime* rt = runtime.rt;
+  blvd_set_camera_source(rt, BLVD_CAMERA_TRACKED);  // frames follow the tracked vehicle
   gnss_replay::FrameWriter frames;
   samples::JsonLines poses;
   if (!frames.open(rt, o.width, o.height, o.frames_dir, o.frame_wait_ms, err) || !poses.open(o.poses_path, err)) {

@@ -3,7 +3,7 @@
 // socket's filters. The tracker is fed either the whole frame, which the C
 // API decodes itself with its own profile (blvd_feed_can_frame: vcan_drive's
 // C API runtime), or the decoded blvd_odometry (blvd_feed_odometry's
-// equivalent: the direct tracker of vcan_drive_track and --no-render). Both
+// equivalent: the blvd_tracker of vcan_drive_track and --no-render). Both
 // profiles see the same frames, so the log holds what the tracker was fed.
 #pragma once
 

@@ -1,16 +1,13 @@
 // The tracker vcan_drive feeds, behind one small interface so the program does
 // not care which implementation it has:
 //
-//   makeCapiTracking()    the public C API: a blvd_runtime on a package, with a
-//                         GL backend; tracks and renders (tracking_capi.cpp).
-//   makeDirectTracking()  sdk/track's Tracker, with the package's street graph
-//                         when one is given, and no GL (tracking_direct.cpp).
-//
-// The second exists only because blvd_runtime_create() needs both a package and
-// a GL context, so a track-only host (the qemu guest of tests/vcan, an ECU
-// without a GPU) cannot use the C API today. Its inputs and outputs are the C
-// API's own structs, so when the C API gains a track-only runtime it is replaced
-// by makeCapiTracking() without touching the rest of the program.
+//   makeCapiTracking()     a blvd_runtime on a package, with a GL backend;
+//                          tracks and renders (tracking_capi.cpp).
+//   makeTrackerTracking()  a blvd_tracker: the package's street graph when one
+//                          is given, no GL (tracking_tracker.cpp), for a
+//                          track-only host (the qemu guest of tests/vcan, an
+//                          ECU without a GPU).
+// Both are the public C API: the same feeds give the same poses.
 #pragma once
 
 #include <memory>
@@ -23,10 +20,10 @@ namespace vcan_drive {
 class Tracking {
  public:
   virtual ~Tracking() = default;
-  virtual const char* name() const = 0;  // "capi" or "direct"
+  virtual const char* name() const = 0;  // "capi" or "tracker"
   virtual blvd_status feedOdometry(const blvd_odometry& odo) = 0;
-  // The C API implementation decodes CAN frames itself (blvd_feed_can_frame
-  // with the DBC and vehicle of TrackingDesc); the direct one is fed odometry.
+  // The runtime implementation decodes CAN frames itself (blvd_feed_can_frame
+  // with the DBC and vehicle of TrackingDesc); the tracker one is fed odometry.
   virtual bool feedsCanFrames() const { return false; }
   virtual blvd_status feedCanFrame(const blvd_can_frame& frame) {
     (void)frame;
@@ -39,8 +36,6 @@ class Tracking {
   virtual blvd_status setCalibration(const blvd_odometry_calibration& in) = 0;
   // Tracking from a known pose before the first fix (blvd_set_start_pose).
   virtual blvd_status setStartPose(const blvd_start_pose& in) = 0;
-  // Package origin (degrees); 0, 0 when there is none.
-  virtual void origin(double& lat, double& lon) const = 0;
 
   // Rendering; only the C API implementation can.
   virtual bool canRender() const { return false; }
@@ -62,7 +57,7 @@ class Tracking {
 };
 
 struct TrackingDesc {
-  std::string package;      // .blvd; empty: none (direct tracking only)
+  std::string package;      // .blvd; empty: none (tracker only, no map matching)
   uint32_t width = 800, height = 480;
   blvd_backend backend = BLVD_BACKEND_AUTO;
   double origin_lat = 0, origin_lon = 0;  // the local frame without a package
@@ -72,6 +67,6 @@ struct TrackingDesc {
 
 // Null with `err` set on failure.
 std::unique_ptr<Tracking> makeCapiTracking(const TrackingDesc& desc, std::string& err);
-std::unique_ptr<Tracking> makeDirectTracking(const TrackingDesc& desc, std::string& err);
+std::unique_ptr<Tracking> makeTrackerTracking(const TrackingDesc& desc, std::string& err);
 
 }  // namespace vcan_drive

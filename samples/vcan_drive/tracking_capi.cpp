@@ -10,14 +10,7 @@ namespace {
 class CapiTracking final : public Tracking {
  public:
   CapiTracking(blvd_runtime* rt, blvd_can_profile* profile, const blvd_runtime_desc& d)
-      : rt_(rt), profile_(profile), width_(d.width), height_(d.height) {
-    blvd_runtime_info info{};
-    info.struct_size = sizeof info;
-    if (blvd_runtime_get_info(rt_, &info) == BLVD_OK) {
-      lat_ = info.origin_lat;
-      lon_ = info.origin_lon;
-    }
-  }
+      : rt_(rt), profile_(profile), width_(d.width), height_(d.height) {}
   ~CapiTracking() override {
     blvd_can_profile_destroy(profile_);
     blvd_runtime_destroy(rt_);
@@ -40,7 +33,6 @@ class CapiTracking final : public Tracking {
     return blvd_set_odometry_calibration(rt_, &in);
   }
   blvd_status setStartPose(const blvd_start_pose& in) override { return blvd_set_start_pose(rt_, &in); }
-  void origin(double& lat, double& lon) const override { lat = lat_, lon = lon_; }
 
   bool canRender() const override { return true; }
   blvd_status render(const blvd_pose* pose, unsigned char* rgba, blvd_frame_stats& fs) override {
@@ -50,7 +42,8 @@ class CapiTracking final : public Tracking {
     // Recorded poses are drawn offline: wait for the pose's cell, so a frame
     // never shows the previous cell's blocks around a camera that has moved
     // on (it may stand inside one of them).
-    if (pose) {
+    st = blvd_set_camera_source(rt_, pose ? BLVD_CAMERA_HOST : BLVD_CAMERA_TRACKED);
+    if (st == BLVD_OK && pose) {
       st = blvd_set_pose_local(rt_, pose->camera_x, pose->camera_y, static_cast<float>(pose->camera_heading_deg),
                                static_cast<float>(pose->camera_pitch_deg));
       if (st == BLVD_OK) st = blvd_wait_resident(rt_, 30000);
@@ -74,7 +67,6 @@ class CapiTracking final : public Tracking {
   blvd_runtime* rt_;
   blvd_can_profile* profile_;
   uint32_t width_, height_;
-  double lat_ = 0, lon_ = 0;
 };
 
 }  // namespace

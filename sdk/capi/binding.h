@@ -43,9 +43,16 @@ blvd_status guarded(blvd_runtime* rt, F&& f) {
   }
 }
 
+// A NULL handle, or a call out of order.
 inline blvd_status misuse(blvd_runtime* rt, const char* what) {
   (rt ? rt->impl->last_error : t_create_error) = what;
   return BLVD_ERR_MISUSE;
+}
+
+// A NULL pointer argument.
+inline blvd_status nullArg(blvd_runtime* rt, const char* what) {
+  (rt ? rt->impl->last_error : t_create_error) = what;
+  return BLVD_ERR_INVALID_ARG;
 }
 
 }  // namespace blvd::capi

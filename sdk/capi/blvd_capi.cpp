@@ -15,6 +15,7 @@ thread_local std::string t_create_error;  // blvd_last_error(NULL)
 }  // namespace blvd::capi
 using blvd::capi::guarded;
 using blvd::capi::misuse;
+using blvd::capi::nullArg;
 using blvd::capi::t_create_error;
 
 extern "C" {
@@ -62,9 +63,9 @@ bool knownMode(int32_t m) { return m >= BLVD_MODE_BLVD && m <= BLVD_MODE_SINGLE;
 }  // namespace
 
 blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** out) {
-  if (!out) return misuse(nullptr, "blvd_runtime_create: out is NULL");
+  if (!out) return nullArg(nullptr, "blvd_runtime_create: out is NULL");
   *out = nullptr;
-  if (!desc) return misuse(nullptr, "blvd_runtime_create: desc is NULL");
+  if (!desc) return nullArg(nullptr, "blvd_runtime_create: desc is NULL");
   t_create_error.clear();
   const blvd_runtime_desc d = blvd_runtime_desc_defaults(desc);
   if (!d.package_path || !*d.package_path) {
@@ -133,7 +134,7 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
 
 blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const char* package_path, uint64_t* cpu_bytes,
                                  uint64_t* gpu_bytes) {
-  if (!desc || !cpu_bytes) return misuse(nullptr, "blvd_memory_required: desc or cpu_bytes is NULL");
+  if (!desc || !cpu_bytes) return nullArg(nullptr, "blvd_memory_required: desc or cpu_bytes is NULL");
   t_create_error.clear();
   blvd_runtime_desc d = blvd_runtime_desc_defaults(desc);
   if (package_path) d.package_path = package_path;
@@ -167,13 +168,23 @@ const char* blvd_last_error(const blvd_runtime* rt) {
 
 blvd_status blvd_runtime_get_info(blvd_runtime* rt, blvd_runtime_info* info) {
   if (!rt) return misuse(nullptr, "blvd_runtime_get_info: rt is NULL");
-  if (!info) return misuse(rt, "blvd_runtime_get_info: info is NULL");
+  if (!info) return nullArg(rt, "blvd_runtime_get_info: info is NULL");
   return guarded(rt, [&] { rt->impl->info(info); });
 }
 
 blvd_status blvd_set_pose_geo(blvd_runtime* rt, double lat, double lon, float heading_deg, float pitch_deg) {
   if (!rt) return misuse(nullptr, "blvd_set_pose_geo: rt is NULL");
   return guarded(rt, [&] { rt->impl->setPoseGeo(lat, lon, heading_deg, pitch_deg); });
+}
+
+blvd_status blvd_set_camera_source(blvd_runtime* rt, blvd_camera_source source) {
+  if (!rt) return misuse(nullptr, "blvd_set_camera_source: rt is NULL");
+  const int32_t v = blvd::core::rawEnum(source);
+  if (v != BLVD_CAMERA_HOST && v != BLVD_CAMERA_TRACKED) {
+    rt->impl->last_error = "blvd_set_camera_source: unknown source " + std::to_string(v);
+    return BLVD_ERR_INVALID_ARG;
+  }
+  return guarded(rt, [&] { rt->impl->setCameraSource(source); });
 }
 
 blvd_status blvd_set_pose_local(blvd_runtime* rt, double x, double y, float heading_deg, float pitch_deg) {
@@ -193,13 +204,13 @@ blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mode, float 
 
 blvd_status blvd_runtime_stats(blvd_runtime* rt, blvd_stats* stats) {
   if (!rt) return misuse(nullptr, "blvd_runtime_stats: rt is NULL");
-  if (!stats) return misuse(rt, "blvd_runtime_stats: stats is NULL");
+  if (!stats) return nullArg(rt, "blvd_runtime_stats: stats is NULL");
   return guarded(rt, [&] { rt->impl->stats(stats); });
 }
 
 blvd_status blvd_render_views(blvd_runtime* rt, const blvd_view* views, uint32_t n, blvd_frame_stats* stats) {
   if (!rt) return misuse(nullptr, "blvd_render_views: rt is NULL");
-  if (!views || n == 0 || n > 16) return misuse(rt, "blvd_render_views: need 1..16 views");
+  if (!views || n == 0 || n > 16) return nullArg(rt, "blvd_render_views: need 1..16 views");
   return guarded(rt, [&] { rt->impl->render(stats, views, n); });
 }
 
@@ -220,13 +231,13 @@ blvd_status blvd_render(blvd_runtime* rt, blvd_frame_stats* stats) {
 
 blvd_status blvd_read_pixels(blvd_runtime* rt, void* rgba, size_t rgba_bytes) {
   if (!rt) return misuse(nullptr, "blvd_read_pixels: rt is NULL");
-  if (!rgba) return misuse(rt, "blvd_read_pixels: rgba is NULL");
+  if (!rgba) return nullArg(rt, "blvd_read_pixels: rgba is NULL");
   return guarded(rt, [&] { rt->impl->readPixels(rgba, rgba_bytes); });
 }
 
 blvd_status blvd_read_items(blvd_runtime* rt, uint32_t* ids, size_t count) {
   if (!rt) return misuse(nullptr, "blvd_read_items: rt is NULL");
-  if (!ids) return misuse(rt, "blvd_read_items: ids is NULL");
+  if (!ids) return nullArg(rt, "blvd_read_items: ids is NULL");
   return guarded(rt, [&] { rt->impl->readItems(ids, count); });
 }
 

@@ -24,15 +24,17 @@ struct blvd_tracker {
 
 using blvd::capi::guarded;
 using blvd::capi::misuse;
+using blvd::capi::nullArg;
 using blvd::capi::t_create_error;
 namespace core = blvd::core;
 namespace track = blvd::track;
 
 namespace {
 
-// Every field of an input struct is needed; a later, longer struct is read up to them.
+// Every field of these input structs is needed (they have no defaults): a
+// struct_size of 0 (this header's size) or one that covers them all.
 void needStructSize(const char* fn, uint32_t got, size_t needed) {
-  if (got < needed)
+  if (got != 0 && got < needed)
     throw core::Error(core::Status::InvalidArg, std::string(fn) + ": struct_size " + std::to_string(got) +
                                                     " is smaller than the " + std::to_string(needed) +
                                                     " bytes it needs");
@@ -113,25 +115,25 @@ blvd_status blvd_feed_odometry(blvd_runtime* rt, const blvd_odometry* odo) {
 
 blvd_status blvd_get_pose(blvd_runtime* rt, double t, blvd_pose* pose) {
   if (!rt) return misuse(nullptr, "blvd_get_pose: rt is NULL");
-  if (!pose) return misuse(rt, "blvd_get_pose: pose is NULL");
+  if (!pose) return nullArg(rt, "blvd_get_pose: pose is NULL");
   return guarded(rt, [&] { blvd::capi::toBlvd(rt->impl->pose(t), rt->impl->frame(), pose); });
 }
 
 blvd_status blvd_get_odometry_calibration(blvd_runtime* rt, blvd_odometry_calibration* cal) {
   if (!rt) return misuse(nullptr, "blvd_get_odometry_calibration: rt is NULL");
-  if (!cal) return misuse(rt, "blvd_get_odometry_calibration: cal is NULL");
+  if (!cal) return nullArg(rt, "blvd_get_odometry_calibration: cal is NULL");
   return guarded(rt, [&] { blvd::capi::toBlvd(rt->impl->tracker().calibration(), cal); });
 }
 
 blvd_status blvd_set_odometry_calibration(blvd_runtime* rt, const blvd_odometry_calibration* cal) {
   if (!rt) return misuse(nullptr, "blvd_set_odometry_calibration: rt is NULL");
-  if (!cal) return misuse(rt, "blvd_set_odometry_calibration: cal is NULL");
+  if (!cal) return nullArg(rt, "blvd_set_odometry_calibration: cal is NULL");
   return guarded(rt, [&] { setCalibration(rt->impl->tracker(), "blvd_set_odometry_calibration", *cal); });
 }
 
 blvd_status blvd_set_start_pose(blvd_runtime* rt, const blvd_start_pose* sp) {
   if (!rt) return misuse(nullptr, "blvd_set_start_pose: rt is NULL");
-  if (!sp) return misuse(rt, "blvd_set_start_pose: sp is NULL");
+  if (!sp) return nullArg(rt, "blvd_set_start_pose: sp is NULL");
   return guarded(rt, [&] {
     setStartPose("blvd_set_start_pose", *sp, [&](const track::StartPose& s) { return rt->impl->setStartPose(s); });
   });
@@ -142,12 +144,12 @@ blvd_status blvd_set_start_pose(blvd_runtime* rt, const blvd_start_pose* sp) {
 blvd_status blvd_tracker_create(const blvd_tracker_desc* desc, blvd_tracker** out) {
   if (!out) {
     t_create_error = "blvd_tracker_create: out is NULL";
-    return BLVD_ERR_MISUSE;
+    return BLVD_ERR_INVALID_ARG;
   }
   *out = nullptr;
   if (!desc) {
     t_create_error = "blvd_tracker_create: desc is NULL";
-    return BLVD_ERR_MISUSE;
+    return BLVD_ERR_INVALID_ARG;
   }
   t_create_error.clear();
   const blvd_tracker_desc d = core::sized(*desc);

@@ -98,9 +98,9 @@ static_assert(static_cast<int>(vehicle::SpeedSource::Auto) == BLVD_CAN_SPEED_AUT
               "speed source enums");
 
 blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_profile** out) {
-  if (!out) return fail(BLVD_ERR_MISUSE, "blvd_can_profile_create: out is NULL");
+  if (!out) return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: out is NULL");
   *out = nullptr;
-  if (!desc) return fail(BLVD_ERR_MISUSE, "blvd_can_profile_create: desc is NULL");
+  if (!desc) return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: desc is NULL");
   const blvd_can_profile_desc d = blvd::core::sized(*desc);
   if (!d.dbc_path || !*d.dbc_path) return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: desc.dbc_path is required");
   using blvd::core::rawEnum;
@@ -139,7 +139,8 @@ blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_
 void blvd_can_profile_destroy(blvd_can_profile* profile) { delete profile; }
 
 blvd_status blvd_can_profile_decode(blvd_can_profile* profile, const blvd_can_frame* frame, blvd_odometry* odo) {
-  if (!profile || !frame || !odo) return BLVD_ERR_INVALID_ARG;
+  if (!profile) return BLVD_ERR_MISUSE;
+  if (!frame || !odo) return BLVD_ERR_INVALID_ARG;
   return decodeLocked(profile, *frame, *odo);
 }
 

@@ -40,7 +40,7 @@ inline track::GnssFix toTrack(const blvd_gnss_fix& in) {
   g.track_deg = f.track_deg;
   g.hdop = f.hdop;
   g.h_acc_m = f.h_acc_m;
-  g.mode = f.mode;
+  g.mode = core::rawEnum(f.mode);
   g.flags = f.flags;  // BLVD_GNSS_HAS_* == track::GnssFlag bits
   return g;
 }

@@ -2,11 +2,7 @@
 // Shared backend: error names, extension checks, and context creation on an
 // already initialised display. Internal to sdk/render.
 #pragma once
-#ifndef EGL_NO_X11
-#define EGL_NO_X11  // no Xlib: its macros (None, Status, Bool) break C++ code
-#endif
-#include <EGL/egl.h>
-#include <EGL/eglext.h>
+#include "render/gl_library.h"
 
 #include <memory>
 #include <string>

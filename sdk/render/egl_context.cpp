@@ -44,7 +44,7 @@ void fail(std::string& why, const char* backend, const char* what) {
   why += ": ";
   why += what;
   why += " failed (";
-  why += errorName(eglGetError());
+  why += errorName(eglApi().GetError());
   why += ")\n";
 }
 
@@ -60,20 +60,20 @@ class EglContext final : public Context {
   // process-wide and would kill any other context on the same display, e.g.
   // a second runtime or the host's own. An initialised display costs little.
   ~EglContext() override {
-    if (eglGetCurrentContext() == ctx_) {
-      eglMakeCurrent(dpy_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    if (eglApi().GetCurrentContext() == ctx_) {
+      eglApi().MakeCurrent(dpy_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     }
-    eglDestroyContext(dpy_, ctx_);
-    if (surf_ != EGL_NO_SURFACE) eglDestroySurface(dpy_, surf_);
+    eglApi().DestroyContext(dpy_, ctx_);
+    if (surf_ != EGL_NO_SURFACE) eglApi().DestroySurface(dpy_, surf_);
   }
 
   bool makeCurrent() override {
-    if (eglGetCurrentContext() == ctx_) return true;
-    return eglMakeCurrent(dpy_, surf_, surf_, ctx_) == EGL_TRUE;
+    if (eglApi().GetCurrentContext() == ctx_) return true;
+    return eglApi().MakeCurrent(dpy_, surf_, surf_, ctx_) == EGL_TRUE;
   }
   const char* name() const override { return backend_; }
   void* getProcAddress(const char* fn) override {
-    return reinterpret_cast<void*>(eglGetProcAddress(fn));
+    return reinterpret_cast<void*>(eglApi().GetProcAddress(fn));
   }
   bool isGles() const override { return true; }
 
@@ -87,10 +87,10 @@ class EglContext final : public Context {
 }  // namespace
 
 std::unique_ptr<Context> createOnDisplay(EGLDisplay dpy, const char* backend, std::string& why) {
-  const char* exts = eglQueryString(dpy, EGL_EXTENSIONS);
+  const char* exts = eglApi().QueryString(dpy, EGL_EXTENSIONS);
   const bool surfaceless = hasExtension(exts, "EGL_KHR_surfaceless_context");
 
-  if (eglBindAPI(EGL_OPENGL_ES_API) != EGL_TRUE) {
+  if (eglApi().BindAPI(EGL_OPENGL_ES_API) != EGL_TRUE) {
     fail(why, backend, "eglBindAPI(EGL_OPENGL_ES_API)");
     return nullptr;
   }
@@ -105,7 +105,7 @@ std::unique_ptr<Context> createOnDisplay(EGLDisplay dpy, const char* backend, st
                                    EGL_NONE};
   EGLConfig config = nullptr;
   EGLint count = 0;
-  if (eglChooseConfig(dpy, config_attribs, &config, 1, &count) != EGL_TRUE || count < 1) {
+  if (eglApi().ChooseConfig(dpy, config_attribs, &config, 1, &count) != EGL_TRUE || count < 1) {
     if (surfaceless && hasExtension(exts, "EGL_KHR_no_config_context")) {
       config = EGL_NO_CONFIG_KHR;
     } else {
@@ -116,7 +116,7 @@ std::unique_ptr<Context> createOnDisplay(EGLDisplay dpy, const char* backend, st
   // 3.0 is the floor; Mesa hands out the highest compatible version (3.2).
   const EGLint ctx_attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 0,
                                 EGL_NONE};
-  EGLContext ctx = eglCreateContext(dpy, config, EGL_NO_CONTEXT, ctx_attribs);
+  EGLContext ctx = eglApi().CreateContext(dpy, config, EGL_NO_CONTEXT, ctx_attribs);
   if (ctx == EGL_NO_CONTEXT) {
     fail(why, backend, "eglCreateContext(GLES 3.0)");
     return nullptr;
@@ -124,10 +124,10 @@ std::unique_ptr<Context> createOnDisplay(EGLDisplay dpy, const char* backend, st
   EGLSurface surf = EGL_NO_SURFACE;
   if (!surfaceless) {
     const EGLint pb_attribs[] = {EGL_WIDTH, 16, EGL_HEIGHT, 16, EGL_NONE};
-    surf = config ? eglCreatePbufferSurface(dpy, config, pb_attribs) : EGL_NO_SURFACE;
+    surf = config ? eglApi().CreatePbufferSurface(dpy, config, pb_attribs) : EGL_NO_SURFACE;
     if (surf == EGL_NO_SURFACE) {
       fail(why, backend, "eglCreatePbufferSurface (no EGL_KHR_surfaceless_context)");
-      eglDestroyContext(dpy, ctx);
+      eglApi().DestroyContext(dpy, ctx);
       return nullptr;
     }
   }

@@ -18,8 +18,12 @@ bool isSoftware(PFNEGLQUERYDEVICESTRINGEXTPROC query_string, EGLDeviceEXT dev) {
 }  // namespace
 
 std::unique_ptr<Context> createEglDeviceContext(std::string& why, bool hardware_only) {
+  if (std::string e; !loadEgl(e)) {
+    why += "egl-device: " + e;
+    return nullptr;
+  }
   constexpr const char* kName = "egl-device";
-  const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+  const char* client = eglApi().QueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
   // NVIDIA's EGL advertises EGL_EXT_device_base, the older umbrella for
   // enumeration + query, instead of EGL_EXT_device_enumeration.
   const bool enumeration = egl::hasExtension(client, "EGL_EXT_device_enumeration") ||
@@ -30,11 +34,11 @@ std::unique_ptr<Context> createEglDeviceContext(std::string& why, bool hardware_
     return nullptr;
   }
   auto query_devices =
-      reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+      reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglApi().GetProcAddress("eglQueryDevicesEXT"));
   auto query_string = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
-      eglGetProcAddress("eglQueryDeviceStringEXT"));
+      eglApi().GetProcAddress("eglQueryDeviceStringEXT"));
   auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
-      eglGetProcAddress("eglGetPlatformDisplayEXT"));
+      eglApi().GetProcAddress("eglGetPlatformDisplayEXT"));
   if (!query_devices || !get_display) {
     why += kName;
     why += ": eglQueryDevicesEXT or eglGetPlatformDisplayEXT missing\n";
@@ -58,7 +62,7 @@ std::unique_ptr<Context> createEglDeviceContext(std::string& why, bool hardware_
         egl::fail(tried, kName, "eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT)");
         continue;
       }
-      if (eglInitialize(dpy, &major, &minor) != EGL_TRUE) {
+      if (eglApi().Initialize(dpy, &major, &minor) != EGL_TRUE) {
         egl::fail(tried, kName, "eglInitialize");
         continue;
       }

@@ -6,15 +6,19 @@
 namespace blvd::render {
 
 std::unique_ptr<Context> createEglSurfacelessContext(std::string& why) {
+  if (std::string e; !loadEgl(e)) {
+    why += "egl-surfaceless: " + e;
+    return nullptr;
+  }
   constexpr const char* kName = "egl-surfaceless";
-  const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+  const char* client = eglApi().QueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
   if (!egl::hasExtension(client, "EGL_MESA_platform_surfaceless")) {
     why += kName;
     why += ": EGL_MESA_platform_surfaceless not offered by this EGL\n";
     return nullptr;
   }
   auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
-      eglGetProcAddress("eglGetPlatformDisplayEXT"));
+      eglApi().GetProcAddress("eglGetPlatformDisplayEXT"));
   if (!get_display) {
     why += kName;
     why += ": eglGetPlatformDisplayEXT missing\n";
@@ -26,7 +30,7 @@ std::unique_ptr<Context> createEglSurfacelessContext(std::string& why) {
     return nullptr;
   }
   EGLint major = 0, minor = 0;
-  if (eglInitialize(dpy, &major, &minor) != EGL_TRUE) {
+  if (eglApi().Initialize(dpy, &major, &minor) != EGL_TRUE) {
     egl::fail(why, kName, "eglInitialize");
     return nullptr;
   }

@@ -14,10 +14,10 @@ class SharedContext final : public Context {
 
   // The host may switch contexts between frames; drawing into someone else's
   // context would corrupt it, so this only checks.
-  bool makeCurrent() override { return eglGetCurrentContext() == ctx_; }
+  bool makeCurrent() override { return eglApi().GetCurrentContext() == ctx_; }
   const char* name() const override { return "shared"; }
   void* getProcAddress(const char* fn) override {
-    return reinterpret_cast<void*>(eglGetProcAddress(fn));
+    return reinterpret_cast<void*>(eglApi().GetProcAddress(fn));
   }
   bool isGles() const override { return gles_; }
   bool isShared() const override { return true; }
@@ -30,13 +30,17 @@ class SharedContext final : public Context {
 }  // namespace
 
 std::unique_ptr<Context> createSharedContext(std::string& why) {
-  EGLContext ctx = eglGetCurrentContext();
+  if (std::string e; !loadEgl(e)) {
+    why += "shared: " + e;
+    return nullptr;
+  }
+  EGLContext ctx = eglApi().GetCurrentContext();
   if (ctx == EGL_NO_CONTEXT) {
     why += "shared: no EGL context is current on the calling thread\n";
     return nullptr;
   }
   EGLint client_type = EGL_OPENGL_ES_API;
-  eglQueryContext(eglGetCurrentDisplay(), ctx, EGL_CONTEXT_CLIENT_TYPE, &client_type);
+  eglApi().QueryContext(eglApi().GetCurrentDisplay(), ctx, EGL_CONTEXT_CLIENT_TYPE, &client_type);
   return std::make_unique<SharedContext>(ctx, client_type == EGL_OPENGL_ES_API);
 }
 

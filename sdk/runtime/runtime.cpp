@@ -86,14 +86,22 @@ Runtime::~Runtime() {
   ctx_.reset();
 }
 
+void Runtime::setCameraSource(blvd_camera_source source) {
+  if (source != BLVD_CAMERA_HOST && source != BLVD_CAMERA_TRACKED)
+    throw Error(Status::InvalidArg, "blvd_set_camera_source: unknown source");
+  camera_source_ = source;
+}
+
 void Runtime::setPoseLocal(double x, double y, double heading_deg, double pitch_deg) {
+  if (camera_source_ == BLVD_CAMERA_TRACKED)
+    throw Error(Status::Misuse, "blvd_set_pose_*: the camera follows the tracked pose (BLVD_CAMERA_TRACKED); "
+                                "blvd_set_camera_source(rt, BLVD_CAMERA_HOST) first");
   if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(heading_deg) || !std::isfinite(pitch_deg))
     throw Error(Status::InvalidArg, "pose has a non-finite value");
   if (pitch_deg <= -90 || pitch_deg >= 90) throw Error(Status::InvalidArg, "pitch must be within (-90, 90) degrees");
   cam_.eye_enu = {x, y, desc_.eye_height_m};
   cam_.heading_deg = std::fmod(heading_deg, 360.0);
   cam_.pitch_deg = pitch_deg;
-  manual_pose_ = true;
 }
 
 void Runtime::setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg) {

@@ -38,7 +38,10 @@ class Runtime {
   explicit Runtime(const blvd_runtime_desc& desc);
   ~Runtime();
 
-  // The host places the camera (finite values, pitch within (-90, 90)).
+  // Who places the camera: the host (setPose*) or the tracker.
+  void setCameraSource(blvd_camera_source source);
+  // The host places the camera (finite values, pitch within (-90, 90));
+  // Misuse while the tracker does.
   void setPoseLocal(double x, double y, double heading_deg, double pitch_deg);
   void setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg);
   void setMode(blvd_render_mode mode, float radius_m);
@@ -55,8 +58,7 @@ class Runtime {
 
   // Tracking. The feeds are safe from any thread and never touch last_error
   // (another thread may be reading it); pose() runs on the render thread.
-  // A feed or a start pose hands the camera to the tracker until the host
-  // sets a pose again.
+  // None of them moves the camera: setCameraSource does.
   void feedGnss(const track::GnssFix& fix);
   void feedOdometry(const track::Odometry& odo);
   const track::Pose& pose(double t);
@@ -97,11 +99,9 @@ class Runtime {
   bool rendered_ = false;
   bool items_drawn_ = false;  // readItems drew over the frame
   blvd_stats stats_{};        // the frame's own figures; the pools' are read in stats()
-  // The tracker drives the camera once it has a pose, until the host places
-  // the camera itself (blvd_set_pose_*); the next feed hands it back.
   std::unique_ptr<track::Tracker> tracker_;
-  std::atomic<bool> manual_pose_{true};
-  std::atomic<double> last_feed_t_{0.0};
+  blvd_camera_source camera_source_ = BLVD_CAMERA_HOST;  // render thread
+  std::atomic<double> last_feed_t_{0.0};  // the newest fed time, from any feeding thread
 };
 
 }  // namespace blvd::runtime

@@ -12,7 +12,6 @@ void Runtime::noteFeed(double t) {
   double seen = last_feed_t_.load();
   while (t > seen && !last_feed_t_.compare_exchange_weak(seen, t)) {
   }
-  manual_pose_ = false;
 }
 
 void Runtime::feedGnss(const track::GnssFix& fix) {
@@ -32,7 +31,7 @@ const track::Pose& Runtime::pose(double t) {
 
 bool Runtime::setStartPose(const track::StartPose& sp) {
   if (!tracker_->setStartPose(sp)) return false;
-  // Tracking drives the camera from here, at the start pose's time until something is fed.
+  // The tracked camera stands there, at the start pose's time until something is fed.
   noteFeed(sp.t);
   return true;
 }
@@ -40,7 +39,7 @@ bool Runtime::setStartPose(const track::StartPose& sp) {
 uint32_t Runtime::currentCell(double& arc_m, double& speed) {
   uint32_t cell = graph::kNone;
   arc_m = speed = 0;
-  if (!manual_pose_) {
+  if (camera_source_ == BLVD_CAMERA_TRACKED) {
     // Tracking drives the camera: the pose at the newest fed time.
     const track::Pose& p = tracker_->update(last_feed_t_.load());
     if (p.flags & track::kPoseValid) {

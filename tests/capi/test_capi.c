@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
   EXPECT(strcmp(blvd_status_string((blvd_status)12345), "unknown status") == 0);
 
   /* Misuse and bad arguments never crash. */
-  EXPECT(blvd_runtime_create(NULL, &rt) == BLVD_ERR_MISUSE);
+  EXPECT(blvd_runtime_create(NULL, &rt) == BLVD_ERR_INVALID_ARG);
   EXPECT(rt == NULL);
   EXPECT(blvd_render(NULL, NULL) == BLVD_ERR_MISUSE);
   EXPECT(blvd_set_pose_local(NULL, 0, 0, 0, 0) == BLVD_ERR_MISUSE);
@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
   EXPECT(info.backend != NULL && info.gl_renderer != NULL);
   EXPECT(fabs(info.origin_lat - 43.73) < 0.1 && fabs(info.origin_lon - 7.42) < 0.1); /* Monaco */
 
-  EXPECT(blvd_read_pixels(rt, NULL, 0) == BLVD_ERR_MISUSE);
+  EXPECT(blvd_read_pixels(rt, NULL, 0) == BLVD_ERR_INVALID_ARG);
   EXPECT(blvd_set_pose_geo(rt, 123.0, 7.42, 0, 0) == BLVD_ERR_INVALID_ARG);
   EXPECT(strstr(blvd_last_error(rt), "latitude") != NULL);
   EXPECT(blvd_set_pose_local(rt, NAN, 0, 0, 0) == BLVD_ERR_INVALID_ARG);
@@ -158,7 +158,7 @@ int main(int argc, char** argv) {
     cal.speed_scale = 1.0;
     cal.struct_size = 8;
     EXPECT(blvd_set_odometry_calibration(rt, &cal) == BLVD_ERR_INVALID_ARG);
-    EXPECT(blvd_set_odometry_calibration(rt, NULL) == BLVD_ERR_MISUSE);
+    EXPECT(blvd_set_odometry_calibration(rt, NULL) == BLVD_ERR_INVALID_ARG);
     EXPECT(blvd_get_odometry_calibration(NULL, &cal) == BLVD_ERR_MISUSE);
     memset(&cal, 0, sizeof cal);
     cal.struct_size = sizeof cal;
@@ -178,7 +178,7 @@ int main(int argc, char** argv) {
       fix.speed_mps = 10.0f;
       fix.track_deg = 211.0f;
       fix.hdop = 1.0f;
-      fix.mode = 3;
+      fix.mode = BLVD_GNSS_MODE_3D;
       fix.flags = BLVD_GNSS_HAS_TIME | BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_SPEED | BLVD_GNSS_HAS_TRACK |
                   BLVD_GNSS_HAS_HDOP;
       EXPECT(blvd_feed_gnss(rt, &fix) == BLVD_OK);
@@ -204,8 +204,9 @@ int main(int argc, char** argv) {
     EXPECT(blvd_get_pose(rt, NAN, &pose) == BLVD_ERR_INVALID_ARG);
     memset(&fs, 0, sizeof fs);
     fs.struct_size = sizeof fs;
+    EXPECT(blvd_set_camera_source(rt, BLVD_CAMERA_TRACKED) == BLVD_OK);
     EXPECT(blvd_render(rt, &fs) == BLVD_OK); /* the camera follows the tracked pose */
-    EXPECT(fs.cell != 0xffffffffu);
+    EXPECT(fs.cell != BLVD_NO_CELL);
 
     /* Key-off: the pose to keep, with its sigmas; key-on: the next drive starts from it
      * and has a matched pose, dead reckoning, before any fix. */
@@ -256,7 +257,7 @@ int main(int argc, char** argv) {
       sp.struct_size = (uint32_t)offsetof(blvd_start_pose, heading_sigma_deg);
       EXPECT(blvd_set_start_pose(rt, &sp) == BLVD_ERR_INVALID_ARG);
       EXPECT(strstr(blvd_last_error(rt), "struct_size") != NULL);
-      EXPECT(blvd_set_start_pose(rt, NULL) == BLVD_ERR_MISUSE);
+      EXPECT(blvd_set_start_pose(rt, NULL) == BLVD_ERR_INVALID_ARG);
       EXPECT(blvd_set_start_pose(NULL, &sp) == BLVD_ERR_MISUSE);
       EXPECT(blvd_get_pose(rt, 500.0, &again) == BLVD_OK);
       EXPECT(fabs(again.lat - pose.lat) < 1e-7 && fabs(again.lon - pose.lon) < 1e-7);

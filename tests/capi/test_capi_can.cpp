@@ -109,7 +109,7 @@ TEST(CapiCan, RefusesBadFramesAndDescriptors) {
   EXPECT_NE(std::string(blvd_last_error(nullptr)).find("ESP_19"), std::string::npos) << blvd_last_error(nullptr);
   d.vehicle = static_cast<blvd_vehicle>(7);
   EXPECT_EQ(blvd_can_profile_create(&d, &p), BLVD_ERR_INVALID_ARG);
-  EXPECT_EQ(blvd_can_profile_create(nullptr, &p), BLVD_ERR_MISUSE);
+  EXPECT_EQ(blvd_can_profile_create(nullptr, &p), BLVD_ERR_INVALID_ARG);
   blvd_can_profile_destroy(nullptr);  // no-op
 
   blvd_vehicle v;
@@ -160,7 +160,7 @@ TEST(CapiCan, FeedsFromManyThreadsReachTheTracker) {
   fix.speed_mps = 10;
   fix.track_deg = 0;
   fix.h_acc_m = 1;
-  fix.mode = 3;
+  fix.mode = BLVD_GNSS_MODE_3D;
   fix.flags = BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_SPEED | BLVD_GNSS_HAS_TRACK | BLVD_GNSS_HAS_HACC;
   ASSERT_EQ(blvd_feed_gnss(rt, &fix), BLVD_OK);
   blvd_pose p0{};

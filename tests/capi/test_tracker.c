@@ -28,7 +28,7 @@ static void feedDrive(blvd_tracker* tr, blvd_runtime* rt) {
     fix.speed_mps = 10.0f;
     fix.track_deg = (float)kHdgDeg;
     fix.hdop = 1.0f;
-    fix.mode = 3;
+    fix.mode = BLVD_GNSS_MODE_3D;
     fix.flags = BLVD_GNSS_HAS_TIME | BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_SPEED | BLVD_GNSS_HAS_TRACK |
                 BLVD_GNSS_HAS_HDOP;
     memset(&odo, 0, sizeof odo);
@@ -50,10 +50,10 @@ static void feedDrive(blvd_tracker* tr, blvd_runtime* rt) {
 static void checkCreateErrors(const char* self) {
   blvd_tracker_desc d;
   blvd_tracker* tr = NULL;
-  EXPECT(blvd_tracker_create(NULL, &tr) == BLVD_ERR_MISUSE && tr == NULL);
+  EXPECT(blvd_tracker_create(NULL, &tr) == BLVD_ERR_INVALID_ARG && tr == NULL);
   memset(&d, 0, sizeof d);
   d.struct_size = sizeof d;
-  EXPECT(blvd_tracker_create(&d, NULL) == BLVD_ERR_MISUSE);
+  EXPECT(blvd_tracker_create(&d, NULL) == BLVD_ERR_INVALID_ARG);
   d.package_path = "/nonexistent/city.blvd";
   EXPECT(blvd_tracker_create(&d, &tr) == BLVD_ERR_IO && tr == NULL);
   EXPECT(strstr(blvd_tracker_last_error(NULL), "/nonexistent/city.blvd") != NULL);

@@ -113,7 +113,7 @@ TEST(Items, TheIdsReplaceTheFrameUntilTheNextRender) {
   ASSERT_EQ(blvd_render(r.rt, nullptr), BLVD_OK);
   EXPECT_EQ(blvd_read_items(r.rt, ids.data(), ids.size() - 1), BLVD_ERR_INVALID_ARG);
   EXPECT_NE(std::string(blvd_last_error(r.rt)).find("id buffer"), std::string::npos);
-  EXPECT_EQ(blvd_read_items(r.rt, nullptr, ids.size()), BLVD_ERR_MISUSE);
+  EXPECT_EQ(blvd_read_items(r.rt, nullptr, ids.size()), BLVD_ERR_INVALID_ARG);
   EXPECT_EQ(blvd_read_items(r.rt, ids.data(), ids.size()), BLVD_OK);
   EXPECT_EQ(blvd_read_pixels(r.rt, px.data(), px.size()), BLVD_ERR_MISUSE);
   ASSERT_EQ(blvd_render(r.rt, nullptr), BLVD_OK);

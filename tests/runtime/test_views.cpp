@@ -131,7 +131,7 @@ TEST(Views, ViewsOutsideTheFrameAreRefused) {
   v = view();
   v.fov_y_deg = 200.f;
   EXPECT_EQ(blvd_render_views(r.rt, &v, 1, nullptr), BLVD_ERR_INVALID_ARG);
-  EXPECT_EQ(blvd_render_views(r.rt, &v, 0, nullptr), BLVD_ERR_MISUSE);
+  EXPECT_EQ(blvd_render_views(r.rt, &v, 0, nullptr), BLVD_ERR_INVALID_ARG);
 }
 
 }  // namespace

@@ -84,7 +84,7 @@ refused() {  # N CONTENT MESSAGE_PATTERN
   [ "$(cat "$cal")" = "$2" ] || fail "a refused calibration file was overwritten"
 }
 refused 3 '{"speed_scale": 1.01' "$cal: not JSON"
-refused 4 '{"speed_scale": 3, "speed_scale_sigma": 0, "yaw_rate_bias_dps": 0, "yaw_rate_bias_sigma_dps": 0}' "$cal: .*refused"
+refused 4 '{"speed_scale": 3, "speed_scale_sigma": 0, "yaw_rate_bias_dps": 0, "yaw_rate_bias_sigma_dps": 0}' "$cal: .*speed_scale 3 .*must lie in"
 refused 5 '{"speed_scale": 1.01}' "$cal: no number \"speed_scale_sigma\""
 good='"speed_scale": 1.01, "speed_scale_sigma": 0, "yaw_rate_bias_dps": 0, "yaw_rate_bias_sigma_dps": 0'
 refused 6 "{$good, \"start_pose\": {\"lat\": 43.7}}" "$cal: start_pose: no number \"lon\""

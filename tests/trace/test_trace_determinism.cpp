@@ -61,6 +61,9 @@ Session run(const std::vector<Input>& inputs, const std::vector<double>& epochs,
   desc.mode = BLVD_MODE_FULL;
   blvd_runtime* rt = nullptr;
   EXPECT_EQ(blvd_runtime_create(&desc, &rt), BLVD_OK) << blvd_last_error(nullptr);
+  if (rt) {
+    EXPECT_EQ(blvd_set_camera_source(rt, BLVD_CAMERA_TRACKED), BLVD_OK);  // frames follow the feeds
+  }
   blvd_can_profile* prof = createToyotaProfile();
   if (!rt || !prof) {
     blvd_can_profile_destroy(prof);

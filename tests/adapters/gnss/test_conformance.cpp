@@ -50,22 +50,32 @@ namespace {
 
 using namespace blvd::gnss;
 
-const char* const kLogs[] = {
-    "beidou-bd.log",
-    "bt451.log",
-    "bu353-glonass.log",
-    "firefly-II.log",
-    "garmin-geko201.log",
-    "gp-320fw-2019-04-07-coldboot.log",
-    "haicom-305N.log",
-    "holux-gm-210.log",
-    "nmea-fuzzy-cases.log",
-    "nmea-rtk.log",
-    "quectel-eg25-g.log",
-    "skytraq-PX1172RH_DS.log",
-    "telit-pls83-w.log",
-    "ublox-zed-f9p-nmea.log",
+// Each log with the epochs its .chk holds by the rules above: gpsd TPVs of
+// mode >= 2 (fix epochs) and of mode 1, one per epoch. The counts are
+// asserted, so that a change in how epochs are read shows here and not only
+// as a smaller figure in the docs.
+struct Log {
+  const char* name;
+  int fix_epochs, nofix_epochs;
 };
+constexpr Log kLogs[] = {
+    {"beidou-bd.log", 4, 0},
+    {"bt451.log", 12, 0},
+    {"bu353-glonass.log", 9, 10},
+    {"firefly-II.log", 23, 0},
+    {"garmin-geko201.log", 0, 0},
+    {"gp-320fw-2019-04-07-coldboot.log", 1, 8},
+    {"haicom-305N.log", 67, 0},
+    {"holux-gm-210.log", 0, 0},
+    {"nmea-fuzzy-cases.log", 14, 0},
+    {"nmea-rtk.log", 122, 0},
+    {"quectel-eg25-g.log", 23, 2},
+    {"skytraq-PX1172RH_DS.log", 9, 0},
+    {"telit-pls83-w.log", 10, 0},
+    {"ublox-zed-f9p-nmea.log", 29, 0},
+};
+// The figure docs/benchmarks.md gives.
+constexpr int kTotalFixEpochs = 323;
 
 std::string readFile(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
@@ -293,10 +303,16 @@ Result compare(const std::string& log, const std::map<std::string, Fix>& ours, c
   return r;
 }
 
-class Conformance : public ::testing::TestWithParam<const char*> {};
+class Conformance : public ::testing::TestWithParam<Log> {};
+
+TEST(ConformanceLogs, FixEpochsAddUpToTheDocumentedTotal) {
+  int total = 0;
+  for (const Log& l : kLogs) total += l.fix_epochs;
+  EXPECT_EQ(total, kTotalFixEpochs);
+}
 
 TEST_P(Conformance, FixesMatchGpsdTpv) {
-  const std::string log = GetParam();
+  const std::string log = GetParam().name;
   const std::string bytes = readFile(dataPath(log));
   ASSERT_FALSE(bytes.empty()) << dataPath(log);
   const Reference ref = readChk(dataPath(log + ".chk"));
@@ -328,6 +344,8 @@ TEST_P(Conformance, FixesMatchGpsdTpv) {
       r.nofix_matched, r.nofix_epochs, untimed_found, ref.untimed_pos.size(), ref.stale, fixes.size(), updates);
   for (const auto& f : r.failures) ADD_FAILURE() << f;
   EXPECT_EQ(r.fix_matched, r.fix_epochs);
+  EXPECT_EQ(r.fix_epochs, GetParam().fix_epochs) << log;
+  EXPECT_EQ(r.nofix_epochs, GetParam().nofix_epochs) << log;
 
   // Streaming must not change the result: the same fixes byte by byte, and
   // without early emission (closing each epoch only when the next begins).
@@ -350,7 +368,7 @@ TEST_P(Conformance, FixesMatchGpsdTpv) {
 }
 
 INSTANTIATE_TEST_SUITE_P(GpsdLogs, Conformance, ::testing::ValuesIn(kLogs), [](const auto& param_info) {
-  std::string n = param_info.param;
+  std::string n = param_info.param.name;
   for (char& c : n)
     if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
   return n;

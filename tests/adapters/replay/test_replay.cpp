@@ -34,7 +34,7 @@ blvd_gnss_fix makeFix(double t, double lat, double lon) {
   f.speed_mps = 10.0f;
   f.track_deg = 211.0f;
   f.hdop = 0.9f;
-  f.mode = 3;
+  f.mode = BLVD_GNSS_MODE_3D;
   f.flags = BLVD_GNSS_HAS_TIME | BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_ALT | BLVD_GNSS_HAS_SPEED |
             BLVD_GNSS_HAS_TRACK | BLVD_GNSS_HAS_HDOP;
   return f;
@@ -308,7 +308,7 @@ TEST(Replay, RecordedOutageAndMidnightReplayEachFixOnce) {
       f = blvd_gnss_fix{};
       f.struct_size = sizeof f;
       f.t = t;
-      f.mode = 1;
+      f.mode = BLVD_GNSS_MODE_NO_FIX;
       f.flags = BLVD_GNSS_HAS_TIME;
     } else if (k < 18) {  // with an accuracy (not a multiple of a millimetre times sqrt 2)
       f.h_acc_m = 1.7f + 0.01f * static_cast<float>(k);

@@ -37,7 +37,7 @@ TEST(ReplayRuntime, SyntheticTraceGivesValidPose) {
     f.speed_mps = 10.0f;
     f.track_deg = 211.0f;
     f.hdop = 1.0f;
-    f.mode = 3;
+    f.mode = BLVD_GNSS_MODE_3D;
     f.flags = BLVD_GNSS_HAS_TIME | BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_SPEED | BLVD_GNSS_HAS_TRACK |
               BLVD_GNSS_HAS_HDOP;
     ASSERT_TRUE(rec.record(f));
