@@ -820,222 +820,257 @@ void Renderer::release(MeshHandle h) {
   impl_->free_slots.push_back(index);
 }
 
+// What every draw of a frame shares: the eye, the view and clip transforms,
+// the frustum and the fog.
+struct FrameView {
+  glm::dvec3 eye;
+  glm::dmat4 view, clip;
+  glm::mat4 clip_f;
+  Frustum frustum;
+  float inv_fog2;
+};
+
+namespace {
+
+FrameView frameView(const Camera& cam, const Look& look) {
+  FrameView v;
+  v.eye = enuToGltf(cam.eye_enu);
+  v.view = viewRotation(cam);
+  v.clip = projection(cam) * v.view;
+  v.clip_f = glm::mat4(v.clip);
+  v.frustum = Frustum::fromClip(v.clip);
+  const float fog_d = look.fog_distance_m > 0.0f ? look.fog_distance_m : static_cast<float>(0.4 * cam.far_m);
+  v.inv_fog2 = 1.0f / (fog_d * fog_d);
+  return v;
+}
+
+void applyLook(const GlApi& gl, const Renderer::Impl& m, const Uniforms& u, float inv_fog2) {
+  gl.Uniform3f(u.sun_dir, m.sun_dir.x, m.sun_dir.y, m.sun_dir.z);
+  gl.Uniform3f(u.sun_color, m.sun_color.x, m.sun_color.y, m.sun_color.z);
+  gl.Uniform3f(u.sky_ambient, m.sky_ambient.x, m.sky_ambient.y, m.sky_ambient.z);
+  gl.Uniform3f(u.ground_ambient, m.ground_ambient.x, m.ground_ambient.y, m.ground_ambient.z);
+  gl.Uniform3f(u.horizon, m.horizon.x, m.horizon.y, m.horizon.z);
+  gl.Uniform1f(u.inv_fog2, inv_fog2);
+}
+
+// Sky and ground go last, only where no mesh landed (depth still 1.0):
+// llvmpipe then shades each covered pixel once instead of twice.
+void drawBackground(const GlApi& gl, const Renderer::Impl& m, const Camera& cam, const FrameView& v, FrameStats& fs) {
+  // Camera-to-world rotation is the transpose of the view rotation; its
+  // columns are right, up and back in world axes.
+  const glm::dmat3 cam_to_world = glm::transpose(glm::dmat3(v.view));
+  const double ty = std::tan(glm::radians(cam.fov_y_deg) * 0.5);
+  const double tx = ty * static_cast<double>(cam.width) / static_cast<double>(cam.height);
+  const glm::mat3 basis(glm::vec3(cam_to_world[0] * tx), glm::vec3(cam_to_world[1] * ty),
+                        glm::vec3(-cam_to_world[2]));
+  gl.UseProgram(m.bg_program);
+  applyLook(gl, m, m.bg, v.inv_fog2);
+  gl.UniformMatrix3fv(m.bg.ray_basis, 1, GL_FALSE, &basis[0][0]);
+  gl.Uniform3f(m.bg.zenith, m.zenith.x, m.zenith.y, m.zenith.z);
+  gl.Uniform3f(m.bg.ground, m.ground.x, m.ground.y, m.ground.z);
+  gl.Uniform1f(m.bg.eye_height, static_cast<float>(v.eye.y));
+  gl.Disable(GL_CULL_FACE);
+  gl.DepthFunc(GL_LEQUAL);  // the triangle sits exactly on the far plane
+  gl.DepthMask(GL_FALSE);
+  gl.BindVertexArray(m.empty_vao);
+  gl.DrawArrays(GL_TRIANGLES, 0, 3);
+  gl.DepthMask(GL_TRUE);
+  ++fs.draw_calls;
+}
+
+// The pass's target, viewport (clears stay inside this view: a frame may hold
+// several), fixed state, and cleared buffers.
+void beginPass(const GlApi& gl, const Renderer::Impl& m, const Camera& cam, Pass pass, bool scaled, bool shared) {
+  // Scaled views draw into the scaled target and are blitted at the end.
+  if (scaled) gl.BindFramebuffer(GL_FRAMEBUFFER, m.scaled_fbo);
+  else if (!shared) gl.BindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+  gl.Viewport(cam.viewport_x, cam.viewport_y, cam.width, cam.height);
+  gl.Enable(GL_SCISSOR_TEST);
+  gl.Scissor(cam.viewport_x, cam.viewport_y, cam.width, cam.height);
+  gl.Disable(GL_STENCIL_TEST);
+  gl.Disable(GL_BLEND);
+  gl.Disable(GL_POLYGON_OFFSET_FILL);
+  gl.Disable(GL_RASTERIZER_DISCARD);
+  gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl.DepthMask(GL_TRUE);
+  gl.Enable(GL_DEPTH_TEST);
+  if (gl.ClearDepthf) gl.ClearDepthf(1.0f);
+  if (pass == Pass::Shaded) {
+    gl.Clear(GL_DEPTH_BUFFER_BIT);
+  } else {
+    // Bake captures start from nothing: transparent black, far depth.
+    gl.ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  }
+  if (pass == Pass::CaptureColor || pass == Pass::CaptureDepth) {
+    gl.Disable(GL_CULL_FACE);
+  } else {
+    gl.Enable(GL_CULL_FACE);
+    gl.CullFace(GL_BACK);
+    gl.FrontFace(cam.mirror ? GL_CW : GL_CCW);  // a mirrored projection flips the winding
+  }
+  gl.DepthFunc(GL_LESS);
+}
+
+// The program (and its uniforms) that draws the pass's untextured meshes, or
+// (textured) its impostors: false when the pass draws none.
+bool passProgram(const Renderer::Impl& m, Pass pass, bool textured, GLuint& program, const Uniforms*& u) {
+  if (textured) {
+    // An item buffer shows impostors too (flat, in their ids); captures never hold them.
+    if (pass == Pass::Shaded) program = m.tex_program, u = &m.tex;
+    else if (pass == Pass::ItemBuffer) program = m.item_program, u = &m.item;
+    else return false;
+    return true;
+  }
+  switch (pass) {
+    case Pass::Shaded: program = m.mesh_program, u = &m.mesh; break;
+    case Pass::ItemBuffer: program = m.item_program, u = &m.item; break;
+    case Pass::CaptureColor: program = m.cap_color_program, u = &m.cap_color; break;
+    case Pass::CaptureDepth: program = m.cap_depth_program, u = &m.cap_depth; break;
+  }
+  return true;
+}
+
+// Stretches the scaled view over the real one: a textured triangle over the
+// viewport, bilinear (cheaper than a linear glBlitFramebuffer on llvmpipe,
+// decision 0008 §7). Only colour goes to the destination; its depth is left alone.
+void stretchScaled(const GlApi& gl, const Renderer::Impl& m, const Camera& out, const Camera& cam, bool shared,
+                   FrameStats& fs) {
+  gl.BindFramebuffer(GL_FRAMEBUFFER, shared ? static_cast<GLuint>(m.host_fbo) : m.fbo);
+  gl.Viewport(out.viewport_x, out.viewport_y, out.width, out.height);
+  gl.Scissor(out.viewport_x, out.viewport_y, out.width, out.height);
+  gl.Disable(GL_DEPTH_TEST);
+  gl.DepthMask(GL_FALSE);
+  gl.Disable(GL_CULL_FACE);
+  gl.UseProgram(m.up_program);
+  gl.ActiveTexture(GL_TEXTURE0);
+  gl.BindTexture(GL_TEXTURE_2D, m.scaled_color_tex);
+  gl.Uniform1i(m.up.texture, 0);
+  const float tw = static_cast<float>(m.scaled_w), th = static_cast<float>(m.scaled_h);
+  gl.Uniform2f(m.up.uv_scale, static_cast<float>(cam.width) / tw, static_cast<float>(cam.height) / th);
+  gl.Uniform4f(m.up.uv_clamp, 0.5f / tw, 0.5f / th, (static_cast<float>(cam.width) - 0.5f) / tw,
+               (static_cast<float>(cam.height) - 0.5f) / th);
+  gl.BindVertexArray(m.empty_vao);
+  gl.DrawArrays(GL_TRIANGLES, 0, 3);
+  gl.DepthMask(GL_TRUE);
+  ++fs.draw_calls;
+}
+
+}  // namespace
+
+// Why a frame cannot be drawn as asked, or null.
+const char* Renderer::checkRender(const Camera& out, const MeshHandle* list, size_t n, const RenderOptions& opt) const {
+  if (const char* bad = validateCamera(out)) return bad;
+  if (!(opt.scale > 0.0 && opt.scale <= 1.0)) return "render scale outside (0, 1]";
+  const bool scaled = opt.pass == Pass::Shaded && opt.scale < 1.0;
+  if (scaled && !impl_->scaled_fbo) return "render scale < 1 needs RendererDesc::scaled_target";
+  if (scaled && (out.width > impl_->scaled_w || out.height > impl_->scaled_h)) return "view is larger than the scaled target";
+  if (out.viewport_x < 0 || out.viewport_y < 0) return "camera viewport starts outside the framebuffer";
+  if (!shared_ && (out.viewport_x + out.width > fb_w_ || out.viewport_y + out.height > fb_h_))
+    return "camera viewport is larger than the renderer's framebuffer";
+  if (n > 0 && !list) return "draw list is null";
+  if (opt.pass == Pass::ItemBuffer && n > 0 && !opt.item_ids) return "item buffer pass without item ids";
+  return nullptr;
+}
+
+// The meshes of `list` with (textured) or without a texture that the frustum
+// keeps, nearest first, with the pass's program.
+void Renderer::drawMeshes(const Camera& cam, const MeshHandle* list, size_t n, const RenderOptions& opt,
+                          const FrameView& v, bool textured, FrameStats& fs) {
+  const GlApi& gl = *gl_;
+  Impl& m = *impl_;
+  GLuint program = 0;
+  const Uniforms* u = nullptr;
+  if (!passProgram(m, opt.pass, textured, program, u)) return;
+  m.order.clear();
+  for (size_t i = 0; i < n; ++i) {
+    if (!isValid(list[i])) {
+      if (!textured) ++fs.meshes_invalid;
+      continue;
+    }
+    const MeshSlot& s = m.slots[(list[i].id & kIndexMask) - 1];
+    if ((s.texture != 0) != textured) continue;
+    const glm::dvec3 rel = s.center - v.eye;
+    if (!v.frustum.intersectsBox(rel, s.half)) {
+      ++fs.meshes_culled;
+      continue;
+    }
+    // Reserved for twice the pool; only a list longer than that grows it.
+    m.order.emplace_back(static_cast<float>(glm::length(rel) - glm::length(s.half)), static_cast<uint32_t>(i));
+  }
+  std::sort(m.order.begin(), m.order.end());
+  const bool shaded_tex = textured && opt.pass == Pass::Shaded;
+  bool bound = false;
+  for (const auto& entry : m.order) {
+    const size_t i = entry.second;
+    const MeshSlot& s = m.slots[(list[i].id & kIndexMask) - 1];
+    const glm::dvec3 rel = s.center - v.eye;
+    if (!bound) {
+      bound = true;
+      gl.UseProgram(program);
+      applyLook(gl, m, *u, v.inv_fog2);
+      gl.UniformMatrix4fv(u->viewproj, 1, GL_FALSE, &v.clip_f[0][0]);
+      if (opt.pass == Pass::CaptureDepth) {
+        const glm::dvec3 f = viewForward(cam);
+        gl.Uniform3f(u->forward, float(f.x), float(f.y), float(f.z));
+        gl.Uniform1f(u->depth_scale, float(16777215.0 / opt.max_depth_m));
+      }
+      if (shaded_tex) {
+        gl.ActiveTexture(GL_TEXTURE0);
+        gl.Uniform1i(u->texture, 0);
+      }
+    }
+    if (opt.pass == Pass::ItemBuffer) {
+      const uint32_t id = opt.item_ids[i];
+      gl.Uniform4f(u->item, float(id & 255u) / 255.0f, float((id >> 8) & 255u) / 255.0f,
+                   float((id >> 16) & 255u) / 255.0f, 1.0f);
+    }
+    if (shaded_tex) {
+      gl.BindTexture(GL_TEXTURE_2D, s.texture);
+      gl.Uniform2f(u->uv_scale, s.uv_scale[0], s.uv_scale[1]);
+    }
+    gl.Uniform3f(u->offset, static_cast<float>(rel.x), static_cast<float>(rel.y), static_cast<float>(rel.z));
+    gl.BindVertexArray(s.vao);
+    gl.DrawElements(GL_TRIANGLES, s.index_count, s.index_type, byteOffset(s.index_offset));
+    ++fs.draw_calls;
+    ++fs.meshes_drawn;
+    fs.triangles += static_cast<uint64_t>(s.index_count / 3);
+  }
+}
+
 bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, FrameStats* stats,
                       const RenderOptions& opt) {
-  if (const char* bad = validateCamera(out)) return fail(bad);
-  if (!(opt.scale > 0.0 && opt.scale <= 1.0)) return fail("render scale outside (0, 1]");
+  if (const char* bad = checkRender(out, list, n, opt)) return fail(bad);
+  if (!ctx_.makeCurrent()) return fail("GL context is not current on this thread");
   // Scaled: the same camera over fewer pixels of the scaled target, stretched
   // over the view afterwards (the aspect ratio is kept to within a pixel).
   const bool scaled = opt.pass == Pass::Shaded && opt.scale < 1.0;
-  if (scaled && !impl_->scaled_fbo) return fail("render scale < 1 needs RendererDesc::scaled_target");
-  if (scaled && (out.width > impl_->scaled_w || out.height > impl_->scaled_h))
-    return fail("view is larger than the scaled target");
-  Camera scaled_cam = out;
+  Camera cam = out;
   if (scaled) {
-    scaled_cam.width = std::max(1, static_cast<int>(std::lround(out.width * opt.scale)));
-    scaled_cam.height = std::max(1, static_cast<int>(std::lround(out.height * opt.scale)));
-    scaled_cam.viewport_x = scaled_cam.viewport_y = 0;
+    cam.width = std::max(1, static_cast<int>(std::lround(out.width * opt.scale)));
+    cam.height = std::max(1, static_cast<int>(std::lround(out.height * opt.scale)));
+    cam.viewport_x = cam.viewport_y = 0;
   }
-  const Camera& cam = scaled ? scaled_cam : out;
-  if (out.viewport_x < 0 || out.viewport_y < 0) return fail("camera viewport starts outside the framebuffer");
-  if (!shared_ && (out.viewport_x + out.width > fb_w_ || out.viewport_y + out.height > fb_h_)) {
-    return fail("camera viewport is larger than the renderer's framebuffer");
-  }
-  if (n > 0 && !list) return fail("draw list is null");
-  if (opt.pass == Pass::ItemBuffer && n > 0 && !opt.item_ids) return fail("item buffer pass without item ids");
-  if (!ctx_.makeCurrent()) return fail("GL context is not current on this thread");
-
   const auto t0 = std::chrono::steady_clock::now();
   const GlApi& gl = *gl_;
   Impl& m = *impl_;
   FrameStats fs;
-
-  const glm::dvec3 eye = enuToGltf(cam.eye_enu);
-  const glm::dmat4 view = viewRotation(cam);
-  const glm::dmat4 clip = projection(cam) * view;
-  const Frustum frustum = Frustum::fromClip(clip);
-  const float fog_d = look_.fog_distance_m > 0.0f ? look_.fog_distance_m
-                                                   : static_cast<float>(0.4 * cam.far_m);
-  const float inv_fog2 = 1.0f / (fog_d * fog_d);
-
+  const FrameView v = frameView(cam, look_);
   {
     ScopedGlState guard(gl, shared_);
     if (shared_) m.host_fbo = guard.saved().draw_framebuffer;
-    // Scaled views draw into the scaled target and are blitted at the end.
-    if (scaled) gl.BindFramebuffer(GL_FRAMEBUFFER, m.scaled_fbo);
-    else if (!shared_) gl.BindFramebuffer(GL_FRAMEBUFFER, m.fbo);
-    gl.Viewport(cam.viewport_x, cam.viewport_y, cam.width, cam.height);
-    // The clear below must stay inside this view (a frame may hold several).
-    gl.Enable(GL_SCISSOR_TEST);
-    gl.Scissor(cam.viewport_x, cam.viewport_y, cam.width, cam.height);
-    gl.Disable(GL_STENCIL_TEST);
-    gl.Disable(GL_BLEND);
-    gl.Disable(GL_POLYGON_OFFSET_FILL);
-    gl.Disable(GL_RASTERIZER_DISCARD);
-    gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    gl.DepthMask(GL_TRUE);
-    gl.Enable(GL_DEPTH_TEST);
-
-    auto set_look = [&](const Uniforms& u) {
-      gl.Uniform3f(u.sun_dir, m.sun_dir.x, m.sun_dir.y, m.sun_dir.z);
-      gl.Uniform3f(u.sun_color, m.sun_color.x, m.sun_color.y, m.sun_color.z);
-      gl.Uniform3f(u.sky_ambient, m.sky_ambient.x, m.sky_ambient.y, m.sky_ambient.z);
-      gl.Uniform3f(u.ground_ambient, m.ground_ambient.x, m.ground_ambient.y,
-                   m.ground_ambient.z);
-      gl.Uniform3f(u.horizon, m.horizon.x, m.horizon.y, m.horizon.z);
-      gl.Uniform1f(u.inv_fog2, inv_fog2);
-    };
-
-    const glm::mat4 clip_f(clip);
-    // Sky and ground go last, only where no mesh landed (depth still 1.0):
-    // llvmpipe then shades each covered pixel once instead of twice.
-    auto drawBackground = [&] {
-      // Camera-to-world rotation is the transpose of the view rotation; its
-      // columns are right, up and back in world axes.
-      const glm::dmat3 cam_to_world = glm::transpose(glm::dmat3(view));
-      const double ty = std::tan(glm::radians(cam.fov_y_deg) * 0.5);
-      const double tx = ty * static_cast<double>(cam.width) / static_cast<double>(cam.height);
-      const glm::mat3 basis(glm::vec3(cam_to_world[0] * tx), glm::vec3(cam_to_world[1] * ty),
-                            glm::vec3(-cam_to_world[2]));
-      gl.UseProgram(m.bg_program);
-      set_look(m.bg);
-      gl.UniformMatrix3fv(m.bg.ray_basis, 1, GL_FALSE, &basis[0][0]);
-      gl.Uniform3f(m.bg.zenith, m.zenith.x, m.zenith.y, m.zenith.z);
-      gl.Uniform3f(m.bg.ground, m.ground.x, m.ground.y, m.ground.z);
-      gl.Uniform1f(m.bg.eye_height, static_cast<float>(eye.y));
-      gl.Disable(GL_CULL_FACE);
-      gl.DepthFunc(GL_LEQUAL);  // the triangle sits exactly on the far plane
-      gl.DepthMask(GL_FALSE);
-      gl.BindVertexArray(m.empty_vao);
-      gl.DrawArrays(GL_TRIANGLES, 0, 3);
-      gl.DepthMask(GL_TRUE);
-      ++fs.draw_calls;
-    };
-    if (opt.pass == Pass::Shaded) {
-      if (gl.ClearDepthf) gl.ClearDepthf(1.0f);
-      gl.Clear(GL_DEPTH_BUFFER_BIT);
-    } else {
-      // Bake captures start from nothing: transparent black, far depth.
-      gl.ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
-      if (gl.ClearDepthf) gl.ClearDepthf(1.0f);
-      gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    }
-
-    // Meshes: untextured with the pass's program, then (shaded pass only) the
-    // textured impostors with theirs.
-    GLuint program = m.mesh_program;
-    const Uniforms* u = &m.mesh;
-    switch (opt.pass) {
-      case Pass::Shaded: break;
-      case Pass::ItemBuffer: program = m.item_program, u = &m.item; break;
-      case Pass::CaptureColor: program = m.cap_color_program, u = &m.cap_color; break;
-      case Pass::CaptureDepth: program = m.cap_depth_program, u = &m.cap_depth; break;
-    }
-    const bool capture = opt.pass == Pass::CaptureColor || opt.pass == Pass::CaptureDepth;
-    if (capture) {
-      gl.Disable(GL_CULL_FACE);
-    } else {
-      gl.Enable(GL_CULL_FACE);
-      gl.CullFace(GL_BACK);
-      gl.FrontFace(cam.mirror ? GL_CW : GL_CCW);  // a mirrored projection flips the winding
-    }
-    gl.DepthFunc(GL_LESS);
-    for (int textured = 0; textured < 2; ++textured) {
-      if (textured) {
-        // An item buffer shows impostors too (flat, in their ids); captures
-        // never hold them.
-        if (opt.pass != Pass::Shaded && opt.pass != Pass::ItemBuffer) break;
-        if (opt.pass == Pass::Shaded) program = m.tex_program, u = &m.tex;
-      }
-      bool bound = false;
-      m.order.clear();
-      for (size_t i = 0; i < n; ++i) {
-        const uint32_t index = (list[i].id & kIndexMask) - 1;
-        if (!isValid(list[i])) {
-          if (!textured) ++fs.meshes_invalid;
-          continue;
-        }
-        const MeshSlot& s = m.slots[index];
-        if ((s.texture != 0) != (textured != 0)) continue;
-        const glm::dvec3 rel = s.center - eye;
-        if (!frustum.intersectsBox(rel, s.half)) {
-          ++fs.meshes_culled;
-          continue;
-        }
-        // Reserved for twice the pool; only a list longer than that grows it.
-        m.order.emplace_back(static_cast<float>(glm::length(rel) - glm::length(s.half)), static_cast<uint32_t>(i));
-      }
-      std::sort(m.order.begin(), m.order.end());
-      for (const auto& entry : m.order) {
-        const size_t i = entry.second;
-        const uint32_t index = (list[i].id & kIndexMask) - 1;
-        const MeshSlot& s = m.slots[index];
-        const glm::dvec3 rel = s.center - eye;
-        if (!bound) {
-          bound = true;
-          gl.UseProgram(program);
-          set_look(*u);
-          gl.UniformMatrix4fv(u->viewproj, 1, GL_FALSE, &clip_f[0][0]);
-          if (opt.pass == Pass::CaptureDepth) {
-            const glm::dvec3 f = viewForward(cam);
-            gl.Uniform3f(u->forward, float(f.x), float(f.y), float(f.z));
-            gl.Uniform1f(u->depth_scale, float(16777215.0 / opt.max_depth_m));
-          }
-          if (textured && opt.pass == Pass::Shaded) {
-            gl.ActiveTexture(GL_TEXTURE0);
-            gl.Uniform1i(u->texture, 0);
-          }
-        }
-        if (opt.pass == Pass::ItemBuffer) {
-          const uint32_t id = opt.item_ids[i];
-          gl.Uniform4f(u->item, float(id & 255u) / 255.0f, float((id >> 8) & 255u) / 255.0f,
-                       float((id >> 16) & 255u) / 255.0f, 1.0f);
-        }
-        if (textured && opt.pass == Pass::Shaded) {
-          gl.BindTexture(GL_TEXTURE_2D, s.texture);
-          gl.Uniform2f(u->uv_scale, s.uv_scale[0], s.uv_scale[1]);
-        }
-        gl.Uniform3f(u->offset, static_cast<float>(rel.x), static_cast<float>(rel.y),
-                     static_cast<float>(rel.z));
-        gl.BindVertexArray(s.vao);
-        gl.DrawElements(GL_TRIANGLES, s.index_count, s.index_type, byteOffset(s.index_offset));
-        ++fs.draw_calls;
-        ++fs.meshes_drawn;
-        fs.triangles += static_cast<uint64_t>(s.index_count / 3);
-      }
-    }
-    if (opt.pass == Pass::Shaded) drawBackground();
-    if (scaled) {
-      // Stretch the scaled view over the real one: a textured triangle over
-      // the viewport, bilinear (cheaper than a linear glBlitFramebuffer on
-      // llvmpipe, decision 0008 §7). Only colour goes to the destination;
-      // its depth is left alone.
-      gl.BindFramebuffer(GL_FRAMEBUFFER, shared_ ? static_cast<GLuint>(m.host_fbo) : m.fbo);
-      gl.Viewport(out.viewport_x, out.viewport_y, out.width, out.height);
-      gl.Scissor(out.viewport_x, out.viewport_y, out.width, out.height);
-      gl.Disable(GL_DEPTH_TEST);
-      gl.DepthMask(GL_FALSE);
-      gl.Disable(GL_CULL_FACE);
-      gl.UseProgram(m.up_program);
-      gl.ActiveTexture(GL_TEXTURE0);
-      gl.BindTexture(GL_TEXTURE_2D, m.scaled_color_tex);
-      gl.Uniform1i(m.up.texture, 0);
-      const float tw = static_cast<float>(m.scaled_w), th = static_cast<float>(m.scaled_h);
-      gl.Uniform2f(m.up.uv_scale, static_cast<float>(cam.width) / tw, static_cast<float>(cam.height) / th);
-      gl.Uniform4f(m.up.uv_clamp, 0.5f / tw, 0.5f / th, (static_cast<float>(cam.width) - 0.5f) / tw,
-                   (static_cast<float>(cam.height) - 0.5f) / th);
-      gl.BindVertexArray(m.empty_vao);
-      gl.DrawArrays(GL_TRIANGLES, 0, 3);
-      gl.DepthMask(GL_TRUE);
-      ++fs.draw_calls;
-    }
+    beginPass(gl, m, cam, opt.pass, scaled, shared_);
+    // Meshes: untextured with the pass's program, then the textured impostors with theirs.
+    drawMeshes(cam, list, n, opt, v, false, fs);
+    drawMeshes(cam, list, n, opt, v, true, fs);
+    if (opt.pass == Pass::Shaded) drawBackground(gl, m, cam, v, fs);
+    if (scaled) stretchScaled(gl, m, out, cam, shared_, fs);
     gl.BindVertexArray(0);
     gl.BindTexture(GL_TEXTURE_2D, 0);
   }
   // The wall time must include the rasterisation, which GL defers.
   gl.Finish();
-  fs.frame_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  fs.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   fs.pixels = static_cast<uint64_t>(cam.width) * static_cast<uint64_t>(cam.height);
   last_w_ = out.viewport_x + out.width;
   last_h_ = out.viewport_y + out.height;

@@ -135,6 +135,8 @@ inline double unpackCaptureDepth(const uint8_t* rgba, double max_depth_m) {
   return q == 0 ? 0.0 : double(q) * max_depth_m / 16777215.0;
 }
 
+struct FrameView;  // renderer.cpp
+
 class Renderer {
  public:
   // Loads GL through `ctx` (made current here), compiles the shaders and, for
@@ -209,10 +211,15 @@ class Renderer {
   uint64_t meshBytes() const { return mesh_bytes_; }  // vertex + index bytes in GL buffers
   const std::string& lastError() const { return error_; }
 
+ public:
+  struct Impl;  // renderer.cpp's; public so that its drawing helpers there can take it
+
  private:
-  struct Impl;
   struct Slab;
   explicit Renderer(Context& ctx);
+  const char* checkRender(const Camera& out, const MeshHandle* list, size_t n, const RenderOptions& opt) const;
+  void drawMeshes(const Camera& cam, const MeshHandle* list, size_t n, const RenderOptions& opt,
+                  const FrameView& v, bool textured, FrameStats& fs);
   // A mesh's slot and vertex array; copies its bytes unless `copied` (a
   // finished SlabUpload) says where they already are.
   MeshHandle place(const PreparedMesh& mesh, uint32_t slab_id, const SlabUpload* copied = nullptr);
