@@ -184,262 +184,314 @@ blvd_status Database::load(const std::string& path, std::string& err, const DbcO
   return parse(ss.str(), path, err, opt);
 }
 
+// One DBC text being read, a line at a time: the statements' state between
+// lines, and what is resolved after the last (VAL_ and SIG_VALTYPE_ refer to
+// signals by message id and name, and may come before them).
+class Database::Parser {
+ public:
+  Parser(Database& db, const std::string& source, const DbcOptions& opt) : db_(db), source_(source), opt_(opt) {}
+  // False on a fatal error: status(), line() and reason() say which.
+  bool line(std::string_view line, uint32_t line_no);
+  bool finish();
+  blvd_status status() const { return status_; }
+  uint32_t errorLine() const { return error_line_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  bool fail(blvd_status st, uint32_t line_no, std::string reason) {
+    status_ = st, error_line_ = line_no, reason_ = std::move(reason);
+    return false;
+  }
+  bool signal(Cursor& c, std::string_view line, uint32_t line_no);
+  bool multiplexer(Cursor& c, Signal& s, uint32_t line_no);
+  bool layout(Cursor& c, std::string_view line, Signal& s, uint32_t line_no);
+  bool placed(Signal& s, uint32_t line_no);
+  bool message(Cursor& c, std::string_view line, uint32_t line_no);
+  void valueTable(Cursor& c, std::string_view line, uint32_t line_no);
+  void valueType(Cursor& c, uint32_t line_no);
+  Signal* findSignal(uint32_t k, const std::string& name);
+
+  Database& db_;
+  const std::string& source_;
+  const DbcOptions& opt_;
+  bool in_ns_ = false;            // inside the indented keyword list after "NS_ :"
+  bool skipping_string_ = false;  // a skipped statement's quoted string runs on
+  Message* current_ = nullptr;    // the BO_ whose SG_ lines follow
+  bool skip_signals_ = false;     // signals of a pseudo message we do not keep
+  std::vector<PendingVal> vals_;
+  std::vector<PendingType> types_;
+  std::vector<std::string> notes_;
+  blvd_status status_ = BLVD_OK;
+  uint32_t error_line_ = 0;
+  std::string reason_;
+};
+
+bool Database::Parser::line(std::string_view line, uint32_t line_no) {
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (skipping_string_) {
+    skipping_string_ = endsInsideString(line, true);
+    return true;
+  }
+  Cursor c{line};
+  if (c.atEnd()) return true;
+  const bool indented = line[0] == ' ' || line[0] == '\t';
+  if (in_ns_) {
+    if (indented) return true;
+    in_ns_ = false;
+  }
+  if (line.substr(c.p, 2) == "//") return true;
+  std::string_view kw;
+  if (!c.ident(kw)) {
+    // Not a statement (stray text or the tail of a skipped one): skip it like any unknown statement.
+    skipping_string_ = endsInsideString(line, false);
+    return true;
+  }
+  if (kw == "SG_") return signal(c, line, line_no);
+  current_ = nullptr;
+  skip_signals_ = false;
+  if (kw == "BO_") return message(c, line, line_no);
+  if (kw == "NS_") {
+    in_ns_ = true;
+  } else if (kw == "VAL_") {
+    valueTable(c, line, line_no);
+  } else if (kw == "SIG_VALTYPE_") {
+    valueType(c, line_no);
+  } else {
+    // CM_ and everything else: skipped, including a quoted string running on over lines.
+    skipping_string_ = endsInsideString(line, false);
+  }
+  return true;
+}
+
+// SG_ NAME [M|mN|mNM] : START|LENGTH@ORDER SIGN (FACTOR,OFFSET) [MIN|MAX] "UNIT" RECEIVERS
+bool Database::Parser::signal(Cursor& c, std::string_view line, uint32_t line_no) {
+  if (!current_ && !skip_signals_) return fail(BLVD_ERR_CORRUPT, line_no, "SG_ outside a BO_ message");
+  if (skip_signals_) return true;
+  Signal s;
+  s.line = line_no;
+  std::string_view name;
+  if (!c.ident(name)) return fail(BLVD_ERR_CORRUPT, line_no, "SG_ without a signal name");
+  s.name.assign(name);
+  if (!multiplexer(c, s, line_no) || !layout(c, line, s, line_no) || !placed(s, line_no)) return false;
+  for (const auto& other : current_->signals)
+    if (other.name == s.name)
+      return fail(BLVD_ERR_CORRUPT, line_no,
+                  "signal " + s.name + " declared twice in message " + current_->name + " (first at line " +
+                      std::to_string(other.line) + ")");
+  current_->signals.push_back(std::move(s));
+  return true;
+}
+
+// The optional multiplexer indicator between the name and the ':'.
+bool Database::Parser::multiplexer(Cursor& c, Signal& s, uint32_t line_no) {
+  if (c.peek(':')) return true;
+  std::string_view mux;
+  if (!c.ident(mux)) return fail(BLVD_ERR_CORRUPT, line_no, "expected ':' after signal " + s.name);
+  if (mux == "M") {
+    s.multiplexor = true;
+    return true;
+  }
+  const std::string bad = "bad multiplexer indicator '" + std::string(mux) + "' for signal " + s.name;
+  if (mux.size() < 2 || mux[0] != 'm') return fail(BLVD_ERR_CORRUPT, line_no, bad);
+  std::string_view digits = mux.substr(1);
+  if (digits.back() == 'M') {  // extended multiplexing: multiplexed and a multiplexor itself
+    s.multiplexor = true;
+    digits.remove_suffix(1);
+  }
+  int64_t v = -1;
+  const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+  if (r.ec != std::errc() || r.ptr != digits.data() + digits.size() || v < 0 || v > INT32_MAX)
+    return fail(BLVD_ERR_CORRUPT, line_no, bad);
+  s.multiplex_value = static_cast<int32_t>(v);
+  return true;
+}
+
+// From the ':' to the end of the line.
+bool Database::Parser::layout(Cursor& c, std::string_view line, Signal& s, uint32_t line_no) {
+  uint64_t start = 0, len = 0;
+  if (!c.expect(':') || !c.unsignedInt(start, 65535) || !c.expect('|') || !c.unsignedInt(len, 65535) ||
+      !c.expect('@'))
+    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected ': START|LENGTH@'");
+  if (c.p >= line.size() || (line[c.p] != '0' && line[c.p] != '1'))
+    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": byte order must be @0 or @1");
+  s.order = line[c.p++] == '1' ? ByteOrder::Intel : ByteOrder::Motorola;
+  if (c.p >= line.size() || (line[c.p] != '+' && line[c.p] != '-'))
+    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected + or - after the byte order");
+  s.is_signed = line[c.p++] == '-';
+  if (len < 1 || len > 64)
+    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": length " + std::to_string(len) + " is not 1..64 bits");
+  s.start_bit = static_cast<uint16_t>(start);
+  s.length = static_cast<uint16_t>(len);
+  if (!c.expect('(') || !c.number(s.factor) || !c.expect(',') || !c.number(s.offset) || !c.expect(')'))
+    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected (FACTOR,OFFSET)");
+  if (s.factor == 0) return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": factor is 0");
+  if (!c.expect('[') || !c.number(s.minimum) || !c.expect('|') || !c.number(s.maximum) || !c.expect(']'))
+    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected [MIN|MAX]");
+  if (!c.quoted(s.unit)) return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected \"UNIT\"");
+  while (!c.atEnd()) {
+    if (c.expect(',')) continue;
+    std::string_view r;
+    if (!c.ident(r))
+      return fail(BLVD_ERR_CORRUPT, line_no,
+                  "signal " + s.name + ": bad receiver list near '" + std::string(line.substr(c.p, 20)) + "'");
+    s.receivers.emplace_back(r);
+  }
+  return true;
+}
+
+// The signal's bits within a 64-byte frame and its message's size; a
+// multiplexed signal is kept but marked unsupported (or refused).
+bool Database::Parser::placed(Signal& s, uint32_t line_no) {
+  unsigned last_byte = 0;
+  if (!forEachBitMsbFirst(s, [&](unsigned b) { last_byte = std::max(last_byte, b / 8); }))
+    return fail(BLVD_ERR_CORRUPT, line_no,
+                "signal " + s.name + ": bits " + std::to_string(s.start_bit) + "|" + std::to_string(s.length) +
+                    " run outside a 64-byte frame");
+  s.bytes_needed = static_cast<uint16_t>(last_byte + 1);
+  if (s.bytes_needed > current_->size)
+    notes_.push_back(at(source_, line_no) + "signal " + s.name + " reaches byte " + std::to_string(last_byte) +
+                     " of message " + current_->name + ", which has " + std::to_string(current_->size) + " bytes");
+  if (s.multiplex_value < 0) return true;
+  s.supported = false;
+  s.unsupported = "unsupported: multiplexed signal " + s.name + " in message " + current_->name + " (line " +
+                  std::to_string(line_no) + ")";
+  if (opt_.reject_unsupported) return fail(BLVD_ERR_UNSUPPORTED, line_no, s.unsupported);
+  db_.diagnostics_.push_back(at(source_, line_no) + s.unsupported);
+  return true;
+}
+
+// BO_ ID NAME: SIZE [TRANSMITTER]
+bool Database::Parser::message(Cursor& c, std::string_view line, uint32_t line_no) {
+  if (c.atEnd()) return true;  // a bare keyword (keyword list)
+  uint64_t raw_id = 0, size = 0;
+  std::string_view name;
+  if (!c.unsignedInt(raw_id, 0xFFFFFFFFu)) return fail(BLVD_ERR_CORRUPT, line_no, "BO_ without a numeric id");
+  if (!c.ident(name)) return fail(BLVD_ERR_CORRUPT, line_no, "BO_ without a message name");
+  const std::string n(name);
+  if (!c.expect(':') || !c.unsignedInt(size, 0xFFFF))
+    return fail(BLVD_ERR_CORRUPT, line_no, "message " + n + ": expected ': SIZE'");
+  std::string_view tx;
+  c.ident(tx);  // optional
+  if (!c.atEnd())
+    return fail(BLVD_ERR_CORRUPT, line_no, "message " + n + ": unexpected text '" + std::string(line.substr(c.p)) + "'");
+  if (name == "VECTOR__INDEPENDENT_SIG_MSG") {  // a container for unplaced signals, not a frame
+    skip_signals_ = true;
+    return true;
+  }
+  if (size > kMaxFdLen)
+    return fail(BLVD_ERR_CORRUPT, line_no, "message " + n + ": size " + std::to_string(size) + " exceeds 64 bytes");
+  Message m;
+  m.extended = (raw_id & kExtendedBit) != 0;
+  m.id = static_cast<uint32_t>(raw_id & ~kExtendedBit);
+  if (m.extended ? m.id > kEffMask : m.id > kSffMask)
+    return fail(BLVD_ERR_CORRUPT, line_no,
+                "message " + n + ": id " + std::to_string(raw_id) +
+                    (m.extended ? " exceeds 29 bits" : " exceeds 0x7FF (extended ids set bit 31)"));
+  m.name = n;
+  m.size = static_cast<uint32_t>(size);
+  m.transmitter.assign(tx);
+  m.line = line_no;
+  const auto k = key(m.id, m.extended);
+  if (const auto it = db_.by_id_.find(k); it != db_.by_id_.end())
+    return fail(BLVD_ERR_CORRUPT, line_no,
+                "message " + m.name + ": id " + std::to_string(raw_id) + " already used by " +
+                    db_.messages_[it->second].name + " (line " + std::to_string(db_.messages_[it->second].line) + ")");
+  db_.by_id_.emplace(k, db_.messages_.size());
+  db_.messages_.push_back(std::move(m));
+  current_ = &db_.messages_.back();
+  return true;
+}
+
+// VAL_ id signal int "text" ... ; on one line. Anything else is ignored: descriptions are optional.
+void Database::Parser::valueTable(Cursor& c, std::string_view line, uint32_t line_no) {
+  PendingVal v;
+  v.line = line_no;
+  uint64_t raw_id = 0;
+  std::string_view sig;
+  bool ok = c.unsignedInt(raw_id, 0xFFFFFFFFu) && c.ident(sig);
+  while (ok && !c.expect(';')) {
+    int64_t n = 0;
+    std::string d;
+    ok = c.signedInt(n) && c.quoted(d);
+    if (ok) v.values.emplace_back(n, std::move(d));
+  }
+  if (!ok) {
+    skipping_string_ = endsInsideString(line, false);
+    return;
+  }
+  v.key = key(static_cast<uint32_t>(raw_id & ~kExtendedBit), (raw_id & kExtendedBit) != 0);
+  v.signal.assign(sig);
+  vals_.push_back(std::move(v));
+}
+
+// SIG_VALTYPE_ id signal : type ;
+void Database::Parser::valueType(Cursor& c, uint32_t line_no) {
+  uint64_t raw_id = 0, type = 0;
+  std::string_view sig;
+  if (c.unsignedInt(raw_id, 0xFFFFFFFFu) && c.ident(sig) && c.expect(':') && c.unsignedInt(type, 3)) {
+    types_.push_back({line_no, key(static_cast<uint32_t>(raw_id & ~kExtendedBit), (raw_id & kExtendedBit) != 0),
+                      std::string(sig), static_cast<int>(type)});
+  } else {
+    notes_.push_back(at(source_, line_no) + "SIG_VALTYPE_ not understood; ignored");
+  }
+}
+
+Signal* Database::Parser::findSignal(uint32_t k, const std::string& name) {
+  const auto it = db_.by_id_.find(k);
+  if (it == db_.by_id_.end()) return nullptr;
+  for (auto& s : db_.messages_[it->second].signals)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+// Value tables and float types onto their signals, then the notes.
+bool Database::Parser::finish() {
+  for (auto& v : vals_)
+    if (Signal* s = findSignal(v.key, v.signal)) s->values = std::move(v.values);
+  for (const auto& t : types_) {
+    Signal* s = findSignal(t.key, t.signal);
+    if (!s) {
+      notes_.push_back(at(source_, t.line) + "SIG_VALTYPE_ for unknown signal " + t.signal);
+      continue;
+    }
+    if (t.type != 1 && t.type != 2) continue;
+    const unsigned want = t.type == 1 ? 32 : 64;
+    if (s->length == want) {
+      s->type = t.type == 1 ? ValueType::Float32 : ValueType::Float64;
+      continue;
+    }
+    s->supported = false;
+    s->unsupported = "unsupported: signal " + s->name + " is declared IEEE float but has " +
+                     std::to_string(s->length) + " bits (line " + std::to_string(t.line) + ")";
+    if (opt_.reject_unsupported) return fail(BLVD_ERR_UNSUPPORTED, t.line, s->unsupported);
+    db_.diagnostics_.push_back(at(source_, t.line) + s->unsupported);
+  }
+  for (auto& n : notes_) db_.diagnostics_.push_back(std::move(n));
+  return true;
+}
+
 blvd_status Database::parse(std::string_view text, const std::string& source, std::string& err,
                             const DbcOptions& opt) {
   messages_.clear();
   by_id_.clear();
   diagnostics_.clear();
   source_ = source;
-  std::vector<PendingVal> vals;
-  std::vector<PendingType> types;
-  std::vector<std::string> notes;
-
-  const auto failWith = [&](blvd_status st, uint32_t line, const std::string& reason) {
-    err = at(source, line) + reason;
-    messages_.clear();
-    by_id_.clear();
-    diagnostics_.clear();
-    return st;
-  };
-
   if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM
-  size_t pos = 0;
+  Parser p(*this, source, opt);
+  bool ok = true;
   uint32_t line_no = 0;
-  bool in_ns = false;            // inside the indented keyword list after "NS_ :"
-  bool skipping_string = false;  // a skipped statement's quoted string runs on
-  Message* current = nullptr;    // the BO_ whose SG_ lines follow
-  bool skip_signals = false;     // signals of a pseudo message we do not keep
-
-  while (pos < text.size()) {
+  for (size_t pos = 0; ok && pos < text.size();) {
     size_t eol = text.find('\n', pos);
     if (eol == std::string_view::npos) eol = text.size();
-    std::string_view line = text.substr(pos, eol - pos);
+    ok = p.line(text.substr(pos, eol - pos), ++line_no);
     pos = eol + 1;
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-
-    if (skipping_string) {
-      skipping_string = endsInsideString(line, true);
-      continue;
-    }
-    Cursor c{line};
-    if (c.atEnd()) continue;
-    const bool indented = line[0] == ' ' || line[0] == '\t';
-    if (in_ns) {
-      if (indented) continue;
-      in_ns = false;
-    }
-    if (line.substr(c.p, 2) == "//") continue;
-    std::string_view kw;
-    if (!c.ident(kw)) {
-      // Not a statement (stray text or the tail of a skipped one): skip it like any unknown statement.
-      skipping_string = endsInsideString(line, false);
-      continue;
-    }
-
-    if (kw == "SG_") {
-      if (!current && !skip_signals) return failWith(BLVD_ERR_CORRUPT, line_no, "SG_ outside a BO_ message");
-      if (skip_signals) continue;
-      Signal s;
-      s.line = line_no;
-      std::string_view name;
-      if (!c.ident(name)) return failWith(BLVD_ERR_CORRUPT, line_no, "SG_ without a signal name");
-      s.name.assign(name);
-      std::string_view mux;
-      if (!c.peek(':')) {
-        if (!c.ident(mux)) return failWith(BLVD_ERR_CORRUPT, line_no, "expected ':' after signal " + s.name);
-        if (mux == "M") {
-          s.multiplexor = true;
-        } else if (mux.size() >= 2 && mux[0] == 'm') {
-          std::string_view digits = mux.substr(1);
-          if (digits.back() == 'M') {  // extended multiplexing: multiplexed and a multiplexor itself
-            s.multiplexor = true;
-            digits.remove_suffix(1);
-          }
-          int64_t v = -1;
-          const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), v);
-          if (r.ec != std::errc() || r.ptr != digits.data() + digits.size() || v < 0 || v > INT32_MAX)
-            return failWith(BLVD_ERR_CORRUPT, line_no,
-                            "bad multiplexer indicator '" + std::string(mux) + "' for signal " + s.name);
-          s.multiplex_value = static_cast<int32_t>(v);
-        } else {
-          return failWith(BLVD_ERR_CORRUPT, line_no,
-                          "bad multiplexer indicator '" + std::string(mux) + "' for signal " + s.name);
-        }
-      }
-      uint64_t start = 0, len = 0;
-      if (!c.expect(':') || !c.unsignedInt(start, 65535) || !c.expect('|') || !c.unsignedInt(len, 65535) ||
-          !c.expect('@'))
-        return failWith(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected ': START|LENGTH@'");
-      if (c.p >= line.size() || (line[c.p] != '0' && line[c.p] != '1'))
-        return failWith(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": byte order must be @0 or @1");
-      s.order = line[c.p++] == '1' ? ByteOrder::Intel : ByteOrder::Motorola;
-      if (c.p >= line.size() || (line[c.p] != '+' && line[c.p] != '-'))
-        return failWith(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected + or - after the byte order");
-      s.is_signed = line[c.p++] == '-';
-      if (len < 1 || len > 64)
-        return failWith(BLVD_ERR_CORRUPT, line_no,
-                        "signal " + s.name + ": length " + std::to_string(len) + " is not 1..64 bits");
-      s.start_bit = static_cast<uint16_t>(start);
-      s.length = static_cast<uint16_t>(len);
-      if (!c.expect('(') || !c.number(s.factor) || !c.expect(',') || !c.number(s.offset) || !c.expect(')'))
-        return failWith(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected (FACTOR,OFFSET)");
-      if (s.factor == 0) return failWith(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": factor is 0");
-      if (!c.expect('[') || !c.number(s.minimum) || !c.expect('|') || !c.number(s.maximum) || !c.expect(']'))
-        return failWith(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected [MIN|MAX]");
-      if (!c.quoted(s.unit)) return failWith(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected \"UNIT\"");
-      while (!c.atEnd()) {
-        if (c.expect(',')) continue;
-        std::string_view r;
-        if (!c.ident(r))
-          return failWith(BLVD_ERR_CORRUPT, line_no,
-                          "signal " + s.name + ": bad receiver list near '" + std::string(line.substr(c.p, 20)) + "'");
-        s.receivers.emplace_back(r);
-      }
-      unsigned last_byte = 0;
-      if (!forEachBitMsbFirst(s, [&](unsigned b) { last_byte = std::max(last_byte, b / 8); }))
-        return failWith(BLVD_ERR_CORRUPT, line_no,
-                        "signal " + s.name + ": bits " + std::to_string(start) + "|" + std::to_string(len) +
-                            " run outside a 64-byte frame");
-      s.bytes_needed = static_cast<uint16_t>(last_byte + 1);
-      if (s.bytes_needed > current->size)
-        notes.push_back(at(source, line_no) + "signal " + s.name + " reaches byte " + std::to_string(last_byte) +
-                        " of message " + current->name + ", which has " + std::to_string(current->size) + " bytes");
-      if (s.multiplex_value >= 0) {
-        s.supported = false;
-        s.unsupported = "unsupported: multiplexed signal " + s.name + " in message " + current->name + " (line " +
-                        std::to_string(line_no) + ")";
-        if (opt.reject_unsupported) return failWith(BLVD_ERR_UNSUPPORTED, line_no, s.unsupported);
-        diagnostics_.push_back(at(source, line_no) + s.unsupported);
-      }
-      for (const auto& other : current->signals)
-        if (other.name == s.name)
-          return failWith(BLVD_ERR_CORRUPT, line_no,
-                          "signal " + s.name + " declared twice in message " + current->name + " (first at line " +
-                              std::to_string(other.line) + ")");
-      current->signals.push_back(std::move(s));
-      continue;
-    }
-
-    current = nullptr;
-    skip_signals = false;
-
-    if (kw == "BO_") {
-      if (c.atEnd()) continue;  // a bare keyword (keyword list)
-      uint64_t raw_id = 0, size = 0;
-      std::string_view name;
-      if (!c.unsignedInt(raw_id, 0xFFFFFFFFu)) return failWith(BLVD_ERR_CORRUPT, line_no, "BO_ without a numeric id");
-      if (!c.ident(name)) return failWith(BLVD_ERR_CORRUPT, line_no, "BO_ without a message name");
-      if (!c.expect(':') || !c.unsignedInt(size, 0xFFFF))
-        return failWith(BLVD_ERR_CORRUPT, line_no, "message " + std::string(name) + ": expected ': SIZE'");
-      std::string_view tx;
-      c.ident(tx);  // optional
-      if (!c.atEnd())
-        return failWith(BLVD_ERR_CORRUPT, line_no,
-                        "message " + std::string(name) + ": unexpected text '" + std::string(line.substr(c.p)) + "'");
-      if (name == "VECTOR__INDEPENDENT_SIG_MSG") {  // a container for unplaced signals, not a frame
-        skip_signals = true;
-        continue;
-      }
-      if (size > kMaxFdLen)
-        return failWith(BLVD_ERR_CORRUPT, line_no,
-                        "message " + std::string(name) + ": size " + std::to_string(size) + " exceeds 64 bytes");
-      Message m;
-      m.extended = (raw_id & kExtendedBit) != 0;
-      m.id = static_cast<uint32_t>(raw_id & ~kExtendedBit);
-      if (m.extended ? m.id > kEffMask : m.id > kSffMask)
-        return failWith(BLVD_ERR_CORRUPT, line_no,
-                        "message " + std::string(name) + ": id " + std::to_string(raw_id) +
-                            (m.extended ? " exceeds 29 bits" : " exceeds 0x7FF (extended ids set bit 31)"));
-      m.name.assign(name);
-      m.size = static_cast<uint32_t>(size);
-      m.transmitter.assign(tx);
-      m.line = line_no;
-      const auto k = key(m.id, m.extended);
-      if (const auto it = by_id_.find(k); it != by_id_.end())
-        return failWith(BLVD_ERR_CORRUPT, line_no,
-                        "message " + m.name + ": id " + std::to_string(raw_id) + " already used by " +
-                            messages_[it->second].name + " (line " + std::to_string(messages_[it->second].line) + ")");
-      by_id_.emplace(k, messages_.size());
-      messages_.push_back(std::move(m));
-      current = &messages_.back();
-      continue;
-    }
-
-    if (kw == "NS_") {
-      in_ns = true;
-      continue;
-    }
-
-    if (kw == "VAL_") {
-      // VAL_ id signal int "text" ... ; on one line. Anything else is ignored: descriptions are optional.
-      PendingVal v;
-      v.line = line_no;
-      uint64_t raw_id = 0;
-      std::string_view sig;
-      bool ok = c.unsignedInt(raw_id, 0xFFFFFFFFu) && c.ident(sig);
-      while (ok && !c.expect(';')) {
-        int64_t n = 0;
-        std::string d;
-        ok = c.signedInt(n) && c.quoted(d);
-        if (ok) v.values.emplace_back(n, std::move(d));
-      }
-      if (ok) {
-        v.key = key(static_cast<uint32_t>(raw_id & ~kExtendedBit), (raw_id & kExtendedBit) != 0);
-        v.signal.assign(sig);
-        vals.push_back(std::move(v));
-      } else {
-        skipping_string = endsInsideString(line, false);
-      }
-      continue;
-    }
-
-    if (kw == "SIG_VALTYPE_") {
-      uint64_t raw_id = 0, type = 0;
-      std::string_view sig;
-      if (c.unsignedInt(raw_id, 0xFFFFFFFFu) && c.ident(sig) && c.expect(':') && c.unsignedInt(type, 3)) {
-        types.push_back({line_no, key(static_cast<uint32_t>(raw_id & ~kExtendedBit), (raw_id & kExtendedBit) != 0),
-                         std::string(sig), static_cast<int>(type)});
-      } else {
-        notes.push_back(at(source, line_no) + "SIG_VALTYPE_ not understood; ignored");
-      }
-      continue;
-    }
-
-    // CM_ and everything else: skipped, including a quoted string running on over lines.
-    skipping_string = endsInsideString(line, false);
   }
-
-  const auto findSignal = [&](uint32_t k, const std::string& name) -> Signal* {
-    const auto it = by_id_.find(k);
-    if (it == by_id_.end()) return nullptr;
-    for (auto& s : messages_[it->second].signals)
-      if (s.name == name) return &s;
-    return nullptr;
-  };
-  for (auto& v : vals)
-    if (Signal* s = findSignal(v.key, v.signal)) s->values = std::move(v.values);
-  for (const auto& t : types) {
-    Signal* s = findSignal(t.key, t.signal);
-    if (!s) {
-      notes.push_back(at(source, t.line) + "SIG_VALTYPE_ for unknown signal " + t.signal);
-      continue;
-    }
-    if (t.type == 1 || t.type == 2) {
-      const unsigned want = t.type == 1 ? 32 : 64;
-      if (s->length != want) {
-        s->supported = false;
-        s->unsupported = "unsupported: signal " + s->name + " is declared IEEE float but has " +
-                         std::to_string(s->length) + " bits (line " + std::to_string(t.line) + ")";
-        if (opt.reject_unsupported) return failWith(BLVD_ERR_UNSUPPORTED, t.line, s->unsupported);
-        diagnostics_.push_back(at(source, t.line) + s->unsupported);
-        continue;
-      }
-      s->type = t.type == 1 ? ValueType::Float32 : ValueType::Float64;
-    }
-  }
-  for (auto& n : notes) diagnostics_.push_back(std::move(n));
-  return BLVD_OK;
+  if (ok && p.finish()) return BLVD_OK;
+  err = at(source, p.errorLine()) + p.reason();
+  messages_.clear();
+  by_id_.clear();
+  diagnostics_.clear();
+  return p.status();
 }
 
 // ---- bits ----------------------------------------------------------------------

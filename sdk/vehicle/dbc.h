@@ -99,6 +99,7 @@ class Database {
   const std::string& source() const { return source_; }
 
  private:
+  class Parser;  // dbc.cpp: one text being read
   std::vector<Message> messages_;
   std::unordered_map<uint32_t, size_t> by_id_;  // id | 0x80000000 for extended ids
   std::vector<std::string> diagnostics_;
