@@ -1,4 +1,5 @@
 #include "sim/sim_feed.h"
+#include "core/math.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +11,7 @@
 namespace blvd::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using blvd::core::kPi;
 
 // The odometry a car's sensors report for one simulated sample: the wheel
 // speeds split by the yaw rate across the track, the steering wheel angle from

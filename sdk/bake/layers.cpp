@@ -1,4 +1,5 @@
 #include "bake/layers.h"
+#include "core/math.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +10,7 @@
 namespace blvd::bake {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 
 double cross(glm::dvec2 o, glm::dvec2 a, glm::dvec2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
 

@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "blvd/blvd.h"
+#include "core/math.h"
 #include "core/sized.h"
 #include "geo/local_frame.h"
 #include "track/ekf.h"
@@ -97,7 +98,7 @@ inline track::StartPose toTrack(const blvd_start_pose& in) {
 }
 
 // The odometry calibration: degrees per second in the C API, radians in sdk/track.
-constexpr double kRadPerDeg = 3.14159265358979323846 / 180;
+constexpr double kRadPerDeg = core::kDegToRad;
 
 inline track::OdometryCalibration toTrack(const blvd_odometry_calibration& in) {
   track::OdometryCalibration c;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/math.h"
 #include "core/sized.h"
 #include "runtime/runtime.h"
 
@@ -87,7 +88,7 @@ render::Camera Runtime::viewCamera(const blvd_view& v, uint32_t i) const {
   c.heading_deg = std::fmod(cam_.heading_deg + v.yaw_offset_deg + 720.0, 360.0);
   c.pitch_deg = std::clamp(cam_.pitch_deg + v.pitch_offset_deg, -89.0, 89.0);
   if (v.fov_y_deg > 0) c.fov_y_deg = v.fov_y_deg;
-  const double hr = cam_.heading_deg * 3.14159265358979323846 / 180.0;
+  const double hr = cam_.heading_deg * core::kDegToRad;
   c.eye_enu.x += std::cos(hr) * v.eye_offset_right_m;  // right of the heading
   c.eye_enu.y -= std::sin(hr) * v.eye_offset_right_m;
   c.mirror = (v.flags & BLVD_VIEW_MIRROR) != 0;

@@ -6,6 +6,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "core/math.h"
 #include "render/frustum.h"
 #include "runtime/draw_list.h"
 
@@ -25,7 +26,7 @@ float DrawList::coverage(uint32_t cell, uint32_t block) const {
 // within lod_error_px on screen at the block box's nearest point.
 void DrawList::levelsByError(const CellSlot& slot, const render::Camera& cam) {
   const glm::dvec3 eye = render::enuToGltf(cam.eye_enu);
-  const double focal_px = cam.height * 0.5 / std::tan(cam.fov_y_deg * 3.14159265358979323846 / 360.0);
+  const double focal_px = cam.height * 0.5 / std::tan(cam.fov_y_deg * 0.5 * core::kDegToRad);
   for (size_t i = 0; i < slot.blocks.size(); ++i) {
     const graph::BlockRecord& r = city_.blocks()[slot.blocks[i].block];
     const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);

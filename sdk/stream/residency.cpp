@@ -1,4 +1,5 @@
 #include "stream/residency.h"
+#include "core/math.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +11,7 @@ namespace {
 constexpr size_t kOpenCapacity = 256;  // frontier bound; the graph's out-degree is small
 
 double headingOf(glm::dvec2 d) {
-  double h = std::atan2(d.x, d.y) * 180.0 / 3.14159265358979323846;
+  double h = std::atan2(d.x, d.y) * core::kRadToDeg;
   return h < 0 ? h + 360.0 : h;
 }
 double turnAngle(double from_deg, double to_deg) {

@@ -1,4 +1,5 @@
 #include "track/ekf.h"
+#include "core/math.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +7,7 @@
 
 namespace blvd::track {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kMaxSubstep = 0.1;       // seconds per integration step
 constexpr double kAnchorMinDist = 10.0;   // metres between fixes for a heading from displacement

@@ -30,6 +30,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "core/math.h"
+
 namespace blvd::track {
 
 // Zero means "default" for every field (see ekfDefaults()).
@@ -80,7 +82,7 @@ struct OdometryCalibration {
 // and a MEMS gyro's bias changes from one power-up to the next (its turn-on
 // bias repeatability, of the order of 0.01-0.1 deg/s for automotive yaw-rate sensors).
 constexpr double kMinScaleSigma = 0.002;
-constexpr double kMinYawBiasSigmaRadS = 0.05 * 3.14159265358979323846 / 180;
+constexpr double kMinYawBiasSigmaRadS = 0.05 * core::kDegToRad;
 
 class Ekf {
  public:

@@ -1,4 +1,5 @@
 #include "track/map_matcher.h"
+#include "core/math.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +9,7 @@
 
 namespace blvd::track {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 constexpr uint8_t kNoBack = 0xff;

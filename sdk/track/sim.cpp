@@ -1,4 +1,5 @@
 #include "track/sim.h"
+#include "core/math.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +11,7 @@
 
 namespace blvd::track {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 constexpr double kDeg = kPi / 180.0;
 
 // Portable random numbers: mt19937_64's output sequence is fixed by the

@@ -1,4 +1,5 @@
 #include "track/tracker.h"
+#include "core/math.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +8,7 @@
 
 namespace blvd::track {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kSqrtHalf = 0.70710678118654752440;
 
