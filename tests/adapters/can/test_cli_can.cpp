@@ -1,5 +1,5 @@
 // `blvd can decode` / `blvd can odometry`, run through the same CLI11 hook the
-// blvd tool uses (cli_can.cpp is compiled into this test).
+// blvd tool uses (sdk/cli/cmd_can.cpp is compiled into this test).
 #include <gtest/gtest.h>
 
 #include <cstdio>
