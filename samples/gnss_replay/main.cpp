@@ -50,11 +50,7 @@ struct Runtime {
   ~Runtime() { blvd_runtime_destroy(rt); }
 };
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Options o;
-  CLI::App app{"gnss_replay: an NMEA log in, tracked poses and rendered frames out (samples/gnss_replay/README.md)"};
+void addOptions(CLI::App& app, Options& o) {
   app.add_option("nmea", o.nmea, "NMEA 0183 log (RMC/GGA/GST ...; RMC or ZDA gives the date)")->required();
   app.add_option("--package", o.package, "a .blvd package (blvd bake)")->required();
   app.add_option("--frames", o.frames_dir, "write the frames as PNG into this folder");
@@ -79,6 +75,187 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember(samples::backendNames()));
   app.add_option("--width", o.width)->capture_default_str()->check(CLI::Range(16u, 8192u));
   app.add_option("--height", o.height)->capture_default_str()->check(CLI::Range(16u, 8192u));
+}
+
+// The replay on the log's clock, which starts at its first position fix:
+// before it there is nothing to draw.
+class Replay {
+ public:
+  Replay(const Options& o, blvd::replay::Replayer& replayer, blvd_runtime* rt, gnss_replay::FrameWriter& frames,
+         samples::JsonLines& poses)
+      : o_(o), replayer_(replayer), rt_(rt), frames_(frames), poses_(poses) {}
+  // Until the log ends, --duration is reached, or something fails (1).
+  int run();
+  // Fails (1) when the log held no position fix.
+  int checkFixes() const;
+  nlohmann::json stats() const;
+  void summary() const;
+
+ private:
+  bool tick(double until, bool inclusive, std::string& err);
+  bool pose(double t, std::string& err);
+  void pace(double t) const;
+  void feed(const blvd::replay::Event& ev);
+  void printWarnings();
+
+  const Options& o_;
+  blvd::replay::Replayer& replayer_;
+  blvd_runtime* rt_;
+  gnss_replay::FrameWriter& frames_;
+  samples::JsonLines& poses_;
+  bool started_ = false;
+  double t0_ = 0, last_t_ = 0, next_frame_t_ = 0, next_pose_t_ = 0;
+  Clock::time_point pace0_;  // wall time of t0
+  uint64_t fixes_ = 0, position_fixes_ = 0, feed_errors_ = 0, pose_count_ = 0, valid_ = 0, matched_ = 0;
+  size_t warned_ = 0;
+  std::vector<uint32_t> cells_;
+};
+
+void Replay::printWarnings() {
+  const std::vector<std::string>& w = replayer_.warnings();
+  for (; warned_ < w.size(); ++warned_) std::fprintf(stderr, "gnss_replay: %s\n", w[warned_].c_str());
+}
+
+// Sleeps until log time t is due on the wall clock (--realtime).
+void Replay::pace(double t) const {
+  if (!o_.realtime) return;
+  std::this_thread::sleep_until(pace0_ + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>((t - t0_) / o_.speed)));
+}
+
+bool Replay::pose(double t, std::string& err) {
+  blvd_pose p{};
+  p.struct_size = sizeof p;
+  if (blvd_get_pose(rt_, t, &p) != BLVD_OK) {
+    err = std::string("blvd_get_pose: ") + blvd_last_error(rt_);
+    return false;
+  }
+  poses_.pose(p);
+  ++pose_count_;
+  valid_ += (p.flags & BLVD_POSE_VALID) != 0;
+  matched_ += (p.flags & BLVD_POSE_MATCHED) != 0;
+  samples::noteCell(cells_, p);
+  next_pose_t_ = t0_ + double(pose_count_) * o_.pose_interval_s;
+  return true;
+}
+
+// Poses and frames whose time is before `until` (up to it, inclusive, at the end).
+bool Replay::tick(double until, bool inclusive, std::string& err) {
+  for (;;) {
+    const double t = std::min(next_pose_t_, next_frame_t_);
+    if (g_stop || t > until || (!inclusive && t == until)) return true;
+    pace(t);
+    if (next_pose_t_ <= next_frame_t_) {
+      if (!pose(t, err)) return false;
+    } else {
+      if (!frames_.frame(err)) return false;
+      next_frame_t_ = t0_ + double(frames_.stats().frames) / o_.fps;
+    }
+  }
+}
+
+void Replay::feed(const blvd::replay::Event& ev) {
+  ++fixes_;
+  if (ev.gnss.flags & BLVD_GNSS_HAS_LATLON) {
+    ++position_fixes_;
+    if (!started_) {
+      started_ = true;
+      t0_ = next_frame_t_ = next_pose_t_ = ev.t;
+      pace0_ = Clock::now();
+    }
+  }
+  if (started_) pace(ev.t);
+  if (blvd_feed_gnss(rt_, &ev.gnss) != BLVD_OK) ++feed_errors_;
+  last_t_ = ev.t;
+}
+
+int Replay::run() {
+  blvd::replay::Event ev;
+  std::string err;
+  while (!g_stop) {
+    const blvd::replay::Replayer::Step step = replayer_.next(ev);
+    printWarnings();
+    if (step == blvd::replay::Replayer::Step::Error) {
+      // --strict: the malformed line was just listed; a read error was not.
+      const std::vector<std::string>& w = replayer_.warnings();
+      if (o_.strict && !w.empty() && w.back() == replayer_.error())
+        std::fprintf(stderr, "gnss_replay: stopped at that line (--strict)\n");
+      else
+        std::fprintf(stderr, "gnss_replay: %s\n", replayer_.error().c_str());
+      return 1;
+    }
+    const bool end = step == blvd::replay::Replayer::Step::End ||
+                     (started_ && o_.duration_s > 0 && ev.t > t0_ + o_.duration_s);
+    if (started_ && !tick(end ? last_t_ : ev.t, end, err)) {
+      std::fprintf(stderr, "gnss_replay: %s\n", err.c_str());
+      return 1;
+    }
+    if (end) break;
+    if (ev.type == blvd::replay::EventType::Gnss) feed(ev);
+  }
+  return 0;
+}
+
+int Replay::checkFixes() const {
+  if (position_fixes_ > 0) return 0;
+  const blvd::replay::Replayer::Stats& rs = replayer_.stats();
+  std::fprintf(stderr, "gnss_replay: %s: no position fix in %llu fixes (%llu without a date, %llu malformed lines%s)\n",
+               o_.nmea.c_str(), static_cast<unsigned long long>(fixes_), static_cast<unsigned long long>(rs.gnss_untimed),
+               static_cast<unsigned long long>(rs.bad_lines), rs.bad_lines ? ", listed above" : "");
+  return 1;
+}
+
+nlohmann::json Replay::stats() const {
+  blvd_stats st{};
+  st.struct_size = sizeof st;
+  const bool have_st = blvd_runtime_stats(rt_, &st) == BLVD_OK;
+  const blvd::replay::Replayer::Stats& rs = replayer_.stats();
+  nlohmann::json j;
+  j["nmea"] = o_.nmea;
+  j["package"] = o_.package;
+  j["realtime"] = o_.realtime;
+  j["fps"] = o_.fps;
+  j["fixes"] = fixes_;
+  j["position_fixes"] = position_fixes_;
+  j["fixes_without_date"] = rs.gnss_untimed;
+  j["feed_errors"] = feed_errors_;
+  j["malformed_lines"] = rs.bad_lines;
+  j["malformed"] = replayer_.warnings();  // the first Replayer::kMaxWarnings, "file:line: reason"
+  j["first_t"] = t0_;
+  j["last_t"] = last_t_;
+  j["poses"] = pose_count_;
+  j["valid_poses"] = valid_;
+  j["matched_poses"] = matched_;
+  j["cells_visited"] = cells_;
+  samples::addRenderStats(j, frames_.stats());
+  j["frame_wait_ms"] = o_.frame_wait_ms;
+  j["frame_wait_timeouts"] = frames_.waitTimeouts();
+  samples::addMemoryStats(j, have_st ? &st : nullptr);
+  if (have_st) {
+    j["runtime_frames"] = st.frames;
+    j["upload_ms_max"] = st.upload_ms_max;
+  }
+  return j;
+}
+
+void Replay::summary() const {
+  const auto& fs = frames_.stats();
+  std::fprintf(stderr,
+               "gnss_replay: %llu fixes (%llu with a position, %llu malformed lines) over %.1f s of log: %llu poses "
+               "(%llu matched, %zu cells), %llu frames (%llu degraded, %llu blank)\n",
+               static_cast<unsigned long long>(fixes_), static_cast<unsigned long long>(position_fixes_),
+               static_cast<unsigned long long>(replayer_.stats().bad_lines), last_t_ - t0_,
+               static_cast<unsigned long long>(pose_count_), static_cast<unsigned long long>(matched_), cells_.size(),
+               static_cast<unsigned long long>(fs.frames), static_cast<unsigned long long>(fs.degraded),
+               static_cast<unsigned long long>(fs.blank));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app{"gnss_replay: an NMEA log in, tracked poses and rendered frames out (samples/gnss_replay/README.md)"};
+  addOptions(app, o);
   CLI11_PARSE(app, argc, argv);
   if (o.frame_wait_ms < 0) o.frame_wait_ms = o.realtime ? 0 : 2000;
 
@@ -116,139 +293,19 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  // The log's clock starts at its first position fix: before it there is nothing to draw.
-  bool started = false;
-  double t0 = 0, last_t = 0, next_frame_t = 0, next_pose_t = 0;
-  Clock::time_point pace0;  // wall time of t0
-  uint64_t fixes = 0, position_fixes = 0, feed_errors = 0, pose_count = 0, valid = 0, matched = 0;
-  size_t warned = 0;
-  std::vector<uint32_t> cells;
-  int rc = 0;
-  const auto printWarnings = [&] {
-    const std::vector<std::string>& w = replayer.warnings();
-    for (; warned < w.size(); ++warned) std::fprintf(stderr, "gnss_replay: %s\n", w[warned].c_str());
-  };
-  // Sleeps until log time t is due on the wall clock (--realtime).
-  const auto pace = [&](double t) {
-    if (!o.realtime) return;
-    std::this_thread::sleep_until(pace0 + std::chrono::duration_cast<Clock::duration>(
-                                              std::chrono::duration<double>((t - t0) / o.speed)));
-  };
-  // Poses and frames whose time is before `until` (up to it, inclusive, at the end).
-  const auto tick = [&](double until, bool inclusive) {
-    for (;;) {
-      const double t = std::min(next_pose_t, next_frame_t);
-      if (g_stop || t > until || (!inclusive && t == until)) return true;
-      pace(t);
-      if (next_pose_t <= next_frame_t) {
-        blvd_pose p{};
-        p.struct_size = sizeof p;
-        if (blvd_get_pose(rt, t, &p) != BLVD_OK) {
-          err = std::string("blvd_get_pose: ") + blvd_last_error(rt);
-          return false;
-        }
-        poses.pose(p);
-        ++pose_count;
-        valid += (p.flags & BLVD_POSE_VALID) != 0;
-        matched += (p.flags & BLVD_POSE_MATCHED) != 0;
-        samples::noteCell(cells, p);
-        next_pose_t = t0 + double(pose_count) * o.pose_interval_s;
-      } else {
-        if (!frames.frame(err)) return false;
-        next_frame_t = t0 + double(frames.stats().frames) / o.fps;
-      }
-    }
-  };
-
-  blvd::replay::Event ev;
-  while (!g_stop) {
-    const blvd::replay::Replayer::Step step = replayer.next(ev);
-    printWarnings();
-    if (step == blvd::replay::Replayer::Step::Error) {
-      // --strict: the malformed line was just listed; a read error was not.
-      const std::vector<std::string>& w = replayer.warnings();
-      if (o.strict && !w.empty() && w.back() == replayer.error())
-        std::fprintf(stderr, "gnss_replay: stopped at that line (--strict)\n");
-      else
-        std::fprintf(stderr, "gnss_replay: %s\n", replayer.error().c_str());
-      rc = 1;
-      break;
-    }
-    const bool end = step == blvd::replay::Replayer::Step::End ||
-                     (started && o.duration_s > 0 && ev.t > t0 + o.duration_s);
-    if (started && !tick(end ? last_t : ev.t, end)) {
-      std::fprintf(stderr, "gnss_replay: %s\n", err.c_str());
-      rc = 1;
-      break;
-    }
-    if (end) break;
-    if (ev.type != blvd::replay::EventType::Gnss) continue;
-    ++fixes;
-    if (ev.gnss.flags & BLVD_GNSS_HAS_LATLON) {
-      ++position_fixes;
-      if (!started) {
-        started = true;
-        t0 = next_frame_t = next_pose_t = ev.t;
-        pace0 = Clock::now();
-      }
-    }
-    if (started) pace(ev.t);
-    if (blvd_feed_gnss(rt, &ev.gnss) != BLVD_OK) ++feed_errors;
-    last_t = ev.t;
-  }
+  Replay replay(o, replayer, rt, frames, poses);
+  int rc = replay.run();
   if (!poses.close(err)) {
     std::fprintf(stderr, "gnss_replay: %s\n", err.c_str());
     rc = 1;
   }
-  const blvd::replay::Replayer::Stats& rs = replayer.stats();
-  if (rc == 0 && position_fixes == 0) {
-    std::fprintf(stderr, "gnss_replay: %s: no position fix in %llu fixes (%llu without a date, %llu malformed lines%s)\n",
-                 o.nmea.c_str(), static_cast<unsigned long long>(fixes),
-                 static_cast<unsigned long long>(rs.gnss_untimed), static_cast<unsigned long long>(rs.bad_lines),
-                 rs.bad_lines ? ", listed above" : "");
-    rc = 1;
-  }
-
-  blvd_stats st{};
-  st.struct_size = sizeof st;
-  const bool have_st = blvd_runtime_stats(rt, &st) == BLVD_OK;
-  nlohmann::json j;
-  j["nmea"] = o.nmea;
-  j["package"] = o.package;
-  j["realtime"] = o.realtime;
-  j["fps"] = o.fps;
-  j["fixes"] = fixes;
-  j["position_fixes"] = position_fixes;
-  j["fixes_without_date"] = rs.gnss_untimed;
-  j["feed_errors"] = feed_errors;
-  j["malformed_lines"] = rs.bad_lines;
-  j["malformed"] = replayer.warnings();  // the first Replayer::kMaxWarnings, "file:line: reason"
-  j["first_t"] = t0;
-  j["last_t"] = last_t;
-  j["poses"] = pose_count;
-  j["valid_poses"] = valid;
-  j["matched_poses"] = matched;
-  j["cells_visited"] = cells;
-  samples::addRenderStats(j, frames.stats());
-  j["frame_wait_ms"] = o.frame_wait_ms;
-  j["frame_wait_timeouts"] = frames.waitTimeouts();
-  samples::addMemoryStats(j, have_st ? &st : nullptr);
-  if (have_st) {
-    j["runtime_frames"] = st.frames;
-    j["upload_ms_max"] = st.upload_ms_max;
-  }
+  if (rc == 0) rc = replay.checkFixes();
+  nlohmann::json j = replay.stats();
   j["wall_s"] = std::chrono::duration<double>(Clock::now() - wall0).count();
   if (!samples::writeStats(o.stats_path, j)) {
     std::fprintf(stderr, "gnss_replay: cannot write %s\n", o.stats_path.c_str());
     rc = 1;
   }
-  std::fprintf(stderr,
-               "gnss_replay: %llu fixes (%llu with a position, %llu malformed lines) over %.1f s of log: %llu poses "
-               "(%llu matched, %zu cells), %llu frames (%llu degraded, %llu blank)\n",
-               static_cast<unsigned long long>(fixes), static_cast<unsigned long long>(position_fixes),
-               static_cast<unsigned long long>(rs.bad_lines), last_t - t0, static_cast<unsigned long long>(pose_count),
-               static_cast<unsigned long long>(matched), cells.size(),
-               static_cast<unsigned long long>(frames.stats().frames), static_cast<unsigned long long>(frames.stats().degraded),
-               static_cast<unsigned long long>(frames.stats().blank));
+  replay.summary();
   return rc;
 }
