@@ -238,134 +238,150 @@ std::vector<double> times(const std::vector<Frame>& f, int which /* -1 all, 0 in
   return v;
 }
 
-int runBudget(const BudgetOpts& o) {
+// The four runs of one benchmark, side by side, and what they were given.
+struct Bench {
+  std::vector<uint32_t> route;
+  std::vector<Pose> poses;
+  double step = 0;
   int w = 0, h = 0;
-  parseSize(o.size, w, h);
+  Run local, coarsest, unbudgeted, budgeted;
+  double cal_floor = 0, cal_free = 0;  // p50s of the warm-up lap
+  double target = 0;
+  std::string target_rule;
+};
+
+// The route's poses every `step` metres (the distance one frame drives at
+// --speed-kmh and --fps, else --step).
+void routeOf(const BudgetOpts& o, Bench& b) {
+  parseSize(o.size, b.w, b.h);
   const unsigned n = parseAutoRoute(o.route);
   if (o.speed_kmh > 0 && !(o.fps > 0))
     throw core::Error(core::Status::InvalidArg, "--speed-kmh needs --fps: the step is the distance driven in one frame");
-  const double step = o.speed_kmh > 0 ? o.speed_kmh / 3.6 / o.fps : o.step;
-  if (!(step > 0.01)) throw core::Error(core::Status::InvalidArg, "the step between frames must exceed 1 cm");
-  Pacer pace(o.fps);
-  std::vector<uint32_t> route;
-  std::vector<Pose> poses;
-  {
-    stream::City city;
-    std::string err;
-    const core::Status st = city.open(o.package, err);
-    if (st != core::Status::Ok) throw core::Error(st, err);
-    if (!city.hasImpostors())
-      throw core::Error(core::Status::Unsupported, o.package + " has no impostors: bake it with --impostor both");
-    route = autoRoute(city.graph(), n, o.seed);
-    poses = samplePoses(city.graph(), route, step);
-  }
-  const size_t image_every = std::max<size_t>(1, poses.size() / 40);
+  b.step = o.speed_kmh > 0 ? o.speed_kmh / 3.6 / o.fps : o.step;
+  if (!(b.step > 0.01)) throw core::Error(core::Status::InvalidArg, "the step between frames must exceed 1 cm");
+  stream::City city;
+  std::string err;
+  const core::Status st = city.open(o.package, err);
+  if (st != core::Status::Ok) throw core::Error(st, err);
+  if (!city.hasImpostors())
+    throw core::Error(core::Status::Unsupported, o.package + " has no impostors: bake it with --impostor both");
+  b.route = autoRoute(city.graph(), n, o.seed);
+  b.poses = samplePoses(city.graph(), b.route, b.step);
+}
 
-  // 0-2 side by side. A tiny error bound keeps the local model at LOD 0; a
-  // target no frame can meet drives every block to its coarsest level and
-  // the scale to its minimum (the floor).
-  std::fprintf(stderr, "bench budget: %zu cells, %zu poses; local model at LOD 0, blvd at the budget's floor and "
-                       "without a budget, side by side ...\n", route.size(), poses.size());
-  Run local, coarsest, unbudgeted, budgeted;
-  local.rt = create(o, w, h, BLVD_MODE_LOCAL, 0.f, 1e-6f);
-  coarsest.rt = create(o, w, h, BLVD_MODE_BLVD, 0.01f, 0.f, float(o.min_scale));
-  unbudgeted.rt = create(o, w, h, BLVD_MODE_BLVD, 0.f, 0.f);
-  unbudgeted.want_images = budgeted.want_images = true;
-  const std::vector<Run*> reference = {&local, &coarsest, &unbudgeted};
-  for (Run* r : reference) check(blvd_set_route(r->rt.get(), route.data(), route.size()), r->rt.get(), "route");
-  // Warm-up laps; the last one also calibrates the auto target.
-  for (int l = 0; l + 1 < o.laps; ++l) lap(reference, pace, poses, l + 2 == o.laps, image_every, w, h);
-  const double cal_floor = pct(times(coarsest.frames, -1), 50), cal_free = pct(times(unbudgeted.frames, -1), 50);
-  for (Run* r : reference) r->frames.clear(), r->images.clear();
-  double target = 0;
-  std::string target_rule;
+// The target: given, or "auto" between the floor and the unbudgeted p50 of the warm-up lap.
+void chooseTarget(const BudgetOpts& o, Bench& b) {
   if (o.target == "auto") {
-    target = cal_floor + o.auto_fraction * (cal_free - cal_floor);
-    char b[200];
-    std::snprintf(b, sizeof b, "floor p50 + %.2f × (unbudgeted blvd p50 − floor p50), from the warm-up lap",
+    if (o.laps < 2)
+      throw core::Error(core::Status::InvalidArg, "--target-ms auto is calibrated on a warm-up lap: --laps must be 2 or more");
+    b.target = b.cal_floor + o.auto_fraction * (b.cal_free - b.cal_floor);
+    char t[200];
+    std::snprintf(t, sizeof t, "floor p50 + %.2f × (unbudgeted blvd p50 − floor p50), from the warm-up lap",
                   o.auto_fraction);
-    target_rule = b;
+    b.target_rule = t;
   } else {
-    target = std::stod(o.target);
-    target_rule = "given";
+    b.target = std::stod(o.target);
+    b.target_rule = "given";
   }
-  if (o.target == "auto" && o.laps < 2)
-    throw core::Error(core::Status::InvalidArg, "--target-ms auto is calibrated on a warm-up lap: --laps must be 2 or more");
-  if (!(target > 0)) throw core::Error(core::Status::InvalidArg, "--target-ms must be > 0 or auto");
+  if (!(b.target > 0)) throw core::Error(core::Status::InvalidArg, "--target-ms must be > 0 or auto");
+}
 
-  // 3. blvd with the target: its own warm-up laps, then the kept lap with
-  // all four side by side.
-  std::fprintf(stderr, "bench budget: blvd with a %.2f ms target ...\n", target);
-  budgeted.rt = create(o, w, h, BLVD_MODE_BLVD, float(target), 0.f, float(o.min_scale));
-  check(blvd_set_route(budgeted.rt.get(), route.data(), route.size()), budgeted.rt.get(), "route");
-  for (int l = 0; l + 1 < o.laps; ++l) lap({&budgeted}, pace, poses, false, image_every, w, h);
-  lap({&local, &coarsest, &unbudgeted, &budgeted}, pace, poses, true, image_every, w, h);
-  blvd_stats bs{};
-  bs.struct_size = sizeof bs;
-  check(blvd_runtime_stats(budgeted.rt.get(), &bs), budgeted.rt.get(), "stats");
-  const double local_p50 = pct(times(local.frames, -1), 50);
-  const double floor_p50 = pct(times(coarsest.frames, -1), 50);
-  const double free_p50 = pct(times(unbudgeted.frames, -1), 50);
-  std::vector<double> ssim;
-  for (size_t i = 0; i < std::min(unbudgeted.images.size(), budgeted.images.size()); ++i)
-    ssim.push_back(imaging::compareImages(unbudgeted.images[i].data(), budgeted.images[i].data(), w, h).ssim);
+// 0-2 side by side. A tiny error bound keeps the local model at LOD 0; a
+// target no frame can meet drives every block to its coarsest level and the
+// scale to its minimum (the floor). Then 3, blvd with the target: its own
+// warm-up laps, and the kept lap with all four side by side.
+void drive(const BudgetOpts& o, Bench& b) {
+  Pacer pace(o.fps);
+  const size_t image_every = std::max<size_t>(1, b.poses.size() / 40);
+  std::fprintf(stderr, "bench budget: %zu cells, %zu poses; local model at LOD 0, blvd at the budget's floor and "
+                       "without a budget, side by side ...\n", b.route.size(), b.poses.size());
+  b.local.rt = create(o, b.w, b.h, BLVD_MODE_LOCAL, 0.f, 1e-6f);
+  b.coarsest.rt = create(o, b.w, b.h, BLVD_MODE_BLVD, 0.01f, 0.f, float(o.min_scale));
+  b.unbudgeted.rt = create(o, b.w, b.h, BLVD_MODE_BLVD, 0.f, 0.f);
+  b.unbudgeted.want_images = b.budgeted.want_images = true;
+  const std::vector<Run*> reference = {&b.local, &b.coarsest, &b.unbudgeted};
+  for (Run* r : reference) check(blvd_set_route(r->rt.get(), b.route.data(), b.route.size()), r->rt.get(), "route");
+  // Warm-up laps; the last one also calibrates the auto target.
+  for (int l = 0; l + 1 < o.laps; ++l) lap(reference, pace, b.poses, l + 2 == o.laps, image_every, b.w, b.h);
+  b.cal_floor = pct(times(b.coarsest.frames, -1), 50);
+  b.cal_free = pct(times(b.unbudgeted.frames, -1), 50);
+  for (Run* r : reference) r->frames.clear(), r->images.clear();
+  chooseTarget(o, b);
+  std::fprintf(stderr, "bench budget: blvd with a %.2f ms target ...\n", b.target);
+  b.budgeted.rt = create(o, b.w, b.h, BLVD_MODE_BLVD, float(b.target), 0.f, float(o.min_scale));
+  check(blvd_set_route(b.budgeted.rt.get(), b.route.data(), b.route.size()), b.budgeted.rt.get(), "route");
+  for (int l = 0; l + 1 < o.laps; ++l) lap({&b.budgeted}, pace, b.poses, false, image_every, b.w, b.h);
+  lap({&b.local, &b.coarsest, &b.unbudgeted, &b.budgeted}, pace, b.poses, true, image_every, b.w, b.h);
+}
 
-  const std::vector<double> all = times(budgeted.frames, -1);
+// Frame times, the stutter, the floor and the picture's cost, and the checks
+// of the targets.
+void frameFigures(const Bench& b, nlohmann::json& j) {
+  const double target = b.target;
+  const std::vector<double> all = times(b.budgeted.frames, -1);
   const double p50 = pct(all, 50), p95 = pct(all, 95);
-  const double p99_inside = pct(times(budgeted.frames, 0), 99), p99_boundary = pct(times(budgeted.frames, 1), 99);
-  std::vector<double> tris_local, tris_budget, scales;
-  for (const Frame& f : local.frames) tris_local.push_back(double(f.tris));
+  const double p99_inside = pct(times(b.budgeted.frames, 0), 99), p99_boundary = pct(times(b.budgeted.frames, 1), 99);
+  const double local_p50 = pct(times(b.local.frames, -1), 50);
+  std::vector<double> tris_local, tris_budget, scales, ssim;
+  for (const Frame& f : b.local.frames) tris_local.push_back(double(f.tris));
   size_t scaled_frames = 0;
-  for (const Frame& f : budgeted.frames) {
+  for (const Frame& f : b.budgeted.frames) {
     tris_budget.push_back(double(f.tris));
     scales.push_back(f.scale);
     scaled_frames += f.scale < 1.f;
   }
-  nlohmann::json j;
+  for (size_t i = 0; i < std::min(b.unbudgeted.images.size(), b.budgeted.images.size()); ++i)
+    ssim.push_back(imaging::compareImages(b.unbudgeted.images[i].data(), b.budgeted.images[i].data(), b.w, b.h).ssim);
   j["target_ms"] = target;
-  j["target_rule"] = target_rule;
+  j["target_rule"] = b.target_rule;
   j["frame_ms_p50"] = p50;
   j["frame_ms_p95"] = p95;
   j["stutter_ratio"] = p99_boundary / p99_inside;
   j["p99_boundary_ms"] = p99_boundary;
   j["p99_inside_ms"] = p99_inside;
-  j["boundary_frames"] = times(budgeted.frames, 1).size();  // the stutter's p99 is over these few
-  const auto ci = stutterInterval(times(budgeted.frames, 1), times(budgeted.frames, 0));
+  j["boundary_frames"] = times(b.budgeted.frames, 1).size();  // the stutter's p99 is over these few
+  const auto ci = stutterInterval(times(b.budgeted.frames, 1), times(b.budgeted.frames, 0));
   j["stutter_ratio_ci90"] = {ci.first, ci.second};
-  j["boundary_spike_rate"] = spikeRate(budgeted.frames, 1);
-  j["inside_spike_rate"] = spikeRate(budgeted.frames, 0);
+  j["boundary_spike_rate"] = spikeRate(b.budgeted.frames, 1);
+  j["inside_spike_rate"] = spikeRate(b.budgeted.frames, 0);
   j["local_lod0_ms_p50"] = local_p50;
-  j["floor_ms_p50"] = floor_p50;
-  j["floor_ms_p95"] = pct(times(coarsest.frames, -1), 95);
-  j["calibration_floor_ms_p50"] = cal_floor;
-  j["calibration_unbudgeted_ms_p50"] = cal_free;
-  j["min_render_scale"] = o.min_scale;
+  j["floor_ms_p50"] = pct(times(b.coarsest.frames, -1), 50);
+  j["floor_ms_p95"] = pct(times(b.coarsest.frames, -1), 95);
+  j["calibration_floor_ms_p50"] = b.cal_floor;
+  j["calibration_unbudgeted_ms_p50"] = b.cal_free;
   j["render_scale_p50"] = pct(scales, 50);
   j["render_scale_p5"] = pct(scales, 5);
-  j["scaled_frames_share"] = budgeted.frames.empty() ? 0.0 : double(scaled_frames) / double(budgeted.frames.size());
+  j["scaled_frames_share"] = b.budgeted.frames.empty() ? 0.0 : double(scaled_frames) / double(b.budgeted.frames.size());
   j["local_lod0_triangles_p50"] = pct(tris_local, 50);
-  j["unbudgeted_ms_p50"] = free_p50;
+  j["unbudgeted_ms_p50"] = pct(times(b.unbudgeted.frames, -1), 50);
   j["budgeted_triangles_p50"] = pct(tris_budget, 50);
   j["ssim_cost_p50"] = 1.0 - pct(ssim, 50);
   j["ssim_vs_unbudgeted_p50"] = pct(ssim, 50);
   j["ssim_vs_unbudgeted_p5"] = pct(ssim, 5);
+  j["frames"] = b.budgeted.frames.size();
+  j["checks"] = {{"local_exceeds_target", local_p50 > target},
+                 {"p50_within_10pct", std::fabs(p50 - target) <= 0.1 * target},
+                 {"p95_within_1_25x", p95 <= 1.25 * target},
+                 {"stutter_at_most_1_2", p99_boundary / p99_inside <= 1.2}};
+}
+
+// The pacing, the prefetch and the decode work of the budgeted runtime.
+void loaderFigures(const BudgetOpts& o, const Bench& b, const blvd_stats& bs, nlohmann::json& j) {
+  j["min_render_scale"] = o.min_scale;
   j["budget_unreachable_at_end"] = bs.budget_unreachable != 0;
-  j["frames"] = budgeted.frames.size();
-  j["route"] = route;  // the cells in driving order, to compare with the CSV's cells
+  j["route"] = b.route;  // the cells in driving order, to compare with the CSV's cells
   // The pacing: frames on a display's ticks (a host at vsync) or back to back.
   j["fps"] = o.fps;
-  j["step_m"] = step;
-  j["speed_kmh"] = o.fps > 0 ? step * o.fps * 3.6 : 0.0;
+  j["step_m"] = b.step;
+  j["speed_kmh"] = o.fps > 0 ? b.step * o.fps * 3.6 : 0.0;
   j["prefetch"] = o.prefetch;
   j["prefetch_gap_waits"] = bs.prefetch_gap_waits;
   j["prefetch_gap_wait_ms"] = bs.prefetch_gap_wait_ms;
   j["prefetch_cpu_mask"] = o.prefetch_cpus;
-  {
-    blvd_runtime_desc d{};
-    d.struct_size = sizeof d;
-    d.prefetch_share = float(o.prefetch_share);
-    j["prefetch_share"] = std::round(double(blvd_runtime_desc_defaults(&d).prefetch_share) * 1e6) / 1e6;  // 0: the default
-  }
+  blvd_runtime_desc d{};
+  d.struct_size = sizeof d;
+  d.prefetch_share = float(o.prefetch_share);
+  j["prefetch_share"] = std::round(double(blvd_runtime_desc_defaults(&d).prefetch_share) * 1e6) / 1e6;  // 0: the default
   j["prefetch_share_waits"] = bs.prefetch_share_waits;
   j["prefetch_share_wait_ms"] = bs.prefetch_share_wait_ms;
   j["prefetch_kept_off_cpu"] = bs.prefetch_kept_off_cpu;
@@ -379,64 +395,78 @@ int runBudget(const BudgetOpts& o) {
   j["loader_cpu_ms"] = bs.loader_cpu_ms;
   // Frames that found their cell not resident (each waited for and drawn
   // again, the second time kept): a prefetch that falls behind shows here.
-  j["degraded_frames"] = budgeted.degraded();
-  j["degraded_frames_unbudgeted"] = unbudgeted.degraded();
-  j["checks"] = {{"local_exceeds_target", local_p50 > target},
-                 {"p50_within_10pct", std::fabs(p50 - target) <= 0.1 * target},
-                 {"p95_within_1_25x", p95 <= 1.25 * target},
-                 {"stutter_at_most_1_2", p99_boundary / p99_inside <= 1.2}};
+  j["degraded_frames"] = b.budgeted.degraded();
+  j["degraded_frames_unbudgeted"] = b.unbudgeted.degraded();
+}
+
+// Every frame of the kept lap of every run (--csv).
+void writeCsv(const std::string& path, const Bench& b) {
+  std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s,degraded,prefetch_cpu_ms,decode_cpu_ms\n";
+  const std::pair<const char*, const std::vector<Frame>*> runs[] = {
+      {"local_lod0", &b.local.frames}, {"floor", &b.coarsest.frames}, {"unbudgeted", &b.unbudgeted.frames},
+      {"budgeted", &b.budgeted.frames}};
+  for (const auto& [name, frames] : runs)
+    for (size_t i = 0; i < frames->size(); ++i) {
+      const Frame& f = (*frames)[i];
+      char row[256];
+      std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u,%.4f,%llu,%llu,%.6f,%d,%.4f,%.4f\n", name, i, f.ms,
+                    f.upload_ms, static_cast<unsigned long long>(f.tris), double(f.scale), int(f.boundary), f.cell,
+                    double(f.aim_ms), static_cast<unsigned long long>(f.block_tris),
+                    static_cast<unsigned long long>(f.budget), f.mono_s, int(f.degraded), f.prefetch_cpu_ms,
+                    f.decode_cpu_ms);
+      csv += row;
+    }
+  writeText(path, csv);
+}
+
+// Frame times and the budget's knobs along the route, drawn (--html).
+void writeHtml(const BudgetOpts& o, const Bench& b) {
+  PlotSpec ft;
+  ft.title = "Frame time along the route (last lap)";
+  ft.x_label = "frame";
+  ft.y_label = "ms";
+  Series a{"local, LOD 0", {}, ""}, u{"blvd, no budget", {}, ""}, c{"blvd, budget", {}, ""}, t{"target", {}, ""},
+      m{"budget's aim", {}, ""};
+  for (const Frame& f : b.local.frames) a.y.push_back(f.ms);
+  for (const Frame& f : b.unbudgeted.frames) u.y.push_back(f.ms);
+  for (const Frame& f : b.budgeted.frames) c.y.push_back(f.ms), t.y.push_back(b.target), m.y.push_back(f.aim_ms);
+  ft.series = {a, u, c, t, m};
+  PlotSpec sc;
+  sc.title = "The budget's knobs along the route (last lap)";
+  sc.x_label = "frame";
+  sc.y_label = "render scale / share of the local model's triangles";
+  Series scale{"render scale", {}, ""}, tris{"block triangles / local LOD 0", {}, ""};
+  for (size_t i = 0; i < b.budgeted.frames.size(); ++i) {
+    scale.y.push_back(b.budgeted.frames[i].scale);
+    const double full = i < b.local.frames.size() ? double(b.local.frames[i].tris) : 0.0;
+    tris.y.push_back(full > 0 ? std::min(1.0, double(b.budgeted.frames[i].tris) / full) : 0.0);
+  }
+  sc.series = {scale, tris};
+  HtmlPage page("blvd bench budget: " + o.package);
+  page.paragraph(std::to_string(b.route.size()) + " cells, " + std::to_string(b.poses.size()) + " frames a lap, " +
+                 o.size + ". Target " + std::to_string(b.target) + " ms (" + b.target_rule + ").");
+  page.raw(svgLinePlot(ft));
+  page.raw(svgLinePlot(sc));
+  std::string err;
+  ::mkdir(o.html_dir.c_str(), 0755);
+  if (!page.write(o.html_dir + "/index.html", err)) throw core::Error(core::Status::Io, err);
+}
+
+int runBudget(const BudgetOpts& o) {
+  Bench b;
+  routeOf(o, b);
+  drive(o, b);
+  blvd_stats bs{};
+  bs.struct_size = sizeof bs;
+  check(blvd_runtime_stats(b.budgeted.rt.get(), &bs), b.budgeted.rt.get(), "stats");
+  nlohmann::json j;
+  frameFigures(b, j);
+  loaderFigures(o, b, bs, j);
   const std::string text = j.dump(2);
   std::printf("%s\n", text.c_str());
   writeText(o.json_path, text);
-  if (!o.csv_path.empty()) {
-    std::string csv = "run,frame,ms,upload_ms,triangles,scale,boundary,cell,aim_ms,block_triangles,polygon_budget,start_mono_s,degraded,prefetch_cpu_ms,decode_cpu_ms\n";
-    const std::pair<const char*, const std::vector<Frame>*> runs[] = {
-        {"local_lod0", &local.frames}, {"floor", &coarsest.frames}, {"unbudgeted", &unbudgeted.frames},
-        {"budgeted", &budgeted.frames}};
-    for (const auto& [name, frames] : runs)
-      for (size_t i = 0; i < frames->size(); ++i) {
-        const Frame& f = (*frames)[i];
-        char row[256];
-        std::snprintf(row, sizeof row, "%s,%zu,%.4f,%.4f,%llu,%.4f,%d,%u,%.4f,%llu,%llu,%.6f,%d,%.4f,%.4f\n", name, i, f.ms,
-                      f.upload_ms, static_cast<unsigned long long>(f.tris), double(f.scale), int(f.boundary), f.cell,
-                      double(f.aim_ms), static_cast<unsigned long long>(f.block_tris),
-                      static_cast<unsigned long long>(f.budget), f.mono_s, int(f.degraded), f.prefetch_cpu_ms,
-                      f.decode_cpu_ms);
-        csv += row;
-      }
-    writeText(o.csv_path, csv);
-  }
-  if (!o.html_dir.empty()) {
-    PlotSpec ft;
-    ft.title = "Frame time along the route (last lap)";
-    ft.x_label = "frame";
-    ft.y_label = "ms";
-    Series a{"local, LOD 0", {}, ""}, b{"blvd, no budget", {}, ""}, c{"blvd, budget", {}, ""}, t{"target", {}, ""},
-        m{"budget's aim", {}, ""};
-    for (const Frame& f : local.frames) a.y.push_back(f.ms);
-    for (const Frame& f : unbudgeted.frames) b.y.push_back(f.ms);
-    for (const Frame& f : budgeted.frames) c.y.push_back(f.ms), t.y.push_back(target), m.y.push_back(f.aim_ms);
-    ft.series = {a, b, c, t, m};
-    PlotSpec sc;
-    sc.title = "The budget's knobs along the route (last lap)";
-    sc.x_label = "frame";
-    sc.y_label = "render scale / share of the local model's triangles";
-    Series scale{"render scale", {}, ""}, tris{"block triangles / local LOD 0", {}, ""};
-    for (size_t i = 0; i < budgeted.frames.size(); ++i) {
-      scale.y.push_back(budgeted.frames[i].scale);
-      const double full = i < local.frames.size() ? double(local.frames[i].tris) : 0.0;
-      tris.y.push_back(full > 0 ? std::min(1.0, double(budgeted.frames[i].tris) / full) : 0.0);
-    }
-    sc.series = {scale, tris};
-    HtmlPage page("blvd bench budget: " + o.package);
-    page.paragraph(std::to_string(route.size()) + " cells, " + std::to_string(poses.size()) + " frames a lap, " +
-                   o.size + ". Target " + std::to_string(target) + " ms (" + target_rule + ").");
-    page.raw(svgLinePlot(ft));
-    page.raw(svgLinePlot(sc));
-    std::string err;
-    ::mkdir(o.html_dir.c_str(), 0755);
-    if (!page.write(o.html_dir + "/index.html", err)) throw core::Error(core::Status::Io, err);
-  }
+  if (!o.csv_path.empty()) writeCsv(o.csv_path, b);
+  if (!o.html_dir.empty()) writeHtml(o, b);
   return 0;
 }
 
