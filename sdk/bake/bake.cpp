@@ -20,24 +20,12 @@
 
 namespace blvd::bake {
 
-BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, const BakeOptions& opt) {
-  const auto t0 = std::chrono::steady_clock::now();
-  checkLodOptions(opt.lod);
-  BakeSummary sum;
-  Progress progress(opt.quiet);
+namespace {
 
-  progress.stage("reading " + osm_path.substr(osm_path.find_last_of('/') + 1));
-  OsmCity city = readOsm(osm_path, opt.osm, [&](uint64_t d, uint64_t t) { progress.update(double(d), double(t)); });
-  sum.streets = city.streets.size();
-  sum.source_bytes = city.source_bytes;
-  sum.bad_polygons = city.bad_polygons;
-  sum.defaulted_heights = city.defaulted;
-
-  progress.stage("street map (arrangement)");
-  StreetMap map(city.streets);
-  graph::StreetGraph& g = map.graph();
-
-  progress.stage("placing buildings");
+// Each face's buildings: the face that holds the building's anchor point.
+std::vector<std::vector<uint32_t>> placeBuildings(const OsmCity& city, StreetMap& map, BakeSummary& sum,
+                                                  Progress& progress) {
+  const graph::StreetGraph& g = map.graph();
   std::vector<std::vector<uint32_t>> face_buildings(g.faces.size());
   for (size_t i = 0; i < city.buildings.size(); ++i) {
     glm::dvec2 p;
@@ -48,13 +36,19 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
     face_buildings[map.locateFace(p)].push_back(static_cast<uint32_t>(i));
     progress.update(double(i), double(city.buildings.size()));
   }
+  return face_buildings;
+}
 
-  progress.stage("block geometry + LOD chain + GLB");
+// One block per face: ground, half streets and buildings, its LOD chain as a
+// GLB blob in the package; the meshes are kept for the impostor captures.
+void buildBlocks(const OsmCity& city, StreetMap& map, const std::vector<std::vector<uint32_t>>& face_buildings,
+                 const BakeOptions& opt, package::PackageWriter& writer, std::vector<graph::BlockRecord>& blocks,
+                 std::vector<geo::MeshData>& block_meshes, BakeSummary& sum, Progress& progress) {
+  const graph::StreetGraph& g = map.graph();
   std::vector<std::vector<uint32_t>> face_halfedges(g.faces.size());
   for (uint32_t h = 0; h < g.halfedges.size(); ++h) face_halfedges[g.halfedges[h].face].push_back(h);
-  package::PackageWriter writer;
-  std::vector<graph::BlockRecord> blocks(g.faces.size());
-  std::vector<geo::MeshData> block_meshes(g.faces.size());  // kept for the impostor captures
+  blocks.assign(g.faces.size(), graph::BlockRecord{});
+  block_meshes.assign(g.faces.size(), geo::MeshData{});
   package::GlbOptions glb_opt;
   glb_opt.codec = opt.block_codec;
   glb_opt.compression_level = opt.draco_level;
@@ -84,44 +78,38 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   }
   if (sum.skipped_buildings)
     BLVD_LOG_WARN("%zu buildings skipped (footprint unusable; see --verbose)", sum.skipped_buildings);
+}
 
-  graph::CellTables tables;
-  // Chosen on the city before any tiling, so the same cells in a 1x and a tiled package.
-  const std::vector<uint32_t> route = opt.select_cells ? opt.select_cells(g) : std::vector<uint32_t>{};
-  if (opt.impostor.mode != ImpostorMode::None) {
-    std::string current;
-    ImpostorOptions iopt = opt.impostor;
-    iopt.only_cells = route;
-    const ImpostorBakeResult ir =
-        bakeImpostors(g, block_meshes, iopt, writer, [&](const char* stage, double d, double t) {
-          if (current != stage) progress.stage(current = stage);
-          progress.update(d, t);
-        });
-    tables = ir.tables;
-    sum.impostors = ir.records.size();
-    sum.item_samples = ir.samples;
-    sum.pvs_seconds = ir.pvs_seconds;
-    sum.impostor_seconds = ir.impostor_seconds;
-    for (const auto& c : tables.impostors) sum.impostor_cells += !c.layered.empty() || !c.single.empty();
-    for (const auto& r : ir.records) {
-      sum.impostor_triangles += r.triangles;
-      sum.impostor_bytes += r.bytes;
-    }
-    if (opt.on_impostors) opt.on_impostors(g, ir, sum.lod);
+// Visibility and impostors of the cells (all, or `route`'s), into the package.
+graph::CellTables impostorsOf(const graph::StreetGraph& g, const std::vector<geo::MeshData>& block_meshes,
+                              const std::vector<uint32_t>& route, const BakeOptions& opt,
+                              package::PackageWriter& writer, BakeSummary& sum, Progress& progress) {
+  if (opt.impostor.mode == ImpostorMode::None) return {};
+  std::string current;
+  ImpostorOptions iopt = opt.impostor;
+  iopt.only_cells = route;
+  const ImpostorBakeResult ir =
+      bakeImpostors(g, block_meshes, iopt, writer, [&](const char* stage, double d, double t) {
+        if (current != stage) progress.stage(current = stage);
+        progress.update(d, t);
+      });
+  sum.impostors = ir.records.size();
+  sum.item_samples = ir.samples;
+  sum.pvs_seconds = ir.pvs_seconds;
+  sum.impostor_seconds = ir.impostor_seconds;
+  for (const auto& c : ir.tables.impostors) sum.impostor_cells += !c.layered.empty() || !c.single.empty();
+  for (const auto& r : ir.records) {
+    sum.impostor_triangles += r.triangles;
+    sum.impostor_bytes += r.bytes;
   }
+  if (opt.on_impostors) opt.on_impostors(g, ir, sum.lod);
+  return ir.tables;
+}
 
-  const bool tiled = opt.tile.nx * opt.tile.ny > 1;
-  if (tiled) progress.stage("tiling " + std::to_string(opt.tile.nx) + "x" + std::to_string(opt.tile.ny));
-  const TileLayout tiles = tileCity(g, blocks, tables, writer, opt.tile);  // 1x1: no change
-  if (tiled) {
-    const uint64_t n = tiles.copies;
-    sum.buildings *= n;
-    sum.triangles *= n;
-    for (uint32_t k = 0; k < graph::kMaxBlockLods; ++k)
-      sum.lod.blocks[k] *= n, sum.lod.triangles[k] *= n, sum.lod.vertices[k] *= n;
-  }
-
-  progress.stage("writing package");
+// The header: origin, bounds of every block, counts and the pool sizes.
+package::PackageHeader packageHeader(const OsmCity& city, const graph::StreetGraph& g,
+                                     const std::vector<graph::BlockRecord>& blocks, const graph::CellTables& tables,
+                                     const package::PackageWriter& writer, const BakeSummary& sum) {
   float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
   bool any = false;
   for (const graph::BlockRecord& rec : blocks) {
@@ -132,8 +120,6 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
     }
     any = true;
   }
-  const std::vector<std::string> bad = graph::checkInvariants(g);
-  if (!bad.empty()) throw core::Error(core::Status::Internal, "street graph invariant broken: " + bad.front());
   package::PackageHeader hdr;
   hdr.origin_lat = city.origin_lat;
   hdr.origin_lon = city.origin_lon;
@@ -148,14 +134,16 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   hdr.triangle_count = sum.triangles;
   hdr.source_bytes = city.source_bytes;
   fillPoolSizing(g, blocks, tables, [&](uint32_t i) { return uint64_t{writer.blob(i).size()}; }, hdr);
-  writer.setHeader(hdr);
-  writer.addSection(package::kSectionGraph, graph::serializeGraph(g));
-  writer.addSection(package::kSectionCells, graph::serializeCells(g));
-  writer.addSection(package::kSectionBlocks, graph::serializeBlocks(blocks));
-  if (!tables.visibility.empty()) {
-    writer.addSection(package::kSectionVisibility, graph::serializeVisibility(tables));
-    writer.addSection(package::kSectionImpostors, graph::serializeImpostors(tables));
-  }
+  return hdr;
+}
+
+// The META section: how the package was baked, with the source's attribution.
+std::string packageMeta(const std::string& osm_path, const OsmCity& city, const BakeOptions& opt,
+                        const TileLayout& tiles, const std::vector<uint32_t>& route, const BakeSummary& sum) {
+  const char* mode = opt.impostor.mode == ImpostorMode::None     ? "none"
+                     : opt.impostor.mode == ImpostorMode::Single ? "single"
+                     : opt.impostor.mode == ImpostorMode::Both   ? "both"
+                                                                 : "layered";
   nlohmann::json meta = {
       {"generator", "blvd bake"},
       {"source", osm_path.substr(osm_path.find_last_of('/') + 1)},
@@ -180,10 +168,7 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
         {"unlocked_levels", sum.lod.unlocked_levels},
         {"max_error_m", sum.lod.max_error_m}}},
       {"impostors",
-       {{"mode", opt.impostor.mode == ImpostorMode::None     ? "none"
-                 : opt.impostor.mode == ImpostorMode::Single ? "single"
-                 : opt.impostor.mode == ImpostorMode::Both   ? "both"
-                                                             : "layered"},
+       {{"mode", mode},
         {"threshold_px", opt.impostor.threshold_px},
         {"texture_max", opt.impostor.texture_max},
         {"grid_px", opt.impostor.grid_px},
@@ -192,8 +177,66 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
        {{"streets", sum.streets}, {"buildings", sum.buildings}, {"height_tagged", city.height_tagged},
         {"level_tagged", city.level_tagged}, {"defaulted", city.defaulted}, {"skipped", sum.skipped_buildings}}},
   };
-  const std::string meta_text = meta.dump(1);
-  writer.addSection(package::kSectionMeta, std::vector<uint8_t>(meta_text.begin(), meta_text.end()));
+  return meta.dump(1);
+}
+
+// A tiled bake repeats the city: its counts grow with the copies.
+void scaleForTiles(const TileLayout& tiles, BakeSummary& sum) {
+  const uint64_t n = tiles.copies;
+  sum.buildings *= n;
+  sum.triangles *= n;
+  for (uint32_t k = 0; k < graph::kMaxBlockLods; ++k)
+    sum.lod.blocks[k] *= n, sum.lod.triangles[k] *= n, sum.lod.vertices[k] *= n;
+}
+
+}  // namespace
+
+BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, const BakeOptions& opt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  checkLodOptions(opt.lod);
+  BakeSummary sum;
+  Progress progress(opt.quiet);
+
+  progress.stage("reading " + osm_path.substr(osm_path.find_last_of('/') + 1));
+  OsmCity city = readOsm(osm_path, opt.osm, [&](uint64_t d, uint64_t t) { progress.update(double(d), double(t)); });
+  sum.streets = city.streets.size();
+  sum.source_bytes = city.source_bytes;
+  sum.bad_polygons = city.bad_polygons;
+  sum.defaulted_heights = city.defaulted;
+
+  progress.stage("street map (arrangement)");
+  StreetMap map(city.streets);
+  graph::StreetGraph& g = map.graph();
+  progress.stage("placing buildings");
+  const std::vector<std::vector<uint32_t>> face_buildings = placeBuildings(city, map, sum, progress);
+  progress.stage("block geometry + LOD chain + GLB");
+  package::PackageWriter writer;
+  std::vector<graph::BlockRecord> blocks;
+  std::vector<geo::MeshData> block_meshes;
+  buildBlocks(city, map, face_buildings, opt, writer, blocks, block_meshes, sum, progress);
+
+  // Chosen on the city before any tiling, so the same cells in a 1x and a tiled package.
+  const std::vector<uint32_t> route = opt.select_cells ? opt.select_cells(g) : std::vector<uint32_t>{};
+  graph::CellTables tables = impostorsOf(g, block_meshes, route, opt, writer, sum, progress);
+
+  const bool tiled = opt.tile.nx * opt.tile.ny > 1;
+  if (tiled) progress.stage("tiling " + std::to_string(opt.tile.nx) + "x" + std::to_string(opt.tile.ny));
+  const TileLayout tiles = tileCity(g, blocks, tables, writer, opt.tile);  // 1x1: no change
+  if (tiled) scaleForTiles(tiles, sum);
+
+  progress.stage("writing package");
+  const std::vector<std::string> bad = graph::checkInvariants(g);
+  if (!bad.empty()) throw core::Error(core::Status::Internal, "street graph invariant broken: " + bad.front());
+  writer.setHeader(packageHeader(city, g, blocks, tables, writer, sum));
+  writer.addSection(package::kSectionGraph, graph::serializeGraph(g));
+  writer.addSection(package::kSectionCells, graph::serializeCells(g));
+  writer.addSection(package::kSectionBlocks, graph::serializeBlocks(blocks));
+  if (!tables.visibility.empty()) {
+    writer.addSection(package::kSectionVisibility, graph::serializeVisibility(tables));
+    writer.addSection(package::kSectionImpostors, graph::serializeImpostors(tables));
+  }
+  const std::string meta = packageMeta(osm_path, city, opt, tiles, route, sum);
+  writer.addSection(package::kSectionMeta, std::vector<uint8_t>(meta.begin(), meta.end()));
   writer.write(out_path);
   sum.package_bytes = writer.fileBytes();
   progress.finish();
