@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -18,6 +19,7 @@
 #include "bake/bake.h"
 #include "can/candump.h"
 #include "capi/track_convert.h"
+#include "core/math.h"
 #include "cli/read_files.h"
 #include "core/status.h"
 #include "replay/replayer.h"
@@ -276,72 +278,203 @@ struct DriveChain {
   bool resume_pose = false;
 };
 
-MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry, const std::string& trace_path,
-                          DriveChain chain = DriveChain{}) {
-  const bool calibrated = chain.calibrated;
-  MatchResult res;
+// Where the last drive ended, carried to the next one when drives are chained.
+struct ChainState {
+  uint32_t end_cell = track::kNoCell;  // where the car stopped
+  double end_arc = 0;
+  bool have_start = false;             // the pose the tracker ended with
+  track::StartPose start;
   track::OdometryCalibration cal;
   bool have_cal = false;
-  // The previous drive's end: where the car stopped and the pose the tracker ended with.
-  uint32_t prev_end_cell = track::kNoCell;
-  double prev_end_arc = 0;
-  bool have_start = false;
-  track::StartPose start;
+};
+
+// Drive r's simulated feed: a seeded street, or (chained) pulling away from
+// where the last drive parked; towed to a seeded street when no route of half
+// the cells goes on from there. False for a drive the graph cannot hold.
+bool driveFeed(const MatchSetup& ms, double sigma, const DriveChain& chain, uint32_t r, ChainState& cs,
+               sim::FeedDesc& fd, sim::Feed& feed, bool& resumed) {
+  const graph::StreetGraph& g = ms.city->graph();
+  fd.drive.seed = 1000 + r;
+  fd.drive.route_cells = ms.route_cells;
+  fd.drive.gnss_sigma_m = sigma;
+  if (ms.lane_wander_m >= 0) fd.drive.lane_wander_m = ms.lane_wander_m;
+  if (chain.chained) {
+    fd.drive.start_speed_mps = 0;
+    fd.drive.park_mid_last_cell = true;
+    fd.drive.first_cell = cs.end_cell;
+    fd.drive.start_arc_m = cs.end_arc;
+  }
+  std::string err;
+  blvd_status fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
+  resumed = chain.resume_pose && cs.have_start;
+  if (fd.drive.first_cell != track::kNoCell && (fst == BLVD_ERR_NOT_FOUND || 2 * feed.route.size() < ms.route_cells)) {
+    fd.drive.first_cell = track::kNoCell;
+    resumed = false;
+    fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
+  }
+  cs.end_cell = track::kNoCell;
+  cs.have_start = false;
+  if (fst == BLVD_ERR_NOT_FOUND) return false;
+  if (fst != BLVD_OK) throw Error(Status::Internal, err);
+  return true;
+}
+
+// The device bytes of a drive, parsed back by the adapters as a host's would be.
+void openReplay(const MatchSetup& ms, const sim::FeedDesc& fd, bool with_odometry, std::istringstream& nmea,
+                std::istringstream& can_log, replay::Replayer& replayer) {
+  replay::ReplayDesc rd;
+  rd.nmea_path = "sim-" + std::to_string(fd.drive.seed) + ".nmea";
+  rd.nmea_stream = &nmea;
+  if (with_odometry) {
+    rd.candump_path = "sim-" + std::to_string(fd.drive.seed) + ".log";
+    rd.candump_stream = &can_log;
+    rd.dbc_path = ms.dbc_path;
+    rd.vehicle = "toyota";
+    rd.has_offset = true;  // both streams are on the simulator's UTC clock
+    rd.offset_s = 0;
+  }
+  rd.strict = true;  // the simulator's output must parse without a single bad line
+  std::string err;
+  if (replayer.open(rd, err) != BLVD_OK) throw Error(Status::Io, err);
+}
+
+const char* kTraceHeader =
+    "drive,t,fix,true_cell,true_arc,true_len,cell,arc,conf,err_m,sigma_m,true_e,true_n,e,n,heading,"
+    "true_heading,est_arc_on_true,est_dist_on_true,map_aids,true_dist_on_est,est_cell_heading,yaw_bias_dps,"
+    "odo_scale,true_h0,true_h1,fix_e,fix_n,nees,sigma_along,aid_suspensions,head_cell,true_lat,est_lat,lane_m,kappa,"
+    "aid_lowconf,aid_disagree,aid_ambiguous,relation\n";
+
+// One epoch of the --trace CSV: the truth, the pose, and the filter's and
+// matcher's state behind it.
+void traceRow(FILE* tf, const graph::StreetGraph& g, uint32_t r, const sim::Feed& feed, const sim::TruthRow& s,
+              const track::Pose& p, const track::Tracker& tr) {
+  const track::CellPoint q = tr.matcher()->project(s.cell, p.e, p.n);
+  const track::CellPoint qe = tr.matcher()->project(p.cell, s.e, s.n);  // the truth on the pose's cell
+  const track::CellPoint qt = tr.matcher()->project(s.cell, s.e, s.n);  // the truth on its own cell
+  const glm::dvec2 d0 = graph::cellDirection(g, s.cell, false), d1 = graph::cellDirection(g, s.cell, true);
+  // The raw fix of this epoch's HMM step (empty without one), and the normalised estimation
+  // error of the filter, err^T P^-1 err over east and north (chi-square with 2 dof, mean 2,
+  // for a consistent filter; Bar-Shalom, Li & Kirubarajan 2001, §5.4.2).
+  const track::MatchObservation& ob = tr.matcher()->lastObservation();
+  char fix_en[64] = ",";
+  if (s.fix && ob.fix_sigma_m > 0 && std::fabs(ob.t - s.t) < 1e-6) std::snprintf(fix_en, sizeof fix_en, "%.2f,%.2f", ob.fix_e, ob.fix_n);
+  const double pee = tr.filter().cov(0, 0), pnn = tr.filter().cov(1, 1), pen = tr.filter().cov(0, 1);
+  const double det = pee * pnn - pen * pen, ee = p.e - s.e, en = p.n - s.n;
+  const double nees = det > 0 ? (ee * ee * pnn - 2 * ee * en * pen + en * en * pee) / det : -1.0;
+  // The filter's sigma along the true heading (its claimed along-track uncertainty).
+  const double th = s.heading_deg * core::kDegToRad, ue = std::sin(th), un = std::cos(th);
+  const double sigma_along = std::sqrt(std::max(0.0, ue * ue * pee + 2 * ue * un * pen + un * un * pnn));
+  const double deg = core::kRadToDeg;
+  std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f,%llu,%.2f,%.1f,%.3f,%.5f,%.1f,%.1f,%s,%.2f,%.3f,%llu,%d,%.3f,%.3f,%.2f,%.5f,%llu,%llu,%llu,%s\n", r,
+               s.t - feed.start_unix, s.fix ? 1 : 0, s.cell, s.arc_m, g.halfedges[s.cell].length, p.cell, p.arc_m,
+               p.confidence, std::hypot(p.e - s.e, p.n - s.n), p.pos_sigma_m, s.e, s.n, p.e, p.n, p.heading_deg,
+               s.heading_deg, q.arc_m, q.dist_m, static_cast<unsigned long long>(tr.stats().map_aids),
+               qe.cell == track::kNoCell ? -1.0 : qe.dist_m, qe.heading_rad * deg, tr.filter().bias() * deg,
+               tr.filter().odometryScale(), std::atan2(d0.x, d0.y) * deg, std::atan2(d1.x, d1.y) * deg, fix_en, nees,
+               sigma_along, static_cast<unsigned long long>(tr.stats().map_aid_suspensions),
+               tr.matcher()->head().cell == track::kNoCell ? -1 : static_cast<int>(tr.matcher()->head().cell),
+               qt.lateral_m, q.lateral_m, track::laneOffset(g.halfedges[s.cell], 1.75),
+               std::fabs(tr.filter().speed()) > 1 ? tr.filter().turnRate() / tr.filter().speed() : 0.0,
+               static_cast<unsigned long long>(tr.stats().map_aid_low_confidence),
+               static_cast<unsigned long long>(tr.stats().map_aid_disagreeing),
+               static_cast<unsigned long long>(tr.stats().map_aid_ambiguous), cellRelation(g, p.cell, s.cell));
+}
+
+// One epoch's score: on the true cell (all, with a fix, warm, inner), and the
+// fixed-lag decision against the truth of its time.
+void scoreEpoch(const graph::StreetGraph& g, const sim::Feed& feed, const sim::TruthRow& s, const track::Pose& p,
+                const std::vector<std::pair<double, uint32_t>>& truth, MatchResult& res) {
+  ++res.epochs;
+  const bool ok = p.cell == s.cell;
+  res.on_cell += ok;
+  if (s.fix) ++res.fix_epochs, res.fix_on_cell += ok;
+  if (s.t - feed.start_unix > 10.0) ++res.warm_epochs, res.warm_on_cell += ok;
+  if (s.arc_m >= 2.0 && g.halfedges[s.cell].length - s.arc_m >= 2.0) ++res.inner_epochs, res.inner_on_cell += ok;
+  if (p.settled_cell == track::kNoCell) return;
+  for (auto it = truth.rbegin(); it != truth.rend(); ++it)
+    if (std::fabs(it->first - p.settled_t) < 1e-6) {
+      ++res.settled;
+      res.settled_ok += it->second == p.settled_cell;
+      return;
+    }
+}
+
+// The adapters' events in time order, into a tracker.
+class EventPump {
+ public:
+  EventPump(replay::Replayer& replayer, track::Tracker& tr, MatchResult& res) : replayer_(replayer), tr_(tr), res_(res) {}
+  // Feeds every event up to time t (all of them with t infinite); `step`
+  // after each. `count`: into the result's gnss and odometry counts (the
+  // drive's epochs), or not (what follows its last epoch).
+  template <typename Step>
+  void until(double t, Step&& step, bool count = true) {
+    while (!done_) {
+      if (!have_) {
+        const replay::Replayer::Step st = replayer_.next(ev_);
+        if (st == replay::Replayer::Step::End) {
+          done_ = true;
+          return;
+        }
+        if (st == replay::Replayer::Step::Error) throw Error(Status::Corrupt, replayer_.error());
+        have_ = true;
+      }
+      if (ev_.t > t + 1e-6) return;
+      have_ = false;
+      if (ev_.type == replay::EventType::Gnss) {
+        tr_.feedGnss(capi::toTrack(ev_.gnss));
+        res_.gnss += count;
+      } else {
+        tr_.feedOdometry(capi::toTrack(ev_.odometry));
+        res_.odometry += count;
+        // Keep the ring from overflowing: update between odometry bursts.
+        if (++fed_ % 64 == 0) tr_.update(ev_.t);
+      }
+      step();
+    }
+  }
+
+ private:
+  replay::Replayer& replayer_;
+  track::Tracker& tr_;
+  MatchResult& res_;
+  replay::Event ev_;
+  bool have_ = false, done_ = false;
+  uint64_t fed_ = 0;
+};
+
+// Key-off: where the car stopped and the pose the tracker ended with, for the next drive.
+void keyOff(const MatchSetup& ms, const sim::Feed& feed, track::Tracker& tr, ChainState& cs) {
+  const track::Pose& p = tr.update(feed.start_unix + feed.duration_s);
+  cs.end_cell = feed.end_cell;
+  cs.end_arc = feed.end_arc_m;
+  if (!(p.flags & track::kPoseValid)) return;
+  double h = 0;
+  ms.city->frame().reverse(geo::Enu{p.e, p.n, 0}, cs.start.lat, cs.start.lon, h);
+  cs.start.heading_deg = p.heading_deg;
+  cs.start.sigma_m = p.pos_sigma_m;
+  cs.start.heading_sigma_deg = p.heading_sigma_deg;
+  cs.have_start = (p.flags & track::kPoseHeadingValid) != 0;
+}
+
+MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry, const std::string& trace_path,
+                          DriveChain chain = DriveChain{}) {
+  MatchResult res;
+  ChainState cs;
   FILE* tf = trace_path.empty() ? nullptr : std::fopen(trace_path.c_str(), "w");
-  if (tf)
-    std::fprintf(tf, "drive,t,fix,true_cell,true_arc,true_len,cell,arc,conf,err_m,sigma_m,true_e,true_n,e,n,heading,"
-                     "true_heading,est_arc_on_true,est_dist_on_true,map_aids,true_dist_on_est,est_cell_heading,yaw_bias_dps,"
-                     "odo_scale,true_h0,true_h1,fix_e,fix_n,nees,sigma_along,aid_suspensions,head_cell,true_lat,est_lat,lane_m,kappa,aid_lowconf,aid_disagree,aid_ambiguous,relation\n");
+  if (tf) std::fputs(kTraceHeader, tf);
   const graph::StreetGraph& g = ms.city->graph();
   for (uint32_t r = 0; r < ms.routes; ++r) {
     sim::FeedDesc fd;
-    fd.drive.seed = 1000 + r;
-    fd.drive.route_cells = ms.route_cells;
-    fd.drive.gnss_sigma_m = sigma;
-    if (ms.lane_wander_m >= 0) fd.drive.lane_wander_m = ms.lane_wander_m;
-    if (chain.chained) {
-      fd.drive.start_speed_mps = 0;
-      fd.drive.park_mid_last_cell = true;
-      fd.drive.first_cell = prev_end_cell;
-      fd.drive.start_arc_m = prev_end_arc;
-    }
     sim::Feed feed;
-    std::string err;
-    blvd_status fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
-    bool resumed = chain.resume_pose && have_start;
-    if (fd.drive.first_cell != track::kNoCell && (fst == BLVD_ERR_NOT_FOUND || 2 * feed.route.size() < ms.route_cells)) {
-      // The last drive parked where no route of half the cells goes on (a dead
-      // end, the edge of the map): the car is towed to a seeded street and
-      // tracked cold there.
-      fd.drive.first_cell = track::kNoCell;
-      resumed = false;
-      fst = sim::makeFeed(g, ms.city->frame(), *ms.profile, fd, feed, err);
-    }
-    prev_end_cell = track::kNoCell;
-    have_start = false;
-    if (fst == BLVD_ERR_NOT_FOUND) continue;
-    if (fst != BLVD_OK) throw Error(Status::Internal, err);
+    bool resumed = false;
+    if (!driveFeed(ms, sigma, chain, r, cs, fd, feed, resumed)) continue;
     ++res.drives;
     res.km += feed.distance_m / 1000.0;
     res.nmea_bytes += feed.nmea.size();
     res.can_frames += feed.frames.size();
-
-    // The device bytes, parsed back by the adapters.
     std::istringstream nmea(feed.nmea), can_log(with_odometry ? sim::candumpText(feed, "can0") : std::string());
-    replay::ReplayDesc rd;
-    rd.nmea_path = "sim-" + std::to_string(fd.drive.seed) + ".nmea";
-    rd.nmea_stream = &nmea;
-    if (with_odometry) {
-      rd.candump_path = "sim-" + std::to_string(fd.drive.seed) + ".log";
-      rd.candump_stream = &can_log;
-      rd.dbc_path = ms.dbc_path;
-      rd.vehicle = "toyota";
-      rd.has_offset = true;  // both streams are on the simulator's UTC clock
-      rd.offset_s = 0;
-    }
-    rd.strict = true;  // the simulator's output must parse without a single bad line
     replay::Replayer replayer;
-    if (replayer.open(rd, err) != BLVD_OK) throw Error(Status::Io, err);
+    openReplay(ms, fd, with_odometry, nmea, can_log, replayer);
 
     track::Tracker tr(ms.city->frame(), &g, ms.tracker);
     if (ms.oracle_calibration) {
@@ -349,129 +482,41 @@ MatchResult benchMatching(const MatchSetup& ms, double sigma, bool with_odometry
       truth.speed_scale = fd.drive.speed_scale;
       truth.yaw_bias_rad_s = fd.drive.yaw_bias_dps * capi::kRadPerDeg;  // sigmas 0: raised to the floors
       if (!tr.setCalibration(truth)) throw Error(Status::Internal, "calibration refused");
-    } else if (calibrated && have_cal && !tr.setCalibration(cal)) {
+    } else if (chain.calibrated && cs.have_cal && !tr.setCalibration(cs.cal)) {
       throw Error(Status::Internal, "calibration refused");
     }
     res.drives_chained += fd.drive.first_cell != track::kNoCell;
     res.drives_resumed += resumed;
     if (resumed) {
-      start.t = feed.start_unix;  // key-on: the car has not moved since the stored pose
-      if (!tr.setStartPose(start)) throw Error(Status::Internal, "start pose refused");
+      cs.start.t = feed.start_unix;  // key-on: the car has not moved since the stored pose
+      if (!tr.setStartPose(cs.start)) throw Error(Status::Internal, "start pose refused");
     }
     res.drive_starts.push_back(res.observations.size());
-    uint64_t steps = 0, fed = 0;
+    uint64_t steps = 0;
     const auto noteStep = [&] {
-      if (tr.matcher()->stats().steps != steps) {
-        steps = tr.matcher()->stats().steps;
-        res.observations.push_back(tr.matcher()->lastObservation());
-      }
+      if (tr.matcher()->stats().steps == steps) return;
+      steps = tr.matcher()->stats().steps;
+      res.observations.push_back(tr.matcher()->lastObservation());
     };
-    replay::Event ev;
-    bool have = false, done = false;
+    EventPump pump(replayer, tr, res);
     std::vector<std::pair<double, uint32_t>> truth;  // (t, cell) per epoch, for the settled check
-    for (size_t e = 0; e < feed.truth.size(); ++e) {
-      const sim::TruthRow& s = feed.truth[e];
+    for (const sim::TruthRow& s : feed.truth) {
       truth.emplace_back(s.t, s.cell);
-      while (!done) {
-        if (!have) {
-          const replay::Replayer::Step st = replayer.next(ev);
-          if (st == replay::Replayer::Step::End) {
-            done = true;
-            break;
-          }
-          if (st == replay::Replayer::Step::Error) throw Error(Status::Corrupt, replayer.error());
-          have = true;
-        }
-        if (ev.t > s.t + 1e-6) break;
-        have = false;
-        if (ev.type == replay::EventType::Gnss) {
-          tr.feedGnss(capi::toTrack(ev.gnss));
-          ++res.gnss;
-        } else {
-          tr.feedOdometry(capi::toTrack(ev.odometry));
-          ++res.odometry;
-          // Keep the ring from overflowing: update between odometry bursts.
-          if (++fed % 64 == 0) tr.update(ev.t);
-        }
-        noteStep();
-      }
+      pump.until(s.t, noteStep);
       const track::Pose& p = tr.update(s.t);
       noteStep();
-      ++res.epochs;
-      const bool ok = p.cell == s.cell;
-      if (tf) {
-        const track::CellPoint q = tr.matcher()->project(s.cell, p.e, p.n);
-        const track::CellPoint qe = tr.matcher()->project(p.cell, s.e, s.n);  // the truth on the pose's cell
-        const track::CellPoint qt = tr.matcher()->project(s.cell, s.e, s.n);  // the truth on its own cell
-        const glm::dvec2 d0 = graph::cellDirection(g, s.cell, false), d1 = graph::cellDirection(g, s.cell, true);
-        // The raw fix of this epoch's HMM step (empty without one), and the normalised estimation
-        // error of the filter, err^T P^-1 err over east and north (chi-square with 2 dof, mean 2,
-        // for a consistent filter; Bar-Shalom, Li & Kirubarajan 2001, §5.4.2).
-        const track::MatchObservation& ob = tr.matcher()->lastObservation();
-        char fix_en[64] = ",";
-        if (s.fix && ob.fix_sigma_m > 0 && std::fabs(ob.t - s.t) < 1e-6) std::snprintf(fix_en, sizeof fix_en, "%.2f,%.2f", ob.fix_e, ob.fix_n);
-        const double pee = tr.filter().cov(0, 0), pnn = tr.filter().cov(1, 1), pen = tr.filter().cov(0, 1);
-        const double det = pee * pnn - pen * pen, ee = p.e - s.e, en = p.n - s.n;
-        const double nees = det > 0 ? (ee * ee * pnn - 2 * ee * en * pen + en * en * pee) / det : -1.0;
-        // The filter's sigma along the true heading (its claimed along-track uncertainty).
-        const double th = s.heading_deg * 0.017453292519943295, ue = std::sin(th), un = std::cos(th);
-        const double sigma_along = std::sqrt(std::max(0.0, ue * ue * pee + 2 * ue * un * pen + un * un * pnn));
-        std::fprintf(tf, "%u,%.2f,%d,%u,%.2f,%.2f,%u,%.2f,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.1f,%.1f,%.2f,%.2f,%llu,%.2f,%.1f,%.3f,%.5f,%.1f,%.1f,%s,%.2f,%.3f,%llu,%d,%.3f,%.3f,%.2f,%.5f,%llu,%llu,%llu,%s\n", r,
-                     s.t - feed.start_unix, s.fix ? 1 : 0, s.cell, s.arc_m, g.halfedges[s.cell].length, p.cell, p.arc_m,
-                     p.confidence, std::hypot(p.e - s.e, p.n - s.n), p.pos_sigma_m, s.e, s.n, p.e, p.n, p.heading_deg,
-                     s.heading_deg, q.arc_m, q.dist_m, static_cast<unsigned long long>(tr.stats().map_aids),
-                     qe.cell == track::kNoCell ? -1.0 : qe.dist_m, qe.heading_rad * 57.29577951308232,
-                     tr.filter().bias() * 57.29577951308232, tr.filter().odometryScale(),
-                     std::atan2(d0.x, d0.y) * 57.29577951308232, std::atan2(d1.x, d1.y) * 57.29577951308232, fix_en, nees, sigma_along,
-                     static_cast<unsigned long long>(tr.stats().map_aid_suspensions),
-                     tr.matcher()->head().cell == track::kNoCell ? -1 : static_cast<int>(tr.matcher()->head().cell), qt.lateral_m, q.lateral_m, track::laneOffset(g.halfedges[s.cell], 1.75),
-                     std::fabs(tr.filter().speed()) > 1 ? tr.filter().turnRate() / tr.filter().speed() : 0.0,
-                     static_cast<unsigned long long>(tr.stats().map_aid_low_confidence),
-                     static_cast<unsigned long long>(tr.stats().map_aid_disagreeing),
-                     static_cast<unsigned long long>(tr.stats().map_aid_ambiguous), cellRelation(g, p.cell, s.cell));
-      }
-      res.on_cell += ok;
-      if (s.fix) ++res.fix_epochs, res.fix_on_cell += ok;
-      if (s.t - feed.start_unix > 10.0) ++res.warm_epochs, res.warm_on_cell += ok;
-      if (s.arc_m >= 2.0 && g.halfedges[s.cell].length - s.arc_m >= 2.0) ++res.inner_epochs, res.inner_on_cell += ok;
-      if (p.settled_cell != track::kNoCell) {
-        for (auto it = truth.rbegin(); it != truth.rend(); ++it)
-          if (std::fabs(it->first - p.settled_t) < 1e-6) {
-            ++res.settled;
-            res.settled_ok += it->second == p.settled_cell;
-            break;
-          }
-      }
+      if (tf) traceRow(tf, g, r, feed, s, p, tr);
+      scoreEpoch(g, feed, s, p, truth, res);
     }
     res.bad_lines += replayer.stats().bad_lines;
     if (chain.chained) {
-      // Key-off: the rest of the drive after its last epoch, then the pose where the car stopped.
-      while (!done) {
-        if (!have) {
-          const replay::Replayer::Step st = replayer.next(ev);
-          if (st == replay::Replayer::Step::End) break;
-          if (st == replay::Replayer::Step::Error) throw Error(Status::Corrupt, replayer.error());
-        }
-        have = false;
-        if (ev.type == replay::EventType::Gnss) tr.feedGnss(capi::toTrack(ev.gnss));
-        else tr.feedOdometry(capi::toTrack(ev.odometry));
-        if (++fed % 64 == 0) tr.update(ev.t);
-      }
-      const track::Pose& p = tr.update(feed.start_unix + feed.duration_s);
-      prev_end_cell = feed.end_cell;
-      prev_end_arc = feed.end_arc_m;
-      if (p.flags & track::kPoseValid) {
-        double h = 0;
-        ms.city->frame().reverse(geo::Enu{p.e, p.n, 0}, start.lat, start.lon, h);
-        start.heading_deg = p.heading_deg;
-        start.sigma_m = p.pos_sigma_m;
-        start.heading_sigma_deg = p.heading_sigma_deg;
-        have_start = (p.flags & track::kPoseHeadingValid) != 0;
-      }
+      // The rest of the drive after its last epoch, then the pose where the car stopped.
+      pump.until(std::numeric_limits<double>::infinity(), [] {}, false);
+      keyOff(ms, feed, tr, cs);
     }
-    if (calibrated) {
-      cal = tr.calibration();
-      have_cal = true;
+    if (chain.calibrated) {
+      cs.cal = tr.calibration();
+      cs.have_cal = true;
     }
     res.breaks += tr.stats().match.breaks;
     res.steps += tr.stats().match.steps;
