@@ -659,9 +659,8 @@ double invDepthAt(const Image& im, int px, int py, glm::dvec2 v, const DepthMesh
   return wv;
 }
 
-bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMeshOptions& opt,
-               geo::MeshData& out, DepthMeshStats& st, std::string& why, DepthMeshDebug* dbg) {
-  // --- Validation: never trust sizes or the camera.
+// Never trust sizes or the camera.
+bool validInputs(const CaptureImage& img, const PinholeCamera& cam, const DepthMeshOptions& opt, std::string& why) {
   if (img.width <= 0 || img.height <= 0) {
     why = "image has no pixels (" + std::to_string(img.width) + "x" + std::to_string(img.height) + ")";
     return false;
@@ -707,7 +706,12 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
     return false;
   }
 
-  Image im;
+  return true;
+}
+
+// The depth as covered pixels and inverse depths; false when nothing is covered.
+bool loadImage(const CaptureImage& img, Image& im, std::string& why) {
+  const size_t n = static_cast<size_t>(img.width) * static_cast<size_t>(img.height);
   im.w = img.width;
   im.h = img.height;
   im.cov.assign(n, 0);
@@ -729,16 +733,19 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
     return false;
   }
 
-  // 1. External contour(s).
-  std::vector<Polyline> loops = traceContours(im);
+  return true;
+}
+
+// 1. External contour(s), simplified; 2. discrepancy lines. As constraint
+// segments, the contours' first.
+std::vector<Segment2> constraintsOf(const Image& im, const DepthMeshOptions& opt, DepthMeshStats& st,
+                                    std::vector<Polyline>& loops) {
+  loops = traceContours(im);
   for (Polyline& l : loops) l = simplifyClosed(l, opt.contour_tolerance_px);
   st.contours = loops.size();
-
-  // 2. Discrepancy lines.
   const Discrepancy dis = discrepancyImage(im, opt);
   std::vector<Polyline> lines = extractChains(im, dis, opt, st.discrepancy_chains);
   snapEnds(lines, loops, 2.5, im.w, im.h);
-
   std::vector<Segment2> constraints;
   for (const Polyline& l : loops)
     for (size_t k = 0; k < l.size(); ++k) constraints.push_back({l[k], l[(k + 1) % l.size()]});
@@ -746,17 +753,19 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
   for (const Polyline& l : lines)
     for (size_t k = 0; k + 1 < l.size(); ++k) constraints.push_back({l[k], l[k + 1]});
   st.discrepancy_segments = constraints.size() - st.contour_segments;
+  return constraints;
+}
 
-  const ContourParity parity(loops, im.h);
-
-  // 3. Regular grid (S97: "to impose a minimal sampling density"). Points on
-  // pixel centres, kept away from the constraints (a point next to a line
-  // only makes slivers). triangulateSegments takes segments, not points, so
-  // each row's neighbouring points are joined by a constraint segment where
-  // the whole span is covered (a grid of squares triangulates into the same
-  // right triangles either way); a point without a row neighbour is joined
-  // to the point below or above, and one with neither is dropped.
-  const int s = opt.grid_spacing_px;
+// 3. Regular grid (S97: "to impose a minimal sampling density"), spaced `s`
+// pixels: the points kept (`gridUsed`) and the segments that join them
+// (`gridSegs`). Points on pixel centres, kept away from the constraints (a point next to a line
+// only makes slivers). triangulateSegments takes segments, not points, so
+// each row's neighbouring points are joined by a constraint segment where
+// the whole span is covered (a grid of squares triangulates into the same
+// right triangles either way); a point without a row neighbour is joined
+// to the point below or above, and one with neither is dropped.
+void gridOf(const Image& im, const std::vector<Segment2>& constraints, const ContourParity& parity, int s,
+            std::vector<Segment2>& gridSegs, std::vector<glm::dvec2>& gridUsed) {
   const int gw = im.w / s + 1, gh = im.h / s + 1;
   const double clearance = std::clamp(0.3 * s, 1.5, 8.0);
   SegmentGrid segIndex(im.w, im.h, 16.0);
@@ -789,8 +798,6 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
     }
     return true;
   };
-  std::vector<Segment2> gridSegs;
-  std::vector<glm::dvec2> gridUsed;
   for (int j = 0; j < gh; ++j) {
     for (int i = 0; i < gw; ++i) {
       if (!ok(i, j)) continue;
@@ -811,36 +818,33 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
       if (linked) gridUsed.push_back(g);
     }
   }
-  st.grid_points = gridUsed.size();
+}
 
-  // 4. Constrained Delaunay triangulation (S97 §4.2, their ref. 25) over the
-  // contour, the discrepancy lines and the grid, in (x, -y).
+// 4. Constrained Delaunay triangulation (S97 §4.2, their ref. 25) over the
+// contour, the discrepancy lines and the grid, in (x, -y).
+bool triangulate(const std::vector<Segment2>& constraints, const std::vector<Segment2>& gridSegs,
+                 const ContourParity& parity, Triangulation& tri, std::string& why) {
   std::vector<Segment2> all;
   all.reserve(constraints.size() + gridSegs.size());
   for (const Segment2& c : constraints) all.push_back({{c.a.x, -c.a.y}, {c.b.x, -c.b.y}});
   for (const Segment2& c : gridSegs) all.push_back({{c.a.x, -c.a.y}, {c.b.x, -c.b.y}});
-  Triangulation tri;
   std::string terr;
-  if (!triangulateSegments(
-          all,
-          [&](glm::dvec2 c) {
-            return parity.inside({c.x, -c.y});
-          },
-          tri, terr)) {
-    why = "triangulation: " + terr;
-    return false;
-  }
+  if (triangulateSegments(all, [&](glm::dvec2 c) { return parity.inside({c.x, -c.y}); }, tri, terr)) return true;
+  why = "triangulation: " + terr;
+  return false;
+}
 
-  // 5. Depth per (triangle, corner), then one output vertex per (position,
-  // depth cluster).
-  struct Corner {
-    uint32_t vid;
-    double z;
-    size_t slot;  // index into the kept triangles' corner list
-  };
-  const double thr = opt.discrepancy_threshold;
-  std::vector<glm::dvec2> pos(tri.vertices.size());
-  for (size_t k = 0; k < pos.size(); ++k) pos[k] = {tri.vertices[k].x, -tri.vertices[k].y};
+// One corner of a kept triangle: its triangulation vertex and depth.
+struct Corner {
+  uint32_t vid;
+  double z;
+  size_t slot;  // index into the kept triangles' corner list
+};
+
+// 5. Depth per (triangle, corner), at image positions `pos`; triangles
+// degenerate in the image or without a depth at a corner are dropped.
+std::vector<Corner> cornerDepths(const Image& im, const Triangulation& tri, const std::vector<glm::dvec2>& pos,
+                                 const DepthMeshOptions& opt) {
   std::vector<Corner> corners;
   corners.reserve(tri.indices.size());
   for (size_t t = 0; t + 2 < tri.indices.size(); t += 3) {
@@ -864,10 +868,20 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
     for (int k = 0; k < 3; ++k)
       corners.push_back({id[k], z[static_cast<size_t>(k)], slot + static_cast<size_t>(k)});
   }
+  return corners;
+}
 
-  // Cluster each position's depths: within half the threshold they are one
-  // surface (merged, so continuous surfaces stay watertight), beyond it they
-  // are the two sides of a step (split).
+// An output vertex: a triangulation vertex at one of its depths.
+struct OutVertex {
+  uint32_t vid;
+  double z;
+};
+
+// Each position's depths clustered: within half the threshold they are one
+// surface (merged, so continuous surfaces stay watertight), beyond it they are
+// the two sides of a step (split). `slotToVertex`: each corner's vertex.
+std::vector<OutVertex> clusterCorners(const std::vector<Corner>& corners, double thr,
+                                      std::vector<uint32_t>& slotToVertex, size_t& splitExtra) {
   std::vector<size_t> order(corners.size());
   std::iota(order.begin(), order.end(), size_t{0});
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
@@ -875,14 +889,10 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
     if (corners[a].z != corners[b].z) return corners[a].z < corners[b].z;
     return corners[a].slot < corners[b].slot;
   });
-  std::vector<uint32_t> slotToVertex(corners.size(), 0);
-  struct OutVertex {
-    uint32_t vid;
-    double z;
-  };
+  slotToVertex.assign(corners.size(), 0);
   std::vector<OutVertex> verts;
   const double mergeTol = 0.5 * thr;
-  size_t splitExtra = 0;
+  splitExtra = 0;
   for (size_t a = 0; a < order.size();) {
     size_t b = a;
     double sum = 0.0;
@@ -898,8 +908,14 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
     for (size_t k = a; k < b; ++k) slotToVertex[corners[order[k]].slot] = vi;
     a = b;
   }
-  st.split_vertices = splitExtra;
+  return verts;
+}
 
+// The mesh: each vertex unprojected at its depth, triangles that survive in
+// 3D, wound counter-clockwise as the camera sees them.
+void emitMesh(const Image& im, const PinholeCamera& cam, const std::vector<glm::dvec2>& pos,
+              const std::vector<OutVertex>& verts, const std::vector<uint32_t>& slotToVertex, geo::MeshData& out,
+              DepthMeshDebug* dbg) {
   // Counter-clockwise on screen is counter-clockwise seen from the camera
   // when right x up points back at the eye (a right-handed camera, the usual
   // case); flip for a left-handed basis.
@@ -937,13 +953,35 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
     emit(flip ? d : b);
     emit(flip ? b : d);
   }
+}
+
+bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMeshOptions& opt,
+               geo::MeshData& out, DepthMeshStats& st, std::string& why, DepthMeshDebug* dbg) {
+  Image im;
+  if (!validInputs(img, cam, opt, why) || !loadImage(img, im, why)) return false;
+  std::vector<Polyline> loops;
+  const std::vector<Segment2> constraints = constraintsOf(im, opt, st, loops);
+  const ContourParity parity(loops, im.h);
+  // 3. Regular grid (S97: "to impose a minimal sampling density").
+  std::vector<Segment2> gridSegs;
+  std::vector<glm::dvec2> gridUsed;
+  gridOf(im, constraints, parity, opt.grid_spacing_px, gridSegs, gridUsed);
+  st.grid_points = gridUsed.size();
+  Triangulation tri;
+  if (!triangulate(constraints, gridSegs, parity, tri, why)) return false;
+  std::vector<glm::dvec2> pos(tri.vertices.size());
+  for (size_t k = 0; k < pos.size(); ++k) pos[k] = {tri.vertices[k].x, -tri.vertices[k].y};
+  // 5. Depth per (triangle, corner), then one output vertex per (position, depth cluster).
+  const std::vector<Corner> corners = cornerDepths(im, tri, pos, opt);
+  std::vector<uint32_t> slotToVertex;
+  const std::vector<OutVertex> verts = clusterCorners(corners, opt.discrepancy_threshold, slotToVertex, st.split_vertices);
+  emitMesh(im, cam, pos, verts, slotToVertex, out, dbg);
   if (out.indices.empty()) {
     why = "no triangle survived re-projection";
     return false;
   }
   st.triangles = out.indices.size() / 3;
   st.vertices = out.positions.size() / 3;
-
   if (dbg) {
     for (size_t k = 0; k < constraints.size(); ++k)
       (k < st.contour_segments ? dbg->contour : dbg->discrepancy).push_back(constraints[k]);
