@@ -343,6 +343,78 @@ long rssKiB() {
   return -1;
 }
 
+// The same claim with every per-frame path a product host uses switched on:
+// the frame-time budget (polygon share and render scale), tracking fed on
+// the render thread (fixes and odometry, the pose read back each frame) and
+// two views a frame (a main view and a mirror). The count is blvd's own
+// allocations on the render thread; the GL driver's are counted beside them
+// and reported, not asserted.
+TEST(RuntimeStream, NoHeapAllocationWithBudgetTrackingAndViews) {
+  if (!blvd::probe::ThreadMallocCounter::available()) GTEST_SKIP() << "malloc belongs to AddressSanitizer here";
+  const blvd_test::Drive dr = drive(40, 6.0);
+  ASSERT_GE(dr.cells.size(), 15u);
+  blvd_runtime_desc d = baseDesc();
+  d.target_frame_ms = 0.3f;  // below any frame llvmpipe draws: the budget and the render scale work every frame
+  d.min_render_scale = 0.5f;
+  Runtime r;
+  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_set_route(r.rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
+  blvd_runtime_info info{};
+  info.struct_size = sizeof info;
+  ASSERT_EQ(blvd_runtime_get_info(r.rt, &info), BLVD_OK);
+  const double m_per_deg_lat = 111132.0, m_per_deg_lon = 111320.0 * std::cos(info.origin_lat * M_PI / 180.0);
+  blvd_view views[2]{};
+  views[0].struct_size = views[1].struct_size = sizeof(blvd_view);
+  views[1].x = d.width / 2, views[1].y = 0, views[1].width = d.width / 2, views[1].height = d.height / 4;
+  views[1].yaw_offset_deg = 180.f;
+  views[1].flags = BLVD_VIEW_MIRROR;
+  double t = 0;
+  uint64_t valid = 0;
+  auto frame = [&](const blvd_test::DrivePose& p) {
+    t += 0.1;
+    blvd_gnss_fix fix{};
+    fix.struct_size = sizeof fix;
+    fix.t = t;
+    fix.lat = info.origin_lat + p.y / m_per_deg_lat;
+    fix.lon = info.origin_lon + p.x / m_per_deg_lon;
+    fix.mode = BLVD_GNSS_MODE_3D;
+    fix.hdop = 1.f;
+    fix.flags = BLVD_GNSS_HAS_TIME | BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_HDOP;
+    blvd_feed_gnss(r.rt, &fix);
+    blvd_odometry odo{};
+    odo.struct_size = sizeof odo;
+    odo.t = t + 0.05;
+    odo.speed_mps = 60.0;
+    odo.flags = BLVD_ODO_SPEED | BLVD_ODO_YAW_RATE;
+    blvd_feed_odometry(r.rt, &odo);
+    blvd_pose pose{};
+    pose.struct_size = sizeof pose;
+    blvd_get_pose(r.rt, t, &pose);
+    valid += (pose.flags & BLVD_POSE_VALID) != 0;
+    blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f);
+    blvd_render_views(r.rt, views, 2, nullptr);
+  };
+  const size_t warm = dr.poses.size() / 3;
+  for (size_t i = 0; i < warm; ++i) frame(dr.poses[i]);
+  const uint64_t loads_before = statsOf(r.rt).loads;
+  long allocations = 0, driver = 0;
+  {
+    blvd::probe::ThreadMallocCounter counter;
+    for (size_t i = warm; i < dr.poses.size(); ++i) frame(dr.poses[i]);
+    allocations = counter.count();
+    driver = counter.driverCount();
+  }
+  RecordProperty("driver_allocations", std::to_string(driver));
+  std::printf("render thread over %zu frames (budget, tracking, 2 views): %ld allocations by blvd, %ld inside the "
+              "GL driver\n", dr.poses.size() - warm, allocations, driver);
+  const blvd_stats s = statsOf(r.rt);
+  EXPECT_GE(s.loads, loads_before + 3);  // cells streamed meanwhile
+  EXPECT_GT(s.polygon_budget, 0u);       // the budget was at work
+  EXPECT_LT(s.render_scale, 1.f);        // down to the render scale
+  EXPECT_GT(valid, dr.poses.size() / 2); // the tracker followed the fixes
+  EXPECT_EQ(allocations, 0) << "heap allocations on the render thread over " << dr.poses.size() - warm << " frames";
+}
+
 TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
   if (!blvd::probe::ThreadMallocCounter::available()) GTEST_SKIP() << "malloc belongs to AddressSanitizer here";
   // glibc's adaptive mmap threshold would move big buffers between mmap and
