@@ -312,7 +312,8 @@ typedef struct blvd_stats {
   uint32_t struct_size;          /* set by the caller */
   uint32_t resident_cells;       /* cells whose geometry is on the GPU */
   uint32_t max_resident_cells;
-  blvd_pool_stats gpu;           /* cell slabs: vertex, index and texture bytes */
+  blvd_pool_stats gpu;           /* cell slabs: vertex, index and texture bytes; capacity as the GL
+                                  * reports it (buffer sizes, each texture level) where it can */
   blvd_pool_stats staging;       /* the loader's staging arenas */
   blvd_pool_stats decode;        /* the loader's decode scratch (high water only; capacity 0) */
   uint64_t table_bytes;          /* package tables held in memory */

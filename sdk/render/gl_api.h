@@ -64,6 +64,7 @@ class Context;
   X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap)                   \
   X(PFNGLGENVERTEXARRAYSPROC, GenVertexArrays)                 \
   X(PFNGLGETBOOLEANVPROC, GetBooleanv)                         \
+  X(PFNGLGETBUFFERPARAMETERI64VPROC, GetBufferParameteri64v)   \
   X(PFNGLGETERRORPROC, GetError)                               \
   X(PFNGLGETFLOATVPROC, GetFloatv)                             \
   X(PFNGLGETINTEGERVPROC, GetIntegerv)                         \
@@ -102,6 +103,9 @@ struct GlApi {
 
   // Optional: GLES 3 and GL 4.1 have it, a GL 3.3 host context may not.
   PFNGLCLEARDEPTHFPROC ClearDepthf = nullptr;
+  // Optional: desktop GL and GLES 3.1 have it, GLES 3.0 does not (what the
+  // driver allocated for each texture level: Renderer::measuredSlabBytes).
+  void(GL_APIENTRYP GetTexLevelParameteriv)(GLenum target, GLint level, GLenum pname, GLint* params) = nullptr;
 
   // Loads every entry point through ctx.getProcAddress (ctx must be current).
   // False when any is missing; `missing` then lists them, e.g.

@@ -704,9 +704,7 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUp
 }
 
 uint64_t slabGpuBytes(const SlabDesc& d) {
-  uint64_t tex = uint64_t(d.texture_width) * uint64_t(d.texture_height) * 4;
-  tex = tex * 4 / 3;  // the mip chain adds a third
-  return d.vertex_bytes + d.index_bytes + uint64_t(d.textures) * tex;
+  return d.vertex_bytes + d.index_bytes + uint64_t(d.textures) * mipChainBytes(d.texture_width, d.texture_height);
 }
 
 SlabHandle Renderer::createSlab(const SlabDesc& d) {
@@ -763,6 +761,39 @@ SlabHandle Renderer::createSlab(const SlabDesc& d) {
   }
   gpu_slab_bytes_ += slabGpuBytes(d);
   return SlabHandle{static_cast<uint32_t>(m.slabs.size())};
+}
+
+uint64_t Renderer::measuredSlabBytes(bool& textures_known) {
+  textures_known = gl_->GetTexLevelParameteriv != nullptr;
+  if (!ctx_.makeCurrent()) return 0;
+  const GlApi& gl = *gl_;
+  ScopedGlState guard(gl, shared_);
+  constexpr GLenum kTextureWidth = 0x1000, kTextureHeight = 0x1001;  // GL_TEXTURE_WIDTH / HEIGHT
+  uint64_t bytes = 0;
+  gl.BindVertexArray(0);
+  for (const Slab& s : impl_->slabs) {
+    for (GLuint b : {s.vbo, s.ibo}) {
+      GLint64 size = 0;
+      gl.BindBuffer(GL_ARRAY_BUFFER, b);
+      gl.GetBufferParameteri64v(GL_ARRAY_BUFFER, GL_BUFFER_SIZE, &size);
+      bytes += uint64_t(size);
+    }
+    if (!textures_known) continue;
+    for (GLuint t : s.textures) {
+      gl.BindTexture(GL_TEXTURE_2D, t);
+      for (GLint level = 0;; ++level) {
+        GLint w = 0, h = 0;
+        gl.GetTexLevelParameteriv(GL_TEXTURE_2D, level, kTextureWidth, &w);
+        gl.GetTexLevelParameteriv(GL_TEXTURE_2D, level, kTextureHeight, &h);
+        if (w <= 0 || h <= 0) break;
+        bytes += uint64_t(w) * uint64_t(h) * 4;
+        if (w == 1 && h == 1) break;
+      }
+    }
+  }
+  gl.BindBuffer(GL_ARRAY_BUFFER, 0);
+  gl.BindTexture(GL_TEXTURE_2D, 0);
+  return bytes;
 }
 
 void Renderer::resetSlab(SlabHandle h) {

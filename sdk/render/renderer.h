@@ -184,6 +184,11 @@ class Renderer {
   void resetSlab(SlabHandle slab);
   SlabUsage slabUsage(SlabHandle slab) const;
   uint64_t slabBytes() const { return gpu_slab_bytes_; }
+  // The same bytes as the GL reports them: each slab's buffers' GL_BUFFER_SIZE
+  // and each texture level's GL_TEXTURE_WIDTH x GL_TEXTURE_HEIGHT x 4 (RGBA8).
+  // `textures_known` is false where the GL cannot report texture levels
+  // (GLES 3.0): their bytes are then left out.
+  uint64_t measuredSlabBytes(bool& textures_known);
   bool isValid(MeshHandle h) const;
 
   void setLook(const Look& look);

@@ -49,6 +49,10 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   if (!renderer_) throw Error(Status::Backend, err);
 
   slots_ = std::make_unique<CellSlots>(city_, *renderer_, *loader_, plan_, desc.block_reuse >= 0);
+  // What the slabs hold as the GL reports it (the plan's own formula where it cannot).
+  bool measured = false;
+  gpu_capacity_ = renderer_->measuredSlabBytes(measured);
+  if (!measured) gpu_capacity_ = renderer_->slabBytes();
   draw_ = std::make_unique<DrawList>(city_, plan_, desc.lod_error_px);
   if (desc.target_frame_ms > 0) {
     // The budget never needs to exceed the largest cell's local model at full detail.
@@ -162,7 +166,7 @@ void Runtime::stats(blvd_stats* out) const {
   s.upload_ms_max = c.upload_ms_max;
   s.misses = draw_->misses();
   s.resident_cells = slots_->residentCount();
-  s.gpu.capacity_bytes = renderer_->slabBytes();  // what createSlab made, not what the plan said
+  s.gpu.capacity_bytes = gpu_capacity_;
   s.gpu.used_bytes = slots_->usedBytes();
   s.gpu.high_water_bytes = std::max(slots_->highWaterBytes(), s.gpu.used_bytes);
   s.staging.capacity_bytes = loader_->carvedBytes();

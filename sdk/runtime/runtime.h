@@ -99,6 +99,7 @@ class Runtime {
   bool rendered_ = false;
   bool items_drawn_ = false;  // readItems drew over the frame
   blvd_stats stats_{};        // the frame's own figures; the pools' are read in stats()
+  uint64_t gpu_capacity_ = 0;  // the slabs' bytes as the GL reported them at create
   std::unique_ptr<track::Tracker> tracker_;
   blvd_camera_source camera_source_ = BLVD_CAMERA_HOST;  // render thread
   std::atomic<double> last_feed_t_{0.0};  // the newest fed time, from any feeding thread

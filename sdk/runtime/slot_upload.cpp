@@ -99,7 +99,7 @@ void CellSlots::finishSlot(CellSlot& slot) {
     });
   }
   const render::SlabUsage u = renderer_.slabUsage(slot.slab);
-  const uint64_t tex = uint64_t(plan_.slab.texture_width) * plan_.slab.texture_height * 4 * 4 / 3;
+  const uint64_t tex = render::mipChainBytes(plan_.slab.texture_width, plan_.slab.texture_height);
   slot.bytes = u.vertex_bytes + u.index_bytes + u.textures * tex;
   slot.state = CellSlot::Resident;
   high_water_ = std::max(high_water_, usedBytes());

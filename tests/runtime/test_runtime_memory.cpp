@@ -36,8 +36,29 @@ using blvd_test::statsOf;
 // A drive from the first cell with impostors, so textures stream too.
 blvd_test::Drive drive(uint32_t cells, double step_m) { return blvd_test::impostorDrive(cells, step_m); }
 
+// A host allocator that adds up what blvd asks of it (the staging arenas and
+// their mesh tables).
+struct CountingAllocator {
+  uint64_t bytes = 0, calls = 0;
+  static void* alloc(size_t size, size_t align, void* user) {
+    auto* self = static_cast<CountingAllocator*>(user);
+    self->bytes += size;
+    ++self->calls;
+    return std::aligned_alloc(align, (size + align - 1) / align * align);
+  }
+  static void free(void* p, void*) { std::free(p); }
+};
+
+// The plan against what was carved, measured apart from the plan's own
+// formulas: the GPU bytes as the GL reports them (each buffer's
+// GL_BUFFER_SIZE, each texture level's size; blvd_stats.gpu.capacity_bytes),
+// and the staging bytes as the loader asked the host allocator for them.
 TEST(RuntimeMemory, RequiredIsWhatCreateCarves) {
   blvd_runtime_desc d = baseDesc();
+  CountingAllocator host;
+  d.allocator.alloc = &CountingAllocator::alloc;
+  d.allocator.free = &CountingAllocator::free;
+  d.allocator.user = &host;
   uint64_t cpu = 0, gpu = 0;
   ASSERT_EQ(blvd_memory_required(&d, nullptr, &cpu, &gpu), BLVD_OK) << blvd_last_error(nullptr);
   EXPECT_GT(cpu, 0u);
@@ -45,7 +66,9 @@ TEST(RuntimeMemory, RequiredIsWhatCreateCarves) {
   Runtime r;
   ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
   const blvd_stats s = statsOf(r.rt);
-  EXPECT_EQ(s.gpu.capacity_bytes, gpu);
+  EXPECT_EQ(s.gpu.capacity_bytes, gpu) << "the GL's slab bytes against the plan's";
+  EXPECT_EQ(host.bytes, s.staging.capacity_bytes) << "the bytes the loader asked the host for against the plan's";
+  EXPECT_GE(host.calls, 2u);
   EXPECT_EQ(s.staging.capacity_bytes + s.table_bytes + s.tracking_bytes, cpu);
   EXPECT_EQ(s.max_resident_cells, 4u);
 
