@@ -93,15 +93,24 @@ CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_
     carved_ += arena_bytes + sizeof(StagedMesh) * meshes;
   }
   if (!executor_.submit) {
-    thread_ = std::thread([this] { run(false); });
-    background_ = std::thread([this] { run(true); });
+    try {
+      thread_ = std::thread([this] { run(false); });
+      background_ = std::thread([this] { run(true); });
+    } catch (...) {
+      // No destructor runs for a constructor that throws: stop the thread
+      // that did start and give the arenas back here.
+      shutdown();
+      throw core::Error(core::Status::NoMem, "out of memory: cannot start the loader's threads");
+    }
     if (pinned_) (void)::pthread_setaffinity_np(background_.native_handle(), sizeof pin, &pin);
     has_cpu_clock_[0] = ::pthread_getcpuclockid(thread_.native_handle(), &cpu_clock_[0]) == 0;
     has_cpu_clock_[1] = ::pthread_getcpuclockid(background_.native_handle(), &cpu_clock_[1]) == 0;
   }
 }
 
-CellLoader::~CellLoader() {
+CellLoader::~CellLoader() { shutdown(); }
+
+void CellLoader::shutdown() {
   {
     std::unique_lock<std::mutex> lock(mu_);
     stop_ = true;
@@ -114,6 +123,8 @@ CellLoader::~CellLoader() {
   for (Staging& s : slots_) {
     alloc_.release(s.arena.base);
     alloc_.release(s.meshes);  // StagedMesh is trivially destructible
+    s.arena.base = nullptr;
+    s.meshes = nullptr;
   }
 }
 

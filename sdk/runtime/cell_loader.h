@@ -152,6 +152,8 @@ class CellLoader {
   double cpuMs(bool background) const;
 
  private:
+  // Stops and joins the threads (after the host's tasks) and gives the arenas back.
+  void shutdown();
   void run(bool background);
   // False when the job was abandoned (its slot is then free again).
   bool decode(Staging& s);

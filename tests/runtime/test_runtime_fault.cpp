@@ -6,11 +6,14 @@
 // block of the host allocator left live.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
 #include "blvd/blvd.h"
+#include "fault/new_failer.h"
 #include "runtime_fixture.h"
 
 namespace {
@@ -104,6 +107,48 @@ TEST(RuntimeMemory, FailingHostAllocatorGivesNoMemAndLeaksNothing) {
     EXPECT_EQ(h.live, 0) << "allocation " << n << " leaked";
     EXPECT_NE(std::string(blvd_last_error(nullptr)).find("staging"), std::string::npos);
   }
+}
+
+// Every C++ allocation blvd makes while creating a runtime (package tables,
+// the tracker, the loader, the renderer's pools; not the GL driver's own)
+// fails in turn: create returns BLVD_ERR_NOMEM with no runtime, says "out of
+// memory", and (under the ASan stage's LeakSanitizer) leaks nothing. The
+// allocations are sampled evenly, at most 400 of them, so the test stays
+// short; BLVD_FAULT_ALL=1 fails every one.
+TEST(RuntimeMemory, EveryAllocationOfCreateFailingGivesNoMem) {
+  blvd_runtime_desc d = baseDesc();
+  long total = 0;
+  {
+    blvd_test::NewFailer count(-1);
+    Runtime r;
+    ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+    total = count.count();
+  }
+  ASSERT_GT(total, 10);
+  const bool all = std::getenv("BLVD_FAULT_ALL") != nullptr;
+  const long stride = all ? 1 : std::max(1L, total / 400);
+  long tried = 0;
+  for (long n = 0; n < total; n += stride) {
+    Runtime r;
+    blvd_status st = BLVD_OK;
+    bool failed = false;
+    {
+      blvd_test::NewFailer fail(n);
+      st = blvd_runtime_create(&d, &r.rt);
+      failed = fail.failed();
+    }
+    if (!failed) continue;  // this create made fewer allocations (no failure reached)
+    ++tried;
+    EXPECT_EQ(st, BLVD_ERR_NOMEM) << "allocation " << n << " of " << total << ": " << blvd_last_error(nullptr);
+    EXPECT_EQ(r.rt, nullptr) << "allocation " << n;
+    EXPECT_NE(std::string(blvd_last_error(nullptr)).find("out of memory"), std::string::npos)
+        << "allocation " << n << ": " << blvd_last_error(nullptr);
+  }
+  std::printf("create: %ld C++ allocations of blvd's on the creating thread, %ld failed in turn\n", total, tried);
+  EXPECT_GT(tried, std::min(total, 100L));
+  // And a create after all that still works.
+  Runtime r;
+  EXPECT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
 }
 
 }  // namespace
