@@ -124,9 +124,13 @@ def main():
     flat = [n for n, v in zip(pngs, variances) if v < 20.0]
     if flat:
         fail("%d of %d frames nearly blank (luminance variance < 20): %s" % (len(flat), len(pngs), flat[:5]))
-    distinct = len({hashlib.sha1(open(os.path.join(frames, n), "rb").read()).digest() for n in pngs})
-    if distinct < len(pngs) // 2:
-        fail("only %d distinct frames of %d: the view does not follow the drive" % (distinct, len(pngs)))
+    digests = {}
+    for n in pngs:
+        digests.setdefault(hashlib.sha1(open(os.path.join(frames, n), "rb").read()).digest(), []).append(n)
+    distinct = len(digests)
+    if distinct != len(pngs):
+        repeats = [names for names in digests.values() if len(names) > 1]
+        fail("%d distinct frames of %d: the view stood still between %s" % (distinct, len(pngs), repeats[:3]))
     pose_lines = checks.read_jsonl(poses)
     if len(pose_lines) != stats["poses"]:
         fail("%d pose lines, stats say %d" % (len(pose_lines), stats["poses"]))
