@@ -109,19 +109,18 @@ blvd_status Replayer::open(const ReplayDesc& desc, std::string& err) {
       err = "replay: a candump log needs a DBC (dbc_path)";
       return BLVD_ERR_INVALID_ARG;
     }
-    blvd_status s = dbc_.load(desc_.dbc_path, err);
-    if (s != BLVD_OK) return s;
+    // The vehicle module's statuses are the C API's values (core/status.h).
+    if (const core::Status v = dbc_.load(desc_.dbc_path, err); v != core::Status::Ok) return static_cast<blvd_status>(v);
     vehicle::ProfileDesc pd = desc_.profile;
     if (!desc_.vehicle.empty() && !vehicle::parseVehicle(desc_.vehicle, pd.vehicle)) {
       err = "replay: unknown vehicle profile \"" + desc_.vehicle + "\" (toyota, vw_mqb, hyundai)";
       return BLVD_ERR_INVALID_ARG;
     }
-    s = profile_.create(pd, dbc_, err);
-    if (s != BLVD_OK) return s;
+    if (const core::Status v = profile_.create(pd, dbc_, err); v != core::Status::Ok) return static_cast<blvd_status>(v);
     if (desc_.candump_stream) {
       candump_.attach(*desc_.candump_stream, desc_.candump_path.empty() ? "<candump>" : desc_.candump_path);
     } else {
-      s = candump_.open(desc_.candump_path);
+      const blvd_status s = candump_.open(desc_.candump_path);
       if (s != BLVD_OK) {
         err = candump_.error();
         return s;

@@ -98,8 +98,8 @@ blvd_status makeFeed(const graph::StreetGraph& g, const geo::LocalFrame& frame, 
 
   // CAN: every message of the profile per odometry sample.
   for (const track::Odometry& o : trace.odometry)
-    if (const blvd_status st = profile.encode(carOdometry(o, desc), t0 + o.t, out.frames, err); st != BLVD_OK)
-      return st;
+    if (const core::Status st = profile.encode(carOdometry(o, desc), t0 + o.t, out.frames, err); st != core::Status::Ok)
+      return static_cast<blvd_status>(st);  // the same values (core/status.h)
   return BLVD_OK;
 }
 

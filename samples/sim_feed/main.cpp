@@ -162,11 +162,11 @@ int main(int argc, char** argv) {
   std::string err;
   if (city.open(o.package, err) != core::Status::Ok) die(err);
   vehicle::Database db;
-  if (db.load(o.dbc, err) != BLVD_OK) die(err);
+  if (db.load(o.dbc, err) != core::Status::Ok) die(err);
   vehicle::ProfileDesc pd;
   if (!vehicle::parseVehicle(o.vehicle, pd.vehicle)) die("--vehicle " + o.vehicle + ": expected toyota, vw_mqb or hyundai");
   vehicle::Profile profile;
-  if (profile.create(pd, db, err) != BLVD_OK) die(err);
+  if (profile.create(pd, db, err) != core::Status::Ok) die(err);
   sim::Feed feed;
   if (sim::makeFeed(city.graph(), city.frame(), profile, o.feed, feed, err) != BLVD_OK) die(err);
   std::fprintf(stderr, "sim_feed: %zu cells, %.0f m in %.1f s; %zu NMEA epochs, %zu CAN frames; outage %.1f..%.1f s\n",

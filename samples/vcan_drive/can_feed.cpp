@@ -12,11 +12,11 @@ static_assert(BLVD_ODO_SPEED == kOdoSpeed && BLVD_ODO_YAW_RATE == kOdoYawRate &&
               "the profile's OdometryField bits are passed through as BLVD_ODO_* flags");
 
 blvd_status CanFeed::open(const std::string& dbc_path, Vehicle vehicle, std::string& err) {
-  blvd_status st = dbc_.load(dbc_path, err);
-  if (st != BLVD_OK) return st;
+  // sdk/vehicle's statuses are the C API's values (core/status.h).
+  if (const auto st = dbc_.load(dbc_path, err); st != blvd::core::Status::Ok) return static_cast<blvd_status>(st);
   ProfileDesc pd;
   pd.vehicle = vehicle;
-  return profile_.create(pd, dbc_, err);
+  return static_cast<blvd_status>(profile_.create(pd, dbc_, err));
 }
 
 bool CanFeed::feed(const Frame& f, Tracking& tracking, blvd_odometry& odo) {

@@ -114,17 +114,17 @@ blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_
   try {
     auto* p = new blvd_can_profile;
     std::string err;
-    blvd_status st = p->dbc.load(d.dbc_path, err);
-    if (st == BLVD_OK) {
+    blvd::core::Status st = p->dbc.load(d.dbc_path, err);
+    if (st == blvd::core::Status::Ok) {
       vehicle::ProfileDesc pd;
       pd.vehicle = static_cast<vehicle::Vehicle>(d.vehicle);
       pd.speed = static_cast<vehicle::SpeedSource>(d.speed);
       pd.wheel_stale_s = d.wheel_stale_s;
       st = p->profile.create(pd, p->dbc, err);
     }
-    if (st != BLVD_OK) {
+    if (st != blvd::core::Status::Ok) {
       delete p;
-      return fail(st, "blvd_can_profile_create: " + err);
+      return fail(blvd::capi::toStatus(st), "blvd_can_profile_create: " + err);
     }
     *out = p;
     blvd::capi::t_create_error.clear();

@@ -136,11 +136,11 @@ FusionResult benchFusion(const std::string& data, double gnss_latency_s, const s
   // CAN: the Toyota profile over the candump, powertrain bus only.
   vehicle::Database db;
   std::string err;
-  if (db.load(data + "/can/dbc/toyota_new_mc_pt_generated.dbc", err) != BLVD_OK) throw core::Error(core::Status::Io, err);
+  if (db.load(data + "/can/dbc/toyota_new_mc_pt_generated.dbc", err) != core::Status::Ok) throw core::Error(core::Status::Io, err);
   vehicle::ProfileDesc pd;
   pd.iface = "can0";
   vehicle::Profile profile;
-  if (profile.create(pd, db, err) != BLVD_OK) throw core::Error(core::Status::NotFound, err);
+  if (profile.create(pd, db, err) != core::Status::Ok) throw core::Error(core::Status::NotFound, err);
   std::istringstream log(readZstd(data + "/can/comma2k19_rav4_seg40_candump.log.zst"));
   can::CandumpReader reader;
   reader.attach(log, "comma2k19_rav4_seg40_candump.log");
@@ -625,9 +625,9 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   ms.city = &city;
   ms.dbc_path = data + "/can/dbc/toyota_new_mc_pt_generated.dbc";
   vehicle::Database db;
-  if (db.load(ms.dbc_path, err) != BLVD_OK) throw Error(Status::Io, err);
+  if (db.load(ms.dbc_path, err) != Status::Ok) throw Error(Status::Io, err);
   vehicle::Profile profile;
-  if (profile.create(vehicle::ProfileDesc{}, db, err) != BLVD_OK) throw Error(Status::NotFound, err);
+  if (profile.create(vehicle::ProfileDesc{}, db, err) != Status::Ok) throw Error(Status::NotFound, err);
   ms.profile = &profile;
   ms.routes = opt.routes;
   ms.route_cells = opt.route_cells;

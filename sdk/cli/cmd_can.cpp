@@ -89,7 +89,7 @@ void putTime(std::string& s, const can::Record& r) {
 
 bool openInputs(const CanOptions& o, vehicle::Database& db, can::CandumpReader& reader, Out& out, int& code) {
   std::string err;
-  if (db.load(o.dbc, err) != BLVD_OK) {
+  if (db.load(o.dbc, err) != core::Status::Ok) {
     std::fprintf(stderr, "blvd can: %s\n", err.c_str());
     code = 2;
     return false;
@@ -207,7 +207,7 @@ int odometryLog(const CanOptions& o) {
   if (!openInputs(o, db, reader, out, code)) return code;
   vehicle::Profile profile;
   std::string err;
-  if (profile.create(desc, db, err) != BLVD_OK) {
+  if (profile.create(desc, db, err) != core::Status::Ok) {
     std::fprintf(stderr, "blvd can odometry: %s\n", err.c_str());
     return 2;
   }

@@ -166,20 +166,20 @@ const Message* Database::findByName(std::string_view name) const {
   return nullptr;
 }
 
-blvd_status Database::load(const std::string& path, std::string& err, const DbcOptions& opt) {
+core::Status Database::load(const std::string& path, std::string& err, const DbcOptions& opt) {
   messages_.clear();
   by_id_.clear();
   diagnostics_.clear();
   std::ifstream f(path, std::ios::binary);
   if (!f) {
     err = path + ": cannot open: " + std::strerror(errno);
-    return BLVD_ERR_IO;
+    return core::Status::Io;
   }
   std::ostringstream ss;
   ss << f.rdbuf();
   if (f.bad()) {
     err = path + ": read error";
-    return BLVD_ERR_IO;
+    return core::Status::Io;
   }
   return parse(ss.str(), path, err, opt);
 }
@@ -193,12 +193,12 @@ class Database::Parser {
   // False on a fatal error: status(), line() and reason() say which.
   bool line(std::string_view line, uint32_t line_no);
   bool finish();
-  blvd_status status() const { return status_; }
+  core::Status status() const { return status_; }
   uint32_t errorLine() const { return error_line_; }
   const std::string& reason() const { return reason_; }
 
  private:
-  bool fail(blvd_status st, uint32_t line_no, std::string reason) {
+  bool fail(core::Status st, uint32_t line_no, std::string reason) {
     status_ = st, error_line_ = line_no, reason_ = std::move(reason);
     return false;
   }
@@ -221,7 +221,7 @@ class Database::Parser {
   std::vector<PendingVal> vals_;
   std::vector<PendingType> types_;
   std::vector<std::string> notes_;
-  blvd_status status_ = BLVD_OK;
+  core::Status status_ = core::Status::Ok;
   uint32_t error_line_ = 0;
   std::string reason_;
 };
@@ -265,17 +265,17 @@ bool Database::Parser::line(std::string_view line, uint32_t line_no) {
 
 // SG_ NAME [M|mN|mNM] : START|LENGTH@ORDER SIGN (FACTOR,OFFSET) [MIN|MAX] "UNIT" RECEIVERS
 bool Database::Parser::signal(Cursor& c, std::string_view line, uint32_t line_no) {
-  if (!current_ && !skip_signals_) return fail(BLVD_ERR_CORRUPT, line_no, "SG_ outside a BO_ message");
+  if (!current_ && !skip_signals_) return fail(core::Status::Corrupt, line_no, "SG_ outside a BO_ message");
   if (skip_signals_) return true;
   Signal s;
   s.line = line_no;
   std::string_view name;
-  if (!c.ident(name)) return fail(BLVD_ERR_CORRUPT, line_no, "SG_ without a signal name");
+  if (!c.ident(name)) return fail(core::Status::Corrupt, line_no, "SG_ without a signal name");
   s.name.assign(name);
   if (!multiplexer(c, s, line_no) || !layout(c, line, s, line_no) || !placed(s, line_no)) return false;
   for (const auto& other : current_->signals)
     if (other.name == s.name)
-      return fail(BLVD_ERR_CORRUPT, line_no,
+      return fail(core::Status::Corrupt, line_no,
                   "signal " + s.name + " declared twice in message " + current_->name + " (first at line " +
                       std::to_string(other.line) + ")");
   current_->signals.push_back(std::move(s));
@@ -286,13 +286,13 @@ bool Database::Parser::signal(Cursor& c, std::string_view line, uint32_t line_no
 bool Database::Parser::multiplexer(Cursor& c, Signal& s, uint32_t line_no) {
   if (c.peek(':')) return true;
   std::string_view mux;
-  if (!c.ident(mux)) return fail(BLVD_ERR_CORRUPT, line_no, "expected ':' after signal " + s.name);
+  if (!c.ident(mux)) return fail(core::Status::Corrupt, line_no, "expected ':' after signal " + s.name);
   if (mux == "M") {
     s.multiplexor = true;
     return true;
   }
   const std::string bad = "bad multiplexer indicator '" + std::string(mux) + "' for signal " + s.name;
-  if (mux.size() < 2 || mux[0] != 'm') return fail(BLVD_ERR_CORRUPT, line_no, bad);
+  if (mux.size() < 2 || mux[0] != 'm') return fail(core::Status::Corrupt, line_no, bad);
   std::string_view digits = mux.substr(1);
   if (digits.back() == 'M') {  // extended multiplexing: multiplexed and a multiplexor itself
     s.multiplexor = true;
@@ -301,7 +301,7 @@ bool Database::Parser::multiplexer(Cursor& c, Signal& s, uint32_t line_no) {
   int64_t v = -1;
   const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), v);
   if (r.ec != std::errc() || r.ptr != digits.data() + digits.size() || v < 0 || v > INT32_MAX)
-    return fail(BLVD_ERR_CORRUPT, line_no, bad);
+    return fail(core::Status::Corrupt, line_no, bad);
   s.multiplex_value = static_cast<int32_t>(v);
   return true;
 }
@@ -311,28 +311,28 @@ bool Database::Parser::layout(Cursor& c, std::string_view line, Signal& s, uint3
   uint64_t start = 0, len = 0;
   if (!c.expect(':') || !c.unsignedInt(start, 65535) || !c.expect('|') || !c.unsignedInt(len, 65535) ||
       !c.expect('@'))
-    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected ': START|LENGTH@'");
+    return fail(core::Status::Corrupt, line_no, "signal " + s.name + ": expected ': START|LENGTH@'");
   if (c.p >= line.size() || (line[c.p] != '0' && line[c.p] != '1'))
-    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": byte order must be @0 or @1");
+    return fail(core::Status::Corrupt, line_no, "signal " + s.name + ": byte order must be @0 or @1");
   s.order = line[c.p++] == '1' ? ByteOrder::Intel : ByteOrder::Motorola;
   if (c.p >= line.size() || (line[c.p] != '+' && line[c.p] != '-'))
-    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected + or - after the byte order");
+    return fail(core::Status::Corrupt, line_no, "signal " + s.name + ": expected + or - after the byte order");
   s.is_signed = line[c.p++] == '-';
   if (len < 1 || len > 64)
-    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": length " + std::to_string(len) + " is not 1..64 bits");
+    return fail(core::Status::Corrupt, line_no, "signal " + s.name + ": length " + std::to_string(len) + " is not 1..64 bits");
   s.start_bit = static_cast<uint16_t>(start);
   s.length = static_cast<uint16_t>(len);
   if (!c.expect('(') || !c.number(s.factor) || !c.expect(',') || !c.number(s.offset) || !c.expect(')'))
-    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected (FACTOR,OFFSET)");
-  if (s.factor == 0) return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": factor is 0");
+    return fail(core::Status::Corrupt, line_no, "signal " + s.name + ": expected (FACTOR,OFFSET)");
+  if (s.factor == 0) return fail(core::Status::Corrupt, line_no, "signal " + s.name + ": factor is 0");
   if (!c.expect('[') || !c.number(s.minimum) || !c.expect('|') || !c.number(s.maximum) || !c.expect(']'))
-    return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected [MIN|MAX]");
-  if (!c.quoted(s.unit)) return fail(BLVD_ERR_CORRUPT, line_no, "signal " + s.name + ": expected \"UNIT\"");
+    return fail(core::Status::Corrupt, line_no, "signal " + s.name + ": expected [MIN|MAX]");
+  if (!c.quoted(s.unit)) return fail(core::Status::Corrupt, line_no, "signal " + s.name + ": expected \"UNIT\"");
   while (!c.atEnd()) {
     if (c.expect(',')) continue;
     std::string_view r;
     if (!c.ident(r))
-      return fail(BLVD_ERR_CORRUPT, line_no,
+      return fail(core::Status::Corrupt, line_no,
                   "signal " + s.name + ": bad receiver list near '" + std::string(line.substr(c.p, 20)) + "'");
     s.receivers.emplace_back(r);
   }
@@ -344,7 +344,7 @@ bool Database::Parser::layout(Cursor& c, std::string_view line, Signal& s, uint3
 bool Database::Parser::placed(Signal& s, uint32_t line_no) {
   unsigned last_byte = 0;
   if (!forEachBitMsbFirst(s, [&](unsigned b) { last_byte = std::max(last_byte, b / 8); }))
-    return fail(BLVD_ERR_CORRUPT, line_no,
+    return fail(core::Status::Corrupt, line_no,
                 "signal " + s.name + ": bits " + std::to_string(s.start_bit) + "|" + std::to_string(s.length) +
                     " run outside a 64-byte frame");
   s.bytes_needed = static_cast<uint16_t>(last_byte + 1);
@@ -355,7 +355,7 @@ bool Database::Parser::placed(Signal& s, uint32_t line_no) {
   s.supported = false;
   s.unsupported = "unsupported: multiplexed signal " + s.name + " in message " + current_->name + " (line " +
                   std::to_string(line_no) + ")";
-  if (opt_.reject_unsupported) return fail(BLVD_ERR_UNSUPPORTED, line_no, s.unsupported);
+  if (opt_.reject_unsupported) return fail(core::Status::Unsupported, line_no, s.unsupported);
   db_.diagnostics_.push_back(at(source_, line_no) + s.unsupported);
   return true;
 }
@@ -365,26 +365,26 @@ bool Database::Parser::message(Cursor& c, std::string_view line, uint32_t line_n
   if (c.atEnd()) return true;  // a bare keyword (keyword list)
   uint64_t raw_id = 0, size = 0;
   std::string_view name;
-  if (!c.unsignedInt(raw_id, 0xFFFFFFFFu)) return fail(BLVD_ERR_CORRUPT, line_no, "BO_ without a numeric id");
-  if (!c.ident(name)) return fail(BLVD_ERR_CORRUPT, line_no, "BO_ without a message name");
+  if (!c.unsignedInt(raw_id, 0xFFFFFFFFu)) return fail(core::Status::Corrupt, line_no, "BO_ without a numeric id");
+  if (!c.ident(name)) return fail(core::Status::Corrupt, line_no, "BO_ without a message name");
   const std::string n(name);
   if (!c.expect(':') || !c.unsignedInt(size, 0xFFFF))
-    return fail(BLVD_ERR_CORRUPT, line_no, "message " + n + ": expected ': SIZE'");
+    return fail(core::Status::Corrupt, line_no, "message " + n + ": expected ': SIZE'");
   std::string_view tx;
   c.ident(tx);  // optional
   if (!c.atEnd())
-    return fail(BLVD_ERR_CORRUPT, line_no, "message " + n + ": unexpected text '" + std::string(line.substr(c.p)) + "'");
+    return fail(core::Status::Corrupt, line_no, "message " + n + ": unexpected text '" + std::string(line.substr(c.p)) + "'");
   if (name == "VECTOR__INDEPENDENT_SIG_MSG") {  // a container for unplaced signals, not a frame
     skip_signals_ = true;
     return true;
   }
   if (size > kMaxFdLen)
-    return fail(BLVD_ERR_CORRUPT, line_no, "message " + n + ": size " + std::to_string(size) + " exceeds 64 bytes");
+    return fail(core::Status::Corrupt, line_no, "message " + n + ": size " + std::to_string(size) + " exceeds 64 bytes");
   Message m;
   m.extended = (raw_id & kExtendedBit) != 0;
   m.id = static_cast<uint32_t>(raw_id & ~kExtendedBit);
   if (m.extended ? m.id > kEffMask : m.id > kSffMask)
-    return fail(BLVD_ERR_CORRUPT, line_no,
+    return fail(core::Status::Corrupt, line_no,
                 "message " + n + ": id " + std::to_string(raw_id) +
                     (m.extended ? " exceeds 29 bits" : " exceeds 0x7FF (extended ids set bit 31)"));
   m.name = n;
@@ -393,7 +393,7 @@ bool Database::Parser::message(Cursor& c, std::string_view line, uint32_t line_n
   m.line = line_no;
   const auto k = key(m.id, m.extended);
   if (const auto it = db_.by_id_.find(k); it != db_.by_id_.end())
-    return fail(BLVD_ERR_CORRUPT, line_no,
+    return fail(core::Status::Corrupt, line_no,
                 "message " + m.name + ": id " + std::to_string(raw_id) + " already used by " +
                     db_.messages_[it->second].name + " (line " + std::to_string(db_.messages_[it->second].line) + ")");
   db_.by_id_.emplace(k, db_.messages_.size());
@@ -463,14 +463,14 @@ bool Database::Parser::finish() {
     s->supported = false;
     s->unsupported = "unsupported: signal " + s->name + " is declared IEEE float but has " +
                      std::to_string(s->length) + " bits (line " + std::to_string(t.line) + ")";
-    if (opt_.reject_unsupported) return fail(BLVD_ERR_UNSUPPORTED, t.line, s->unsupported);
+    if (opt_.reject_unsupported) return fail(core::Status::Unsupported, t.line, s->unsupported);
     db_.diagnostics_.push_back(at(source_, t.line) + s->unsupported);
   }
   for (auto& n : notes_) db_.diagnostics_.push_back(std::move(n));
   return true;
 }
 
-blvd_status Database::parse(std::string_view text, const std::string& source, std::string& err,
+core::Status Database::parse(std::string_view text, const std::string& source, std::string& err,
                             const DbcOptions& opt) {
   messages_.clear();
   by_id_.clear();
@@ -486,7 +486,7 @@ blvd_status Database::parse(std::string_view text, const std::string& source, st
     ok = p.line(text.substr(pos, eol - pos), ++line_no);
     pos = eol + 1;
   }
-  if (ok && p.finish()) return BLVD_OK;
+  if (ok && p.finish()) return core::Status::Ok;
   err = at(source, p.errorLine()) + p.reason();
   messages_.clear();
   by_id_.clear();
@@ -577,7 +577,7 @@ size_t decode(const Message& m, const Frame& f, std::vector<DecodedSignal>& out)
 
 namespace {
 
-blvd_status prepare(const Message& m, Frame& f) {
+core::Status prepare(const Message& m, Frame& f) {
   f.id = m.id;
   f.extended = m.extended;
   f.rtr = f.error = false;
@@ -585,13 +585,13 @@ blvd_status prepare(const Message& m, Frame& f) {
     f.dlc = static_cast<uint8_t>(m.size);
     if (m.size > kMaxClassicLen) f.fd = true;
   }
-  return BLVD_OK;
+  return core::Status::Ok;
 }
 
-blvd_status encodeOne(const Signal& s, double value, const uint64_t* decoded_raw, Frame& f, std::string& err) {
+core::Status encodeOne(const Signal& s, double value, const uint64_t* decoded_raw, Frame& f, std::string& err) {
   if (!s.supported) {
     err = s.unsupported;
-    return BLVD_ERR_UNSUPPORTED;
+    return core::Status::Unsupported;
   }
   uint64_t raw = 0;
   // A value straight from decode() is written back as its raw bits, which is exact
@@ -603,39 +603,39 @@ blvd_status encodeOne(const Signal& s, double value, const uint64_t* decoded_raw
   } else if (!toRaw(s, value, raw)) {
     err = "signal " + s.name + ": value " + std::to_string(value) + " does not fit " + std::to_string(s.length) +
           (s.is_signed ? " signed" : " unsigned") + " bits";
-    return BLVD_ERR_INVALID_ARG;
+    return core::Status::InvalidArg;
   }
   if (s.bytes_needed > f.dlc) f.dlc = static_cast<uint8_t>(s.bytes_needed);
   insertRaw(s, raw, f.data);
-  return BLVD_OK;
+  return core::Status::Ok;
 }
 
 }  // namespace
 
-blvd_status encode(const Message& m, const std::vector<DecodedSignal>& values, Frame& f, std::string& err) {
+core::Status encode(const Message& m, const std::vector<DecodedSignal>& values, Frame& f, std::string& err) {
   prepare(m, f);
   for (const auto& v : values) {
     if (!v.signal || v.signal < m.signals.data() || v.signal >= m.signals.data() + m.signals.size()) {
       err = "encode: a signal does not belong to message " + m.name;
-      return BLVD_ERR_MISUSE;
+      return core::Status::Misuse;
     }
-    if (const blvd_status st = encodeOne(*v.signal, v.value, &v.raw, f, err); st != BLVD_OK) return st;
+    if (const core::Status st = encodeOne(*v.signal, v.value, &v.raw, f, err); st != core::Status::Ok) return st;
   }
-  return BLVD_OK;
+  return core::Status::Ok;
 }
 
-blvd_status encode(const Message& m, const std::vector<std::pair<std::string, double>>& values, Frame& f,
+core::Status encode(const Message& m, const std::vector<std::pair<std::string, double>>& values, Frame& f,
                    std::string& err) {
   prepare(m, f);
   for (const auto& [name, value] : values) {
     const Signal* s = m.signal(name);
     if (!s) {
       err = "message " + m.name + " has no signal " + name;
-      return BLVD_ERR_NOT_FOUND;
+      return core::Status::NotFound;
     }
-    if (const blvd_status st = encodeOne(*s, value, nullptr, f, err); st != BLVD_OK) return st;
+    if (const core::Status st = encodeOne(*s, value, nullptr, f, err); st != core::Status::Ok) return st;
   }
-  return BLVD_OK;
+  return core::Status::Ok;
 }
 
 }  // namespace blvd::vehicle

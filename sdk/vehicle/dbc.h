@@ -28,7 +28,7 @@
 #include <utility>
 #include <vector>
 
-#include "blvd/blvd.h"
+#include "core/status.h"
 #include "vehicle/frame.h"
 
 namespace blvd::vehicle {
@@ -78,17 +78,17 @@ struct DecodedSignal {
 };
 
 struct DbcOptions {
-  bool reject_unsupported = false;  // fail the load (BLVD_ERR_UNSUPPORTED) at the first multiplexed signal
+  bool reject_unsupported = false;  // fail the load (core::Status::Unsupported) at the first multiplexed signal
 };
 
 class Database {
  public:
   // Parses DBC text; `source` names it in messages. On failure the database is
-  // empty and `err` is "source:line: reason". BLVD_ERR_CORRUPT for a syntax error.
-  blvd_status parse(std::string_view text, const std::string& source, std::string& err,
+  // empty and `err` is "source:line: reason". core::Status::Corrupt for a syntax error.
+  core::Status parse(std::string_view text, const std::string& source, std::string& err,
                     const DbcOptions& opt = DbcOptions{});
-  // Reads and parses a file. BLVD_ERR_IO when it cannot be read.
-  blvd_status load(const std::string& path, std::string& err, const DbcOptions& opt = DbcOptions{});
+  // Reads and parses a file. core::Status::Io when it cannot be read.
+  core::Status load(const std::string& path, std::string& err, const DbcOptions& opt = DbcOptions{});
 
   const std::vector<Message>& messages() const { return messages_; }
   const Message* find(uint32_t id, bool extended) const;
@@ -124,13 +124,13 @@ size_t decode(const Message& m, const Frame& f, std::vector<DecodedSignal>& out)
 // Writes the given signals into `f`: sets f's id, extended flag and (when it is
 // shorter) length from `m`, and changes only the bits of those signals, so
 // encode(m, decode(m, f), f2) reproduces every signal bit of f in f2.
-// Each entry's `signal` must point into m.signals (else BLVD_ERR_MISUSE). `value` is
+// Each entry's `signal` must point into m.signals (else core::Status::Misuse). `value` is
 // encoded; when it is exactly the value `raw` decodes to, `raw` is written as is.
-// BLVD_ERR_INVALID_ARG with `err` naming the signal when a value does not fit;
-// BLVD_ERR_UNSUPPORTED for a multiplexed signal.
-blvd_status encode(const Message& m, const std::vector<DecodedSignal>& values, Frame& f, std::string& err);
-// The same, signals given by name. BLVD_ERR_NOT_FOUND for a name m lacks.
-blvd_status encode(const Message& m, const std::vector<std::pair<std::string, double>>& values, Frame& f,
+// core::Status::InvalidArg with `err` naming the signal when a value does not fit;
+// core::Status::Unsupported for a multiplexed signal.
+core::Status encode(const Message& m, const std::vector<DecodedSignal>& values, Frame& f, std::string& err);
+// The same, signals given by name. core::Status::NotFound for a name m lacks.
+core::Status encode(const Message& m, const std::vector<std::pair<std::string, double>>& values, Frame& f,
                    std::string& err);
 
 }  // namespace blvd::vehicle

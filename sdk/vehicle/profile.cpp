@@ -144,7 +144,7 @@ bool parseVehicle(std::string_view name, Vehicle& out) {
   return false;
 }
 
-blvd_status Profile::create(const ProfileDesc& desc, const Database& dbc, std::string& err) {
+core::Status Profile::create(const ProfileDesc& desc, const Database& dbc, std::string& err) {
   desc_ = desc;
   if (!(desc_.wheel_stale_s > 0)) desc_.wheel_stale_s = 0.5;
   bound_.clear();
@@ -183,9 +183,9 @@ blvd_status Profile::create(const ProfileDesc& desc, const Database& dbc, std::s
     err = std::string("profile ") + vehicleName(desc.vehicle) + ": " + dbc.source() + " lacks ";
     for (size_t i = 0; i < missing.size(); ++i) err += (i ? ", " : "") + missing[i];
     bound_.clear();
-    return BLVD_ERR_NOT_FOUND;
+    return core::Status::NotFound;
   }
-  return BLVD_OK;
+  return core::Status::Ok;
 }
 
 void Profile::reset() {
@@ -199,7 +199,7 @@ std::vector<std::pair<uint32_t, bool>> Profile::messageIds() const {
   return ids;
 }
 
-blvd_status Profile::encode(const Odometry& o, double t, std::vector<Frame>& out, std::string& err) const {
+core::Status Profile::encode(const Odometry& o, double t, std::vector<Frame>& out, std::string& err) const {
   std::vector<const Bound*> msgs;
   for (const auto& [k, b] : bound_) msgs.push_back(&b);
   std::sort(msgs.begin(), msgs.end(), [](const Bound* a, const Bound* b) {
@@ -248,25 +248,25 @@ blvd_status Profile::encode(const Odometry& o, double t, std::vector<Frame>& out
       }
       if (!gear_code) v *= it.divisor;
       if (it.sign) {  // magnitude plus a sign bit (VW)
-        if (!put(*it.sign, v < 0 ? 1 : 0, f)) return BLVD_ERR_INVALID_ARG;
+        if (!put(*it.sign, v < 0 ? 1 : 0, f)) return core::Status::InvalidArg;
         v = std::fabs(v);
       }
       if (it.add) {  // coarse signal plus a fine one (Toyota STEER_ANGLE + STEER_FRACTION)
         uint64_t raw = 0;
-        if (!toRaw(*it.signal, v, raw)) return put(*it.signal, v, f), BLVD_ERR_INVALID_ARG;
+        if (!toRaw(*it.signal, v, raw)) return put(*it.signal, v, f), core::Status::InvalidArg;
         insertRaw(*it.signal, raw, f.data);
         const double rest = v - toPhysical(*it.signal, raw);
-        if (!put(*it.add, rest, f)) return BLVD_ERR_INVALID_ARG;
+        if (!put(*it.add, rest, f)) return core::Status::InvalidArg;
         continue;
       }
-      if (!put(*it.signal, v, f)) return BLVD_ERR_INVALID_ARG;
+      if (!put(*it.signal, v, f)) return core::Status::InvalidArg;
     }
     if (desc_.vehicle == Vehicle::Toyota)
       if (const Signal* cs = b->message->signal("CHECKSUM"); cs && cs->supported && cs->bytes_needed <= f.dlc)
         insertRaw(*cs, toyotaChecksum(f), f.data);
     out.push_back(f);
   }
-  return BLVD_OK;
+  return core::Status::Ok;
 }
 
 bool Profile::consume(const Frame& f, Odometry& out) {

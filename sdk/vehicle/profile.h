@@ -36,7 +36,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "blvd/blvd.h"
+#include "core/status.h"
 #include "vehicle/dbc.h"
 #include "vehicle/frame.h"
 
@@ -88,9 +88,9 @@ struct ProfileDesc {
 class Profile {
  public:
   // Binds the profile's signals in `dbc`, which must outlive the profile.
-  // BLVD_ERR_NOT_FOUND with `err` naming each missing message/signal when a
+  // core::Status::NotFound with `err` naming each missing message/signal when a
   // required one is absent (the gear signals are optional).
-  blvd_status create(const ProfileDesc& desc, const Database& dbc, std::string& err);
+  core::Status create(const ProfileDesc& desc, const Database& dbc, std::string& err);
 
   // Feeds one frame. Returns true when it carried a mapped signal; `out` is then
   // the whole state after it, with `updated` saying what changed. Not thread-safe.
@@ -103,9 +103,9 @@ class Profile {
   // set in o.valid; the others as zero) into one frame per message the profile
   // reads, in id order, stamped `t`. consume() of those frames gives `o` back to
   // the DBC's resolution. Toyota messages with a CHECKSUM signal get Toyota's
-  // checksum. BLVD_ERR_INVALID_ARG with `err` naming the signal when a value does
+  // checksum. core::Status::InvalidArg with `err` naming the signal when a value does
   // not fit it.
-  blvd_status encode(const Odometry& o, double t, std::vector<Frame>& out, std::string& err) const;
+  core::Status encode(const Odometry& o, double t, std::vector<Frame>& out, std::string& err) const;
   // (id, extended) of every message the profile reads, e.g. for SocketCAN filters.
   std::vector<std::pair<uint32_t, bool>> messageIds() const;
 

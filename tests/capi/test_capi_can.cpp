@@ -29,7 +29,7 @@ blvd_can_frame encodeToyota(const blvd::vehicle::Database& db, const char* messa
   EXPECT_NE(m, nullptr) << message;
   blvd::vehicle::Frame f;
   std::string err;
-  EXPECT_EQ(blvd::vehicle::encode(*m, values, f, err), BLVD_OK) << err;
+  EXPECT_EQ(blvd::vehicle::encode(*m, values, f, err), blvd::core::Status::Ok) << err;
   blvd_can_frame c{};
   c.struct_size = sizeof c;
   c.t = t;
@@ -42,7 +42,7 @@ blvd_can_frame encodeToyota(const blvd::vehicle::Database& db, const char* messa
 blvd::vehicle::Database loadToyota() {
   blvd::vehicle::Database db;
   std::string err;
-  EXPECT_EQ(db.load(kToyotaDbc, err), BLVD_OK) << err;
+  EXPECT_EQ(db.load(kToyotaDbc, err), blvd::core::Status::Ok) << err;
   return db;
 }
 

@@ -33,8 +33,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   blvd::vehicle::Database db;
   std::string err;
-  const blvd_status st = db.parse(text, "fuzz.dbc", err);
-  if (st != BLVD_OK) {
+  const blvd::core::Status st = db.parse(text, "fuzz.dbc", err);
+  if (st != blvd::core::Status::Ok) {
     if (err.rfind("fuzz.dbc:", 0) != 0 || !db.messages().empty()) std::abort();
     return 0;
   }
@@ -59,7 +59,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     blvd::vehicle::decode(m, f, values);
     blvd::vehicle::Frame g;
     g.dlc = f.dlc;
-    if (blvd::vehicle::encode(m, values, g, err) != BLVD_OK) std::abort();
+    if (blvd::vehicle::encode(m, values, g, err) != blvd::core::Status::Ok) std::abort();
     uint8_t mask[64] = {};
     for (const auto& v : values) blvd::vehicle::insertRaw(*v.signal, ~uint64_t{0}, mask);
     for (size_t i = 0; i < 64; ++i)

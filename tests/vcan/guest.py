@@ -289,6 +289,11 @@ def initramfs(guest, out, binaries, files, scenario, env):
         libs.update(_ldd(b))
     for lib in sorted(libs):
         put(lib, lib, 0o755)
+        # A library from the build tree (libblvd) is also put in /lib, where
+        # the loader looks when the binary's RUNPATH does not exist: the guest
+        # mounts a tmpfs over /tmp, which hides a build tree under /tmp.
+        if not lib.startswith(("/lib", "/usr/")):
+            put(lib, "/lib/" + os.path.basename(lib), 0o755)
     for dst, src in files.items():
         if not os.path.isfile(src):
             raise GuestError("input file for the guest not found: %s" % src)

@@ -130,7 +130,7 @@ class Comma2k19 : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string err;
-    ASSERT_EQ(db_.load(test::dataPath("dbc/toyota_new_mc_pt_generated.dbc"), err), BLVD_OK) << err;
+    ASSERT_EQ(db_.load(test::dataPath("dbc/toyota_new_mc_pt_generated.dbc"), err), blvd::core::Status::Ok) << err;
     rows_ = readReference();
     ASSERT_EQ(rows_.size(), 4974u);
   }
@@ -200,7 +200,7 @@ TEST_F(Comma2k19, ToyotaProfileReproducesTheReferenceCsv) {
   desc.iface = "can0";
   Profile profile;
   std::string err;
-  ASSERT_EQ(profile.create(desc, db_, err), BLVD_OK) << err;
+  ASSERT_EQ(profile.create(desc, db_, err), blvd::core::Status::Ok) << err;
   BatchReader batches(test::comma2k19Candump());
   std::vector<Record> batch;
   Odometry odo;

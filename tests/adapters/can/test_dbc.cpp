@@ -22,11 +22,11 @@ using namespace blvd::vehicle;
 Database parseDbc(const std::string& text) {
   Database db;
   std::string err;
-  EXPECT_EQ(db.parse(text, "test.dbc", err), BLVD_OK) << err;
+  EXPECT_EQ(db.parse(text, "test.dbc", err), blvd::core::Status::Ok) << err;
   return db;
 }
 
-std::string parseError(const std::string& text, blvd_status want = BLVD_ERR_CORRUPT) {
+std::string parseError(const std::string& text, blvd::core::Status want = blvd::core::Status::Corrupt) {
   Database db;
   std::string err;
   EXPECT_EQ(db.parse(text, "bad.dbc", err), want) << text;
@@ -201,7 +201,7 @@ TEST(Dbc, SixtyFourBitSignals) {
   // Both round-trip exactly, though a double cannot hold every 64-bit value.
   Frame back;
   std::string err;
-  ASSERT_EQ(encode(*db.findByName("WIDE_BE"), out, back, err), BLVD_OK) << err;
+  ASSERT_EQ(encode(*db.findByName("WIDE_BE"), out, back, err), blvd::core::Status::Ok) << err;
   EXPECT_EQ(std::memcmp(back.data, g.data, 8), 0);
 }
 
@@ -256,13 +256,13 @@ TEST(Dbc, MultiplexedSignalsAreUnsupportedNotFatal) {
   // Encoding one refuses with the same message.
   Frame g;
   std::string err;
-  EXPECT_EQ(encode(m, {{"B", 5.0}}, g, err), BLVD_ERR_UNSUPPORTED);
+  EXPECT_EQ(encode(m, {{"B", 5.0}}, g, err), blvd::core::Status::Unsupported);
   EXPECT_EQ(err, "unsupported: multiplexed signal B in message MUXED (line 36)");
   // And a strict load fails at the first one.
   Database strict;
   DbcOptions opt;
   opt.reject_unsupported = true;
-  EXPECT_EQ(strict.parse(kEdgeDbc, "test.dbc", err, opt), BLVD_ERR_UNSUPPORTED);
+  EXPECT_EQ(strict.parse(kEdgeDbc, "test.dbc", err, opt), blvd::core::Status::Unsupported);
   EXPECT_EQ(err, "test.dbc:35: unsupported: multiplexed signal A in message MUXED (line 35)");
 }
 
@@ -272,7 +272,7 @@ TEST(Dbc, FloatSignals) {
   EXPECT_EQ(m.signal("F32")->type, ValueType::Float32);
   Frame f;
   std::string err;
-  ASSERT_EQ(encode(m, {{"F32", -1.5}, {"F32Scaled", 7.0}}, f, err), BLVD_OK) << err;
+  ASSERT_EQ(encode(m, {{"F32", -1.5}, {"F32Scaled", 7.0}}, f, err), blvd::core::Status::Ok) << err;
   EXPECT_EQ(f.data[3], 0xBF);  // -1.5f = 0xBFC00000, little endian
   EXPECT_EQ(f.data[2], 0xC0);
   EXPECT_EQ(value(m, f, "F32"), -1.5);
@@ -297,16 +297,16 @@ TEST(Dbc, EncodeByNameAndRange) {
   const Message& m = *db.findByName("EXTENDED");
   Frame f;
   std::string err;
-  ASSERT_EQ(encode(m, {{"Speed", 50.0}, {"Gear", 3}}, f, err), BLVD_OK) << err;
+  ASSERT_EQ(encode(m, {{"Speed", 50.0}, {"Gear", 3}}, f, err), blvd::core::Status::Ok) << err;
   EXPECT_TRUE(f.extended);
   EXPECT_EQ(f.id, 0x1FFu);
   EXPECT_EQ(f.dlc, 3);
   EXPECT_NEAR(value(m, f, "Speed"), 50.0, 1e-9);
   EXPECT_EQ(value(m, f, "Gear"), 3);
-  EXPECT_EQ(encode(m, {{"Gear", 16}}, f, err), BLVD_ERR_INVALID_ARG);
+  EXPECT_EQ(encode(m, {{"Gear", 16}}, f, err), blvd::core::Status::InvalidArg);
   EXPECT_NE(err.find("signal Gear"), std::string::npos) << err;
-  EXPECT_EQ(encode(m, {{"Speed", -70}}, f, err), BLVD_ERR_INVALID_ARG);
-  EXPECT_EQ(encode(m, {{"Nope", 1}}, f, err), BLVD_ERR_NOT_FOUND);
+  EXPECT_EQ(encode(m, {{"Speed", -70}}, f, err), blvd::core::Status::InvalidArg);
+  EXPECT_EQ(encode(m, {{"Nope", 1}}, f, err), blvd::core::Status::NotFound);
   EXPECT_EQ(err, "message EXTENDED has no signal Nope");
 }
 
@@ -331,7 +331,7 @@ TEST(Dbc, ErrorsNameFileAndLine) {
             "bad.dbc:2: bad multiplexer indicator 'x7' for signal S");
   Database db;
   std::string err;
-  EXPECT_EQ(db.load("/nonexistent/x.dbc", err), BLVD_ERR_IO);
+  EXPECT_EQ(db.load("/nonexistent/x.dbc", err), blvd::core::Status::Io);
   EXPECT_EQ(err.rfind("/nonexistent/x.dbc: cannot open", 0), 0u) << err;
 }
 
@@ -358,7 +358,7 @@ TEST(Dbc, LoadsTheThreeOpendbcFiles) {
     SCOPED_TRACE(want.file);
     Database db;
     std::string err;
-    ASSERT_EQ(db.load(test::dataPath(std::string("dbc/") + want.file), err), BLVD_OK) << err;
+    ASSERT_EQ(db.load(test::dataPath(std::string("dbc/") + want.file), err), blvd::core::Status::Ok) << err;
     EXPECT_EQ(db.messages().size(), want.messages);
     size_t signals = 0, unsupported = 0;
     for (const auto& m : db.messages()) {
@@ -370,7 +370,7 @@ TEST(Dbc, LoadsTheThreeOpendbcFiles) {
   }
   Database vw;
   std::string err;
-  ASSERT_EQ(vw.load(test::dataPath("dbc/vw_mqb.dbc"), err), BLVD_OK);
+  ASSERT_EQ(vw.load(test::dataPath("dbc/vw_mqb.dbc"), err), blvd::core::Status::Ok);
   const Signal* ks = vw.findByName("VIN_01")->signal("KS_Geheimnis_1");
   ASSERT_NE(ks, nullptr);
   EXPECT_EQ(ks->unsupported, "unsupported: multiplexed signal KS_Geheimnis_1 in message VIN_01 (line 1243)");
@@ -387,7 +387,7 @@ TEST(Dbc, LoadsTheThreeOpendbcFiles) {
   EXPECT_EQ(esp02->signal("ESP_Gierrate")->factor, 0.01);
 
   Database toyota;
-  ASSERT_EQ(toyota.load(test::dataPath("dbc/toyota_new_mc_pt_generated.dbc"), err), BLVD_OK);
+  ASSERT_EQ(toyota.load(test::dataPath("dbc/toyota_new_mc_pt_generated.dbc"), err), blvd::core::Status::Ok);
   const Signal* steer = toyota.find(0x25, false)->signal("STEER_ANGLE");
   EXPECT_EQ(steer->order, ByteOrder::Motorola);
   EXPECT_TRUE(steer->is_signed);
@@ -404,7 +404,7 @@ TEST(Dbc, LoadsTheThreeOpendbcFiles) {
 TEST(Dbc, EncodeDecodeRoundTripOnComma2k19) {
   Database db;
   std::string err;
-  ASSERT_EQ(db.load(test::dataPath("dbc/toyota_new_mc_pt_generated.dbc"), err), BLVD_OK) << err;
+  ASSERT_EQ(db.load(test::dataPath("dbc/toyota_new_mc_pt_generated.dbc"), err), blvd::core::Status::Ok) << err;
   std::istringstream in(test::comma2k19Candump());
   CandumpReader reader;
   reader.attach(in, "comma2k19");
@@ -422,7 +422,7 @@ TEST(Dbc, EncodeDecodeRoundTripOnComma2k19) {
     for (const auto& d : sig) named.emplace_back(d.signal->name, d.value);
     Frame g;
     g.dlc = r.frame.dlc;
-    ASSERT_EQ(encode(*m, named, g, err), BLVD_OK) << err;
+    ASSERT_EQ(encode(*m, named, g, err), blvd::core::Status::Ok) << err;
     uint8_t mask[64] = {};
     for (const auto& d : sig) insertRaw(*d.signal, ~0ull, mask);
     for (int i = 0; i < r.frame.dlc; ++i)

@@ -20,7 +20,7 @@ using namespace blvd::vehicle;
 Database loadDbc(const char* file) {
   Database db;
   std::string err;
-  EXPECT_EQ(db.load(test::dataPath(std::string("dbc/") + file), err), BLVD_OK) << err;
+  EXPECT_EQ(db.load(test::dataPath(std::string("dbc/") + file), err), blvd::core::Status::Ok) << err;
   return db;
 }
 
@@ -33,7 +33,7 @@ Frame encoded(const Database& db, const char* message, const std::vector<std::pa
   f.iface = iface;
   std::string err;
   if (m) {
-    EXPECT_EQ(encode(*m, values, f, err), BLVD_OK) << err;
+    EXPECT_EQ(encode(*m, values, f, err), blvd::core::Status::Ok) << err;
   }
   return f;
 }
@@ -48,7 +48,7 @@ TEST(Profile, Toyota) {
   const Database db = loadDbc("toyota_new_mc_pt_generated.dbc");
   Profile p;
   std::string err;
-  ASSERT_EQ(p.create(ProfileDesc{}, db, err), BLVD_OK) << err;
+  ASSERT_EQ(p.create(ProfileDesc{}, db, err), blvd::core::Status::Ok) << err;
   EXPECT_EQ(p.messageIds().size(), 5u);  // 0xAA 0xB4 0x24 0x25 0x3BC
 
   // Only the dashboard speed so far: Auto uses it.
@@ -112,7 +112,7 @@ TEST(Profile, ToyotaSpeedSourcesAndInterfaceFilter) {
   desc.iface = "can0";
   Profile p;
   std::string err;
-  ASSERT_EQ(p.create(desc, db, err), BLVD_OK) << err;
+  ASSERT_EQ(p.create(desc, db, err), blvd::core::Status::Ok) << err;
   Odometry o;
   EXPECT_FALSE(p.consume(encoded(db, "SPEED", {{"SPEED", 36.0}}, 1.0, "can1"), o));  // other bus
   o = feed(p, encoded(db, "SPEED", {{"SPEED", 36.0}}, 1.0));
@@ -125,7 +125,7 @@ TEST(Profile, ToyotaSpeedSourcesAndInterfaceFilter) {
 
   desc.speed = SpeedSource::WheelMean;
   desc.iface.clear();
-  ASSERT_EQ(p.create(desc, db, err), BLVD_OK);
+  ASSERT_EQ(p.create(desc, db, err), blvd::core::Status::Ok);
   o = feed(p, encoded(db, "SPEED", {{"SPEED", 36.0}}, 1.0, "can7"));
   EXPECT_FALSE(o.valid & kOdoSpeed);  // never from the vehicle signal
 }
@@ -136,7 +136,7 @@ TEST(Profile, VwMqbSignBits) {
   desc.vehicle = Vehicle::VwMqb;
   Profile p;
   std::string err;
-  ASSERT_EQ(p.create(desc, db, err), BLVD_OK) << err;
+  ASSERT_EQ(p.create(desc, db, err), blvd::core::Status::Ok) << err;
   Odometry o = feed(p, encoded(db, "ESP_19",
                                {{"ESP_VL_Radgeschw_02", 54.0}, {"ESP_VR_Radgeschw_02", 54.0},
                                 {"ESP_HL_Radgeschw_02", 53.1}, {"ESP_HR_Radgeschw_02", 54.9}},
@@ -167,7 +167,7 @@ TEST(Profile, Hyundai) {
   desc.vehicle = Vehicle::Hyundai;
   Profile p;
   std::string err;
-  ASSERT_EQ(p.create(desc, db, err), BLVD_OK) << err;
+  ASSERT_EQ(p.create(desc, db, err), blvd::core::Status::Ok) << err;
   Odometry o = feed(p, encoded(db, "WHL_SPD11",
                                {{"WHL_SPD_FL", 36.0}, {"WHL_SPD_FR", 36.0}, {"WHL_SPD_RL", 36.0}, {"WHL_SPD_RR", 37.125}},
                                1.0));
@@ -197,7 +197,7 @@ TEST(Profile, ToyotaOnTheScionLogIfPresent) {
   const Database db = loadDbc("toyota_new_mc_pt_generated.dbc");
   Profile p;
   std::string err;
-  ASSERT_EQ(p.create(ProfileDesc{}, db, err), BLVD_OK) << err;
+  ASSERT_EQ(p.create(ProfileDesc{}, db, err), blvd::core::Status::Ok) << err;
   CandumpReader reader;
   ASSERT_EQ(reader.open(path), BLVD_OK) << reader.error();
   Record r;
@@ -224,15 +224,15 @@ TEST(Profile, MissingSignalsAreNamed) {
   std::string err;
   ASSERT_EQ(db.parse("BO_ 170 WHEEL_SPEEDS: 8 X\n SG_ WHEEL_SPEED_FR : 7|16@0+ (0.01,-67.67) [0|250] \"km/h\" X\n",
                      "partial.dbc", err),
-            BLVD_OK);
+            blvd::core::Status::Ok);
   Profile p;
-  EXPECT_EQ(p.create(ProfileDesc{}, db, err), BLVD_ERR_NOT_FOUND);
+  EXPECT_EQ(p.create(ProfileDesc{}, db, err), blvd::core::Status::NotFound);
   EXPECT_EQ(err,
             "profile toyota: partial.dbc lacks WHEEL_SPEEDS.WHEEL_SPEED_FL, WHEEL_SPEEDS.WHEEL_SPEED_RL, "
             "WHEEL_SPEEDS.WHEEL_SPEED_RR, SPEED, KINEMATICS, STEER_ANGLE_SENSOR");
   // A DBC for another make is refused, not silently half-used.
   const Database vw = loadDbc("vw_mqb.dbc");
-  EXPECT_EQ(p.create(ProfileDesc{}, vw, err), BLVD_ERR_NOT_FOUND);
+  EXPECT_EQ(p.create(ProfileDesc{}, vw, err), blvd::core::Status::NotFound);
   EXPECT_EQ(err, "profile toyota: " + test::dataPath("dbc/vw_mqb.dbc") +
                      " lacks WHEEL_SPEEDS, SPEED, KINEMATICS, STEER_ANGLE_SENSOR");
   Vehicle v;
@@ -260,8 +260,8 @@ TEST(Profile, EncodeRoundTripsEveryVehicle) {
     pd.speed = SpeedSource::WheelMean;
     Profile enc, dec;
     std::string err;
-    ASSERT_EQ(enc.create(pd, db, err), BLVD_OK) << err;
-    ASSERT_EQ(dec.create(pd, db, err), BLVD_OK) << err;
+    ASSERT_EQ(enc.create(pd, db, err), blvd::core::Status::Ok) << err;
+    ASSERT_EQ(dec.create(pd, db, err), blvd::core::Status::Ok) << err;
     for (const double sign : {1.0, -1.0})
       for (const Gear g : {Gear::Drive, Gear::Reverse, Gear::Park, Gear::Neutral}) {
         Odometry o;
@@ -273,7 +273,7 @@ TEST(Profile, EncodeRoundTripsEveryVehicle) {
         o.gear = g;
         o.valid = kOdoVehicleSpeed | kOdoYawRate | kOdoSteering | kOdoWheelSpeeds | kOdoGear;
         std::vector<Frame> frames;
-        ASSERT_EQ(enc.encode(o, 4.5, frames, err), BLVD_OK) << err;
+        ASSERT_EQ(enc.encode(o, 4.5, frames, err), blvd::core::Status::Ok) << err;
         ASSERT_EQ(frames.size(), enc.messageIds().size());
         Odometry got;
         for (const Frame& f : frames) {

@@ -53,7 +53,7 @@ std::string nmeaTrace(double t0, int n) {
 std::string wheelTrace(double t0, double dt, int n, double kmh) {
   vehicle::Database db;
   std::string err;
-  EXPECT_EQ(db.load(kToyotaDbc, err), BLVD_OK) << err;
+  EXPECT_EQ(db.load(kToyotaDbc, err), blvd::core::Status::Ok) << err;
   const vehicle::Message* m = db.findByName("WHEEL_SPEEDS");
   EXPECT_NE(m, nullptr);
   std::ostringstream out;
@@ -68,7 +68,7 @@ std::string wheelTrace(double t0, double dt, int n, double kmh) {
                           {{"WHEEL_SPEED_FL", kmh}, {"WHEEL_SPEED_FR", kmh}, {"WHEEL_SPEED_RL", kmh},
                            {"WHEEL_SPEED_RR", kmh}},
                           f, err),
-              BLVD_OK)
+              blvd::core::Status::Ok)
         << err;
     EXPECT_TRUE(rec.record(f));
   }
