@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   if (!blvd::can::parseLine("(1533198887.123456) can0 0AA#0102030405060708", r, reason)) return 3;
   blvd::vehicle::Database db;
   std::string err;
-  if (db.load(argv[1], err) != BLVD_OK || !db.find(0xAA, false)) {
+  if (db.load(argv[1], err) != blvd::core::Status::Ok || !db.find(0xAA, false)) {
     std::fprintf(stderr, "%s\n", err.c_str());
     return 4;
   }
