@@ -80,6 +80,17 @@ blvd_status trackerGuarded(blvd_tracker* tr, F&& f) {
   }
 }
 
+// A feed: any thread, so no last error is written; nothing may escape.
+template <typename F>
+blvd_status feedGuarded(F&& f) {
+  try {
+    f();
+    return BLVD_OK;
+  } catch (...) {
+    return BLVD_ERR_INTERNAL;
+  }
+}
+
 blvd_status badTrackerDesc(const char* why) {
   t_create_error = std::string("blvd_tracker_create: ") + why;
   return BLVD_ERR_INVALID_ARG;
@@ -94,23 +105,13 @@ extern "C" {
 blvd_status blvd_feed_gnss(blvd_runtime* rt, const blvd_gnss_fix* fix) {
   if (!rt) return BLVD_ERR_MISUSE;  // no last error: feeds may run on any thread
   if (!fix) return BLVD_ERR_INVALID_ARG;
-  try {
-    rt->impl->feedGnss(blvd::capi::toTrack(*fix));
-    return BLVD_OK;
-  } catch (...) {
-    return BLVD_ERR_INTERNAL;
-  }
+  return feedGuarded([&] { rt->impl->feedGnss(blvd::capi::toTrack(*fix)); });
 }
 
 blvd_status blvd_feed_odometry(blvd_runtime* rt, const blvd_odometry* odo) {
   if (!rt) return BLVD_ERR_MISUSE;
   if (!odo) return BLVD_ERR_INVALID_ARG;
-  try {
-    rt->impl->feedOdometry(blvd::capi::toTrack(*odo));
-    return BLVD_OK;
-  } catch (...) {
-    return BLVD_ERR_INTERNAL;
-  }
+  return feedGuarded([&] { rt->impl->feedOdometry(blvd::capi::toTrack(*odo)); });
 }
 
 blvd_status blvd_get_pose(blvd_runtime* rt, double t, blvd_pose* pose) {
@@ -192,15 +193,13 @@ const char* blvd_tracker_last_error(const blvd_tracker* tr) {
 blvd_status blvd_tracker_feed_gnss(blvd_tracker* tr, const blvd_gnss_fix* fix) {
   if (!tr) return BLVD_ERR_MISUSE;
   if (!fix) return BLVD_ERR_INVALID_ARG;
-  tr->tracker->feedGnss(blvd::capi::toTrack(*fix));
-  return BLVD_OK;
+  return feedGuarded([&] { tr->tracker->feedGnss(blvd::capi::toTrack(*fix)); });
 }
 
 blvd_status blvd_tracker_feed_odometry(blvd_tracker* tr, const blvd_odometry* odo) {
   if (!tr) return BLVD_ERR_MISUSE;
   if (!odo) return BLVD_ERR_INVALID_ARG;
-  tr->tracker->feedOdometry(blvd::capi::toTrack(*odo));
-  return BLVD_OK;
+  return feedGuarded([&] { tr->tracker->feedOdometry(blvd::capi::toTrack(*odo)); });
 }
 
 blvd_status blvd_tracker_feed_can_frame(blvd_tracker* tr, blvd_can_profile* profile, const blvd_can_frame* frame) {

@@ -1,4 +1,5 @@
 #include "cli/malloc_probe.h"
+#include "cli/driver_libraries.h"
 
 #include <cerrno>
 #include <cstddef>
@@ -20,14 +21,6 @@ thread_local int t_active = 0;
 thread_local bool t_inside = false;
 thread_local long t_count = 0, t_driver = 0;
 
-bool isDriver(const char* path) {
-  if (!path) return false;
-  const char* base = std::strrchr(path, '/');
-  base = base ? base + 1 : path;
-  for (const char* lib : {"libGL", "libEGL", "libgallium", "_dri.so", "libLLVM", "libOSMesa", "libglapi", "libgbm"})
-    if (std::strstr(base, lib)) return true;
-  return false;
-}
 
 inline void note() {
   if (!t_active || t_inside) return;
@@ -37,7 +30,7 @@ inline void note() {
   bool driver = false;
   for (int i = 1; i < n && !driver; ++i) {
     Dl_info info;
-    if (dladdr(frames[i], &info)) driver = isDriver(info.dli_fname);
+    if (dladdr(frames[i], &info)) driver = blvd::probe::isDriverLibrary(info.dli_fname);
   }
   ++(driver ? t_driver : t_count);
   t_inside = false;

@@ -10,7 +10,7 @@
 //
 // The GL driver's own calls are told apart and counted separately: a call
 // whose stack (up to 24 frames) passes through a GL/EGL/driver library
-// (libGL*, libEGL*, libgallium*, *_dri.so, libLLVM*, libOSMesa*, libglapi*) is
+// (driver_libraries.h: libGL*, libEGL*, libgallium*, *_dri.so, libLLVM* ...) is
 // the driver's. llvmpipe, for one, bins every frame into scene blocks it
 // mallocs and frees itself; blvd cannot change that and does not claim to.
 #pragma once

@@ -2,35 +2,37 @@
 
 #include <dlfcn.h>
 
-#include <mutex>
-
 namespace blvd::render {
 
 namespace {
 
-}  // namespace
-
-bool openLibrary(const char* const* names, const char* const* symbols, void** fns, size_t n, std::string& err) {
+bool open(const LibraryTable& t, std::string& err) {
   void* lib = nullptr;
-  for (const char* const* name = names; *name && !lib; ++name) lib = ::dlopen(*name, RTLD_NOW | RTLD_LOCAL);
+  for (const char* const* name = t.names; *name && !lib; ++name) lib = ::dlopen(*name, RTLD_NOW | RTLD_LOCAL);
   if (!lib) {
     const char* e = ::dlerror();
-    err = std::string(names[0]) + ": " + (e ? e : "cannot be opened");
+    err = std::string(t.names[0]) + ": " + (e ? e : "cannot be opened");
     return false;
   }
-  for (size_t i = 0; i < n; ++i) {
-    fns[i] = ::dlsym(lib, symbols[i]);
-    if (!fns[i]) {
-      err = std::string(names[0]) + ": no " + symbols[i];
+  for (size_t i = 0; i < t.n; ++i) {
+    t.fns[i] = ::dlsym(lib, t.symbols[i]);
+    if (!t.fns[i]) {
+      err = std::string(t.names[0]) + ": no " + t.symbols[i];
       return false;  // the library stays open: it may be in use elsewhere in the process
     }
   }
   return true;
 }
 
-namespace {
 EglApi g_egl{};
+
 }  // namespace
+
+bool openOnce(LibraryTable& t, std::string& why) {
+  std::call_once(t.once, [&t] { t.ok = open(t, t.err); });
+  if (!t.ok) why += t.err + "\n";
+  return t.ok;
+}
 
 const EglApi* loadEgl(std::string& why) {
   static const char* const names[] = {"libEGL.so.1", "libEGL.so", nullptr};
@@ -41,15 +43,8 @@ const EglApi* loadEgl(std::string& why) {
       "eglCreatePbufferSurface", "eglDestroySurface", "eglMakeCurrent", "eglGetCurrentContext",
       "eglGetCurrentDisplay", "eglQueryContext"};
   static_assert(sizeof(symbols) / sizeof(symbols[0]) == sizeof(EglApi) / sizeof(void*), "one name per entry");
-  static std::once_flag once;
-  static bool ok = false;
-  static std::string err;
-  std::call_once(once, [] {
-    ok = openLibrary(names, symbols, reinterpret_cast<void**>(&g_egl), sizeof(EglApi) / sizeof(void*), err);
-  });
-  if (ok) return &g_egl;
-  why += err + "\n";
-  return nullptr;
+  static LibraryTable table{names, symbols, reinterpret_cast<void**>(&g_egl), sizeof(EglApi) / sizeof(void*)};
+  return openOnce(table, why) ? &g_egl : nullptr;
 }
 
 const EglApi& eglApi() { return g_egl; }

@@ -12,6 +12,7 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 #include <cstddef>
+#include <mutex>
 #include <string>
 
 namespace blvd::render {
@@ -39,9 +40,19 @@ const EglApi* loadEgl(std::string& why);
 // The table once loadEgl has succeeded (EGL contexts exist only then).
 const EglApi& eglApi();
 
-// Opens the first of `names` (null-terminated) that loads and fills `fns[i]`
-// with `symbols[i]`; false with the reason in `err` when the library or an
-// entry point is missing. For the backends' tables (osmesa_context.cpp).
-bool openLibrary(const char* const* names, const char* const* symbols, void** fns, size_t n, std::string& err);
+// A table of a library's entry points, opened once on first use (thread-safe):
+// `names` (null-terminated) are tried in turn, `symbols[i]` fills entry i.
+// True when every entry point is there; else false, with "<library>: <why>\n"
+// appended to `why` (the same reason on every later call).
+struct LibraryTable {
+  const char* const* names;
+  const char* const* symbols;
+  void** fns;
+  size_t n;
+  std::once_flag once{};
+  bool ok = false;
+  std::string err{};
+};
+bool openOnce(LibraryTable& table, std::string& why);
 
 }  // namespace blvd::render

@@ -7,8 +7,6 @@
 #include <cstdint>
 #include <vector>
 
-#include <mutex>
-
 #include "render/context.h"
 #include "render/gl_library.h"
 
@@ -33,14 +31,8 @@ bool loadOsmesa(std::string& why) {
   static const char* const symbols[] = {"OSMesaCreateContextAttribs", "OSMesaDestroyContext", "OSMesaMakeCurrent",
                                         "OSMesaGetCurrentContext", "OSMesaGetProcAddress"};
   static_assert(sizeof(symbols) / sizeof(symbols[0]) == sizeof(OsmesaApi) / sizeof(void*), "one name per entry");
-  static std::once_flag once;
-  static bool ok = false;
-  static std::string err;
-  std::call_once(once, [] {
-    ok = openLibrary(names, symbols, reinterpret_cast<void**>(&g_osmesa), sizeof(OsmesaApi) / sizeof(void*), err);
-  });
-  if (!ok) why += "osmesa: " + err + "\n";
-  return ok;
+  static LibraryTable table{names, symbols, reinterpret_cast<void**>(&g_osmesa), sizeof(OsmesaApi) / sizeof(void*)};
+  return openOnce(table, why);
 }
 
 // OSMesaMakeCurrent insists on a colour buffer, so it gets a tiny one; the
@@ -77,7 +69,10 @@ class OSMesaGlContext final : public Context {
 }  // namespace
 
 std::unique_ptr<Context> createOSMesaContext(std::string& why) {
-  if (!loadOsmesa(why)) return nullptr;
+  if (std::string e; !loadOsmesa(e)) {
+    why += "osmesa: " + e;
+    return nullptr;
+  }
   // Core 3.3 first: it is what the shaders target. A compatibility context is
   // the fallback for OSMesa builds without core-profile support; the renderer
   // checks that it reaches GL 3.3.

@@ -3,6 +3,7 @@
 // of a thread. One replacement for both, so a test may use either.
 #include "alloc_counter.h"
 #include "new_failer.h"
+#include "cli/driver_libraries.h"
 
 #include <dlfcn.h>
 #include <execinfo.h>
@@ -10,7 +11,6 @@
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
-#include <initializer_list>
 #include <new>
 
 namespace {
@@ -21,15 +21,6 @@ std::atomic<long> g_count{0};
 thread_local bool t_active = false, t_inside = false, t_failed = false;
 thread_local long t_count = 0, t_fail_at = -1;
 
-bool isDriver(const char* path) {
-  if (!path) return false;
-  const char* base = std::strrchr(path, '/');
-  base = base ? base + 1 : path;
-  for (const char* p : {"libLLVM", "libGL", "libEGL", "libgallium", "libOSMesa", "libglapi", "libvulkan"})
-    if (std::strncmp(base, p, std::strlen(p)) == 0) return true;
-  return std::strstr(base, "_dri.so") != nullptr;
-}
-
 // Counts a call of blvd's (not the driver's); true when it is the one to fail.
 bool shouldFail() {
   if (!t_active || t_inside) return false;
@@ -39,7 +30,7 @@ bool shouldFail() {
   bool driver = false;
   for (int i = 1; i < n && !driver; ++i) {
     Dl_info info{};
-    if (dladdr(frames[i], &info)) driver = isDriver(info.dli_fname);
+    if (dladdr(frames[i], &info)) driver = blvd::probe::isDriverLibrary(info.dli_fname);
   }
   t_inside = false;
   if (driver) return false;

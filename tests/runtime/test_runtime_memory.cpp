@@ -366,6 +366,28 @@ long rssKiB() {
   return -1;
 }
 
+// blvd's and the GL driver's allocations on the render thread over a drive's
+// last two thirds, the first third having warmed up (shader variants, first
+// uploads); and the loads before the count, to tell that cells streamed.
+struct DriveAllocations {
+  long blvd = 0, driver = 0;
+  uint64_t loads_before = 0;
+  size_t frames = 0;
+};
+template <typename Frame>
+DriveAllocations countAfterWarmUp(blvd_runtime* rt, const std::vector<blvd_test::DrivePose>& poses, Frame&& frame) {
+  const size_t warm = poses.size() / 3;
+  for (size_t i = 0; i < warm; ++i) frame(poses[i]);
+  DriveAllocations a;
+  a.loads_before = statsOf(rt).loads;
+  a.frames = poses.size() - warm;
+  blvd::probe::ThreadMallocCounter counter;
+  for (size_t i = warm; i < poses.size(); ++i) frame(poses[i]);
+  a.blvd = counter.count();
+  a.driver = counter.driverCount();
+  return a;
+}
+
 // The same claim with every per-frame path a product host uses switched on:
 // the frame-time budget (polygon share and render scale), tracking fed on
 // the render thread (fixes and odometry, the pose read back each frame) and
@@ -417,25 +439,16 @@ TEST(RuntimeStream, NoHeapAllocationWithBudgetTrackingAndViews) {
     blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f);
     blvd_render_views(r.rt, views, 2, nullptr);
   };
-  const size_t warm = dr.poses.size() / 3;
-  for (size_t i = 0; i < warm; ++i) frame(dr.poses[i]);
-  const uint64_t loads_before = statsOf(r.rt).loads;
-  long allocations = 0, driver = 0;
-  {
-    blvd::probe::ThreadMallocCounter counter;
-    for (size_t i = warm; i < dr.poses.size(); ++i) frame(dr.poses[i]);
-    allocations = counter.count();
-    driver = counter.driverCount();
-  }
-  RecordProperty("driver_allocations", std::to_string(driver));
+  const DriveAllocations a = countAfterWarmUp(r.rt, dr.poses, frame);
+  RecordProperty("driver_allocations", std::to_string(a.driver));
   std::printf("render thread over %zu frames (budget, tracking, 2 views): %ld allocations by blvd, %ld inside the "
-              "GL driver\n", dr.poses.size() - warm, allocations, driver);
+              "GL driver\n", a.frames, a.blvd, a.driver);
   const blvd_stats s = statsOf(r.rt);
-  EXPECT_GE(s.loads, loads_before + 3);  // cells streamed meanwhile
-  EXPECT_GT(s.polygon_budget, 0u);       // the budget was at work
-  EXPECT_LT(s.render_scale, 1.f);        // down to the render scale
-  EXPECT_GT(valid, dr.poses.size() / 2); // the tracker followed the fixes
-  EXPECT_EQ(allocations, 0) << "heap allocations on the render thread over " << dr.poses.size() - warm << " frames";
+  EXPECT_GE(s.loads, a.loads_before + 3);  // cells streamed meanwhile
+  EXPECT_GT(s.polygon_budget, 0u);         // the budget was at work
+  EXPECT_LT(s.render_scale, 1.f);          // down to the render scale
+  EXPECT_GT(valid, dr.poses.size() / 2);   // the tracker followed the fixes
+  EXPECT_EQ(a.blvd, 0) << "heap allocations on the render thread over " << a.frames << " frames";
 }
 
 TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
@@ -454,26 +467,16 @@ TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
     blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f);
     blvd_render(r.rt, nullptr);
   };
-  // Warm-up: the first third of the drive (shader variants, first uploads).
-  const size_t warm = dr.poses.size() / 3;
-  for (size_t i = 0; i < warm; ++i) frame(dr.poses[i]);
-  const uint64_t loads_before = statsOf(r.rt).loads;
-  long allocations = 0, driver = 0;
-  {
-    blvd::probe::ThreadMallocCounter counter;
-    for (size_t i = warm; i < dr.poses.size(); ++i) frame(dr.poses[i]);
-    allocations = counter.count();
-    driver = counter.driverCount();
-  }
+  const DriveAllocations a = countAfterWarmUp(r.rt, dr.poses, frame);
   // Reported, not asserted: the driver's allocations are its own business
   // (llvmpipe mallocs scene bins each frame).
-  RecordProperty("driver_allocations", std::to_string(driver));
-  std::printf("render thread over %zu frames: %ld allocations by blvd, %ld inside the GL driver\n",
-              dr.poses.size() - warm, allocations, driver);
+  RecordProperty("driver_allocations", std::to_string(a.driver));
+  std::printf("render thread over %zu frames: %ld allocations by blvd, %ld inside the GL driver\n", a.frames,
+              a.blvd, a.driver);
   const blvd_stats s = statsOf(r.rt);
   // The measured frames did stream: cells were loaded and uploaded meanwhile.
-  EXPECT_GE(s.loads, loads_before + 5);
-  EXPECT_EQ(allocations, 0) << "heap allocations on the render thread over " << dr.poses.size() - warm << " frames";
+  EXPECT_GE(s.loads, a.loads_before + 5);
+  EXPECT_EQ(a.blvd, 0) << "heap allocations on the render thread over " << a.frames << " frames";
   // The counter itself counts.
   {
     blvd::probe::ThreadMallocCounter counter;
