@@ -71,6 +71,19 @@ struct Feed {
 blvd_status makeFeed(const graph::StreetGraph& g, const geo::LocalFrame& frame, const vehicle::Profile& profile,
                      const FeedDesc& desc, Feed& out, std::string& err);
 
+// What makeFeed() needs, as files: a host or a sample gives paths and the
+// vehicle's name (blvd_vehicle_from_name) and never touches the SDK's types.
+struct FeedFiles {
+  std::string package_path;                  // the .blvd whose street graph is driven (nothing else is read)
+  std::string dbc_path;                      // the vehicle's DBC, for the CAN frames
+  blvd_vehicle vehicle = BLVD_VEHICLE_TOYOTA;
+};
+
+// makeFeed() on the package's graph and frame with the DBC's profile. Also
+// BLVD_ERR_IO / BLVD_ERR_CORRUPT / BLVD_ERR_NOT_FOUND (err names the file)
+// when a file cannot be read or lacks what the drive needs.
+blvd_status makeFeed(const FeedFiles& files, const FeedDesc& desc, Feed& out, std::string& err);
+
 // The frames as a candump -l log (one "(t) iface ID#DATA" line each).
 std::string candumpText(const Feed& feed, const std::string& iface);
 

@@ -634,6 +634,21 @@ typedef struct blvd_can_frame {
   uint8_t data[64];
 } blvd_can_frame;
 
+/* One message a profile reads, for the host's receive filters (SocketCAN's
+ * CAN_RAW_FILTER, a gateway's pass list). */
+typedef struct blvd_can_message_id {
+  uint32_t id;    /* identifier without flag bits */
+  uint32_t flags; /* BLVD_CAN_EXTENDED for a 29-bit identifier, else 0 */
+} blvd_can_message_id;
+
+/* The messages the profile reads, in identifier order: *count gets how many
+ * there are, and the first min(capacity, *count) go to ids (NULL when capacity
+ * is 0: ask for the count first). Any thread; no allocation.
+ * Errors: BLVD_ERR_MISUSE for a NULL profile; BLVD_ERR_INVALID_ARG for a NULL
+ * count, or NULL ids with a capacity. */
+BLVD_API blvd_status blvd_can_profile_message_ids(const blvd_can_profile* profile, blvd_can_message_id* ids,
+                                                  uint32_t capacity, uint32_t* count);
+
 /* Decodes one frame through the profile: *odo gets the state after it, its
  * flags the BLVD_ODO_* fields this frame changed. Any thread (the profile
  * locks itself); no allocation. Errors: BLVD_ERR_NOT_FOUND when the frame

@@ -25,9 +25,6 @@
 #include "common/data_dir.h"
 #include "gnss/fix.h"
 #include "sim/sim_feed.h"
-#include "stream/city.h"
-#include "vehicle/dbc.h"
-#include "vehicle/profile.h"
 
 namespace {
 
@@ -128,7 +125,7 @@ void runPaced(const Options& o, const sim::Feed& feed, int nmea_fd, can::SocketC
 
 int main(int argc, char** argv) {
   Options o;
-  track::SimDesc& d = o.feed.drive;
+  auto& d = o.feed.drive;  // the route, vehicle model and sensor noise
   CLI::App app{"sim_feed: simulated vehicle NMEA + CAN output on a blvd package's streets"};
   app.add_option("--package", o.package, "the .blvd whose street graph is driven")->required()->check(CLI::ExistingFile);
   o.dbc = blvd::samples::defaultDbc("toyota_new_mc_pt_generated.dbc");  // $BLVD_DATA_DIR, the source tree, the installed SDK
@@ -158,17 +155,14 @@ int main(int argc, char** argv) {
   if (!gnss::parseIso8601(o.start.c_str(), o.start.size(), &o.feed.start_unix))
     die("--start " + o.start + ": expected YYYY-MM-DDThh:mm:ss[.fff]Z");
 
-  stream::City city;
-  std::string err;
-  if (city.open(o.package, err) != core::Status::Ok) die(err);
-  vehicle::Database db;
-  if (db.load(o.dbc, err) != core::Status::Ok) die(err);
-  vehicle::ProfileDesc pd;
-  if (!vehicle::parseVehicle(o.vehicle, pd.vehicle)) die("--vehicle " + o.vehicle + ": expected toyota, vw_mqb or hyundai");
-  vehicle::Profile profile;
-  if (profile.create(pd, db, err) != core::Status::Ok) die(err);
+  sim::FeedFiles files;
+  files.package_path = o.package;
+  files.dbc_path = o.dbc;
+  if (blvd_vehicle_from_name(o.vehicle.c_str(), &files.vehicle) != BLVD_OK)
+    die("--vehicle " + o.vehicle + ": expected toyota, vw_mqb or hyundai");
   sim::Feed feed;
-  if (sim::makeFeed(city.graph(), city.frame(), profile, o.feed, feed, err) != BLVD_OK) die(err);
+  std::string err;
+  if (sim::makeFeed(files, o.feed, feed, err) != BLVD_OK) die(err);
   std::fprintf(stderr, "sim_feed: %zu cells, %.0f m in %.1f s; %zu NMEA epochs, %zu CAN frames; outage %.1f..%.1f s\n",
                feed.route.size(), feed.distance_m, feed.duration_s, feed.truth.size(), feed.frames.size(),
                feed.outage_begin - feed.start_unix, feed.outage_end - feed.start_unix);

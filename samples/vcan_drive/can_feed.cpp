@@ -1,46 +1,51 @@
 #include "can_feed.h"
 
+#include <algorithm>
+
 #include "can/to_blvd.h"
 
 namespace vcan_drive {
 
-using namespace blvd::can;
-using namespace blvd::vehicle;
-
-static_assert(BLVD_ODO_SPEED == kOdoSpeed && BLVD_ODO_YAW_RATE == kOdoYawRate &&
-                  BLVD_ODO_WHEEL_SPEEDS == kOdoWheelSpeeds && BLVD_ODO_GEAR == kOdoGear,
-              "the profile's OdometryField bits are passed through as BLVD_ODO_* flags");
-
-blvd_status CanFeed::open(const std::string& dbc_path, Vehicle vehicle, std::string& err) {
-  // sdk/vehicle's statuses are the C API's values (core/status.h).
-  if (const auto st = dbc_.load(dbc_path, err); st != blvd::core::Status::Ok) return static_cast<blvd_status>(st);
-  ProfileDesc pd;
+blvd_status CanFeed::open(const std::string& dbc_path, blvd_vehicle vehicle, std::string& err) {
+  blvd_can_profile_desc pd{};
+  pd.struct_size = sizeof pd;
   pd.vehicle = vehicle;
-  return static_cast<blvd_status>(profile_.create(pd, dbc_, err));
+  pd.dbc_path = dbc_path.c_str();
+  const blvd_status st = blvd_can_profile_create(&pd, &profile_);
+  if (st != BLVD_OK) {
+    err = blvd_last_error(nullptr);
+    return st;
+  }
+  ids_ = messageIds();
+  std::sort(ids_.begin(), ids_.end());
+  return BLVD_OK;
 }
 
-bool CanFeed::feed(const Frame& f, Tracking& tracking, blvd_odometry& odo) {
+std::vector<std::pair<uint32_t, bool>> CanFeed::messageIds() const {
+  uint32_t n = 0;
+  if (blvd_can_profile_message_ids(profile_, nullptr, 0, &n) != BLVD_OK) return {};
+  std::vector<blvd_can_message_id> ids(n);
+  blvd_can_profile_message_ids(profile_, ids.data(), n, &n);
+  std::vector<std::pair<uint32_t, bool>> out;
+  for (const blvd_can_message_id& m : ids) out.emplace_back(m.id, (m.flags & BLVD_CAN_EXTENDED) != 0);
+  return out;
+}
+
+bool CanFeed::feed(const blvd::can::Frame& f, Tracking& tracking, blvd_odometry& odo) {
   ++stats_.frames;
+  const blvd_can_frame frame = blvd::can::toBlvd(f);
   if (tracking.feedsCanFrames()) {
     // The whole bus goes to the C API; frames without the profile's signals are ignored there.
-    if (tracking.feedCanFrame(toBlvd(f)) == BLVD_OK)
+    if (tracking.feedCanFrame(frame) == BLVD_OK)
       ++stats_.can_frames_fed;
     else
       ++stats_.feed_errors;
   }
-  Odometry o;
-  if (!profile_.consume(f, o)) return false;
-  ++stats_.mapped;
-  const uint32_t flags = o.updated & (BLVD_ODO_SPEED | BLVD_ODO_YAW_RATE | BLVD_ODO_WHEEL_SPEEDS | BLVD_ODO_GEAR);
-  if (!flags) return false;  // steering only: the tracker has no use for it
+  if (std::binary_search(ids_.begin(), ids_.end(), std::make_pair(f.id, f.extended))) ++stats_.mapped;
   odo = blvd_odometry{};
   odo.struct_size = sizeof odo;
-  odo.t = o.t;
-  odo.speed_mps = o.speed_mps;
-  odo.yaw_rate_dps = o.yaw_rate_dps;
-  for (int i = 0; i < 4; ++i) odo.wheel_speeds_mps[i] = o.wheel_speeds_mps[i];
-  odo.reverse = o.gear == Gear::Reverse;
-  odo.flags = flags;
+  // BLVD_ERR_NOT_FOUND: another message, or only the steering angle (the tracker has no use for it).
+  if (blvd_can_profile_decode(profile_, &frame, &odo) != BLVD_OK) return false;
   if (!tracking.feedsCanFrames() && tracking.feedOdometry(odo) != BLVD_OK) {
     ++stats_.feed_errors;
     return false;

@@ -118,11 +118,11 @@ void addOptions(CLI::App& app, Options& opt, CLI::Option*& t0_opt) {
 
 // What the tracker is made from. Without a package the local frame sits at
 // the start, else at the first fix (`first_fix`, when there is one).
-TrackingDesc trackingDesc(const Options& opt, blvd::vehicle::Vehicle vehicle, GnssFeed& gnss, blvd_gnss_fix& first_fix) {
+TrackingDesc trackingDesc(const Options& opt, blvd_vehicle vehicle, GnssFeed& gnss, blvd_gnss_fix& first_fix) {
   TrackingDesc td;
   td.package = opt.package;
   td.dbc_path = opt.dbc;
-  td.vehicle = static_cast<blvd_vehicle>(vehicle);  // the same enumeration (sdk/capi/capi_vehicle.cpp checks)
+  td.vehicle = vehicle;
   td.width = opt.width;
   td.height = opt.height;
   td.backend = parseBackend(opt.backend);
@@ -363,7 +363,7 @@ std::unique_ptr<Tracking> openTracking(const Options& opt, const TrackingDesc& t
 }
 
 // Opens the CAN feed and input and the JSON logs. 0, or 2 with the reason printed.
-int openIo(const Options& opt, blvd::vehicle::Vehicle vehicle, CanFeed& feed, CanInput& input, JsonLines& poses,
+int openIo(const Options& opt, blvd_vehicle vehicle, CanFeed& feed, CanInput& input, JsonLines& poses,
            JsonLines& odolog) {
   std::string err;
   if (feed.open(opt.dbc, vehicle, err) != BLVD_OK) {
@@ -406,8 +406,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
     return 2;
   }
-  blvd::vehicle::Vehicle vehicle;
-  if (!blvd::vehicle::parseVehicle(opt.vehicle, vehicle)) {
+  blvd_vehicle vehicle;
+  if (blvd_vehicle_from_name(opt.vehicle.c_str(), &vehicle) != BLVD_OK) {
     std::fprintf(stderr, "vcan_drive: unknown vehicle %s\n", opt.vehicle.c_str());
     return 2;
   }

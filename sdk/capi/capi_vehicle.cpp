@@ -2,10 +2,12 @@
 // handle, and blvd_feed_can_frame(), which decodes a frame through a profile
 // and queues the odometry exactly as blvd_feed_odometry() does. Design:
 // docs/decisions/0005-can-profiles-in-sdk.md.
+#include <algorithm>
 #include <cstring>
 #include <mutex>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "blvd/blvd.h"
 #include "capi/binding.h"
@@ -22,6 +24,7 @@ struct blvd_can_profile {
   std::mutex mu;
   vehicle::Database dbc;    // must outlive `profile` (it points into it): declared first
   vehicle::Profile profile;
+  std::vector<blvd_can_message_id> ids;  // what the profile reads, in id order: fixed at create
 };
 
 namespace {
@@ -76,6 +79,16 @@ blvd_status decodeLocked(blvd_can_profile* p, const blvd_can_frame& frame, blvd_
   return BLVD_OK;
 }
 
+// The profile's messages as the C API lists them: extended after standard, each by id.
+std::vector<blvd_can_message_id> messageIds(const vehicle::Profile& profile) {
+  std::vector<blvd_can_message_id> ids;
+  for (const auto& [id, extended] : profile.messageIds()) ids.push_back({id, extended ? BLVD_CAN_EXTENDED : 0u});
+  std::sort(ids.begin(), ids.end(), [](const blvd_can_message_id& a, const blvd_can_message_id& b) {
+    return a.flags != b.flags ? a.flags < b.flags : a.id < b.id;
+  });
+  return ids;
+}
+
 }  // namespace
 
 extern "C" {
@@ -122,6 +135,7 @@ blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_
       pd.wheel_stale_s = d.wheel_stale_s;
       st = p->profile.create(pd, p->dbc, err);
     }
+    if (st == blvd::core::Status::Ok) p->ids = messageIds(p->profile);
     if (st != blvd::core::Status::Ok) {
       delete p;
       return fail(blvd::capi::toStatus(st), "blvd_can_profile_create: " + err);
@@ -142,6 +156,16 @@ blvd_status blvd_can_profile_decode(blvd_can_profile* profile, const blvd_can_fr
   if (!profile) return BLVD_ERR_MISUSE;
   if (!frame || !odo) return BLVD_ERR_INVALID_ARG;
   return decodeLocked(profile, *frame, *odo);
+}
+
+blvd_status blvd_can_profile_message_ids(const blvd_can_profile* profile, blvd_can_message_id* ids, uint32_t capacity,
+                                         uint32_t* count) {
+  if (!profile) return BLVD_ERR_MISUSE;
+  if (!count || (!ids && capacity)) return BLVD_ERR_INVALID_ARG;
+  const auto n = static_cast<uint32_t>(profile->ids.size());
+  std::copy_n(profile->ids.begin(), std::min(n, capacity), ids);
+  *count = n;
+  return BLVD_OK;
 }
 
 blvd_status blvd_feed_can_frame(blvd_runtime* rt, blvd_can_profile* profile, const blvd_can_frame* frame) {

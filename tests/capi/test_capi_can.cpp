@@ -4,6 +4,7 @@
 // once reach the tracker (run under TSan/ASan in CI like the other feeds).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <string>
@@ -134,6 +135,39 @@ TEST(CapiCan, RefusesBadFramesAndDescriptors) {
   EXPECT_EQ(blvd_can_profile_decode(h.p, &f, &odo), BLVD_ERR_INVALID_ARG);
   EXPECT_EQ(blvd_can_profile_decode(h.p, nullptr, &odo), BLVD_ERR_INVALID_ARG);
   EXPECT_EQ(blvd_feed_can_frame(nullptr, h.p, &f), BLVD_ERR_MISUSE);
+}
+
+// The ids a host filters its socket on: every message the Toyota profile
+// decodes is listed, in id order, and a short array gets the first ones.
+TEST(CapiCan, ListsTheMessagesTheProfileReads) {
+  blvd_can_profile_desc d{};
+  d.dbc_path = kToyotaDbc.c_str();
+  ProfileHandle h;
+  ASSERT_EQ(blvd_can_profile_create(&d, &h.p), BLVD_OK) << blvd_last_error(nullptr);
+  uint32_t n = 0;
+  ASSERT_EQ(blvd_can_profile_message_ids(h.p, nullptr, 0, &n), BLVD_OK);
+  std::vector<blvd_can_message_id> ids(n + 2, blvd_can_message_id{~0u, ~0u});
+  uint32_t again = 0;
+  ASSERT_EQ(blvd_can_profile_message_ids(h.p, ids.data(), n + 2, &again), BLVD_OK);
+  EXPECT_EQ(again, n);
+  EXPECT_EQ(ids[n].id, ~0u) << "wrote past the count";
+  const auto db = loadToyota();
+  for (const char* name : {"WHEEL_SPEEDS", "KINEMATICS", "GEAR_PACKET", "STEER_ANGLE_SENSOR"}) {
+    const blvd::vehicle::Message* m = db.findByName(name);
+    ASSERT_NE(m, nullptr) << name;
+    const bool listed = std::any_of(ids.begin(), ids.begin() + n, [&](const blvd_can_message_id& x) {
+      return x.id == m->id && x.flags == (m->extended ? BLVD_CAN_EXTENDED : 0u);
+    });
+    EXPECT_TRUE(listed) << name;
+  }
+  for (uint32_t i = 1; i < n; ++i) EXPECT_LT(ids[i - 1].id, ids[i].id);
+  std::vector<blvd_can_message_id> two(2);
+  ASSERT_EQ(blvd_can_profile_message_ids(h.p, two.data(), 2, &again), BLVD_OK);
+  EXPECT_EQ(again, n);
+  EXPECT_EQ(two[1].id, ids[1].id);
+  EXPECT_EQ(blvd_can_profile_message_ids(nullptr, nullptr, 0, &n), BLVD_ERR_MISUSE);
+  EXPECT_EQ(blvd_can_profile_message_ids(h.p, nullptr, 0, nullptr), BLVD_ERR_INVALID_ARG);
+  EXPECT_EQ(blvd_can_profile_message_ids(h.p, nullptr, 3, &n), BLVD_ERR_INVALID_ARG);
 }
 
 // Four threads feed the same runtime through one profile (two buses' worth of

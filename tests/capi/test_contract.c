@@ -52,6 +52,8 @@ static void nullHandles(void) {
   EXPECT(blvd_set_start_pose(NULL, &sp) == BLVD_ERR_MISUSE);
   EXPECT(blvd_feed_can_frame(NULL, NULL, &frame) == BLVD_ERR_MISUSE);
   EXPECT(blvd_can_profile_decode(NULL, &frame, &odo) == BLVD_ERR_MISUSE);
+  uint32_t n_ids = 0;
+  EXPECT(blvd_can_profile_message_ids(NULL, NULL, 0, &n_ids) == BLVD_ERR_MISUSE);
   EXPECT(blvd_tracker_feed_gnss(NULL, &fix) == BLVD_ERR_MISUSE);
   EXPECT(blvd_tracker_get_pose(NULL, 0, &pose) == BLVD_ERR_MISUSE);
   blvd_runtime_destroy(NULL);
