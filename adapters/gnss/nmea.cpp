@@ -741,66 +741,83 @@ bool sameFix(const Fix& a, const Fix& b) {
 }
 }  // namespace
 
-Fix FixAssembler::build(const Epoch& e) const {
-  Fix f = Fix::empty();
-  // Time.
-  if (e.has_tod) {
-    int64_t days = 0;
-    bool dated = false;
-    if (e.has_date) {
-      days = e.days;
-      dated = true;
-    } else if (have_date_) {
-      days = last_days_;
-      // Past midnight since the date was learned.
-      if (e.tod_ms + 12 * 3600 * 1000 < last_tod_ms_) days += 1;
-      dated = true;
-    }
-    if (dated) {
-      f.t_unix = static_cast<double>(days) * 86400.0 + static_cast<double>(e.tod_ms) / 1000.0;
-      f.flags |= kFixHasTime;
-    }
+int FixAssembler::modeOf(const Epoch& e) const {
+  int mode = e.alt_3d ? kMode3D : kMode2D;
+  if (e.gsa_mode >= 2) {
+    if (!(e.gsa_mode == 2 && e.alt_3d)) mode = e.gsa_mode;
+  } else if (e.gsa_mode == 0 && last_gsa_mode_ == kMode3D && (e.has_alt || !e.gga_or_gns) && e.has_tod) {
+    // No GSA in this epoch (many receivers send it less often than GGA/RMC,
+    // or the log ends first): a 3D fix type stated in the last 10 s still
+    // holds while the receiver keeps reporting an altitude, or sends no
+    // GGA/GNS that could say otherwise (RMC-only epochs).
+    int64_t age = e.tod_ms - last_gsa_tod_ms_;
+    if (age < 0) age += 24 * 3600 * 1000;
+    if (age <= 10 * 1000) mode = kMode3D;
   }
-  const bool valid = e.any_position_sentence && !e.invalid && e.has_pos;
-  if (e.has_pos && valid) {
-    f.lat = e.lat;
-    f.lon = e.lon;
-    f.flags |= kFixHasLatLon;
+  return mode;
+}
+
+void FixAssembler::buildTime(const Epoch& e, Fix& f) const {
+  if (!e.has_tod) return;
+  int64_t days = 0;
+  if (e.has_date) {
+    days = e.days;
+  } else if (have_date_) {
+    days = last_days_;
+    if (e.tod_ms + 12 * 3600 * 1000 < last_tod_ms_) days += 1;  // past midnight since the date was learned
+  } else {
+    return;
   }
-  if (valid) {
-    int mode = e.alt_3d ? kMode3D : kMode2D;
-    if (e.gsa_mode >= 2) {
-      if (!(e.gsa_mode == 2 && e.alt_3d)) mode = e.gsa_mode;
-    } else if (e.gsa_mode == 0 && last_gsa_mode_ == kMode3D && e.has_alt && e.has_tod) {
-      // No GSA in this epoch (many receivers send it less often than GGA/RMC,
-      // or the log ends first): a 3D fix type stated in the last 10 s still
-      // holds while the receiver keeps reporting an altitude.
-      int64_t age = e.tod_ms - last_gsa_tod_ms_;
-      if (age < 0) age += 24 * 3600 * 1000;
-      if (age <= 10 * 1000) mode = kMode3D;
-    }
-    f.mode = mode;
-    if (e.has_alt) {  // in 2D, the altitude the receiver held (gpsd reports it too)
-      f.alt = e.alt;
-      f.flags |= kFixHasAlt;
-    }
-    // GGA's quality says most (RTK fixed/float, DGPS, PPS); else the first FAA mode letter.
-    f.status = e.gga_status != kStatusUnknown ? e.gga_status
-               : e.faa_status != kStatusUnknown ? e.faa_status
-                                                : kStatusGps;
-  } else if (e.any_position_sentence) {
-    f.mode = kModeNoFix;
+  f.t_unix = static_cast<double>(days) * 86400.0 + static_cast<double>(e.tod_ms) / 1000.0;
+  f.flags |= kFixHasTime;
+}
+
+void FixAssembler::buildErrors(const Epoch& e, Fix& f) const {
+  if (!(gst_.valid && e.has_tod && gst_.tod_ms == e.tod_ms)) return;
+  if (!std::isnan(gst_.lat_err) && !std::isnan(gst_.lon_err)) {
+    f.lat_err_m = static_cast<float>(gst_.lat_err);
+    f.lon_err_m = static_cast<float>(gst_.lon_err);
+    f.h_acc_m = static_cast<float>(std::sqrt(gst_.lat_err * gst_.lat_err + gst_.lon_err * gst_.lon_err));
+    f.flags |= kFixHasHAcc;
   }
-  if (valid && e.has_speed) {
+  if (!std::isnan(gst_.alt_err)) {
+    f.v_acc_m = static_cast<float>(gst_.alt_err);
+    f.flags |= kFixHasVAcc;
+  }
+}
+
+// The fix's position, mode, altitude, status, speed and track: only with a fix.
+void FixAssembler::buildPosition(const Epoch& e, Fix& f) const {
+  f.lat = e.lat;
+  f.lon = e.lon;
+  f.flags |= kFixHasLatLon;
+  f.mode = modeOf(e);
+  if (e.has_alt) {  // in 2D, the altitude the receiver held (gpsd reports it too)
+    f.alt = e.alt;
+    f.flags |= kFixHasAlt;
+  }
+  // GGA's quality says most (RTK fixed/float, DGPS, PPS); else the first FAA mode letter.
+  f.status = e.gga_status != kStatusUnknown ? e.gga_status : e.faa_status != kStatusUnknown ? e.faa_status : kStatusGps;
+  if (e.has_speed) {
     f.speed_mps = static_cast<float>(e.speed);
     f.flags |= kFixHasSpeed;
   }
-  if (valid && e.has_track) {
+  if (e.has_track) {
     f.track_deg = static_cast<float>(e.track);
     f.flags |= kFixHasTrack;
   }
+  buildErrors(e, f);
+}
+
+Fix FixAssembler::build(const Epoch& e) const {
+  Fix f = Fix::empty();
+  buildTime(e, f);
+  if (e.hasFix())
+    buildPosition(e, f);
+  else if (e.any_position_sentence)
+    f.mode = kModeNoFix;
   if (e.has_heading) {
-    f.heading_deg = static_cast<float>(e.heading);
+    f.heading_deg = static_cast<float>(e.heading_deg);
     f.flags |= kFixHasHeading;
   }
   if (e.has_hdop) {
@@ -816,167 +833,164 @@ Fix FixAssembler::build(const Epoch& e) const {
     f.geoid_sep_m = static_cast<float>(e.geoid_sep);
     f.flags |= kFixHasGeoidSep;
   }
-  if (valid && gst_.valid && e.has_tod && gst_.tod_ms == e.tod_ms) {
-    if (!std::isnan(gst_.lat_err) && !std::isnan(gst_.lon_err)) {
-      f.lat_err_m = static_cast<float>(gst_.lat_err);
-      f.lon_err_m = static_cast<float>(gst_.lon_err);
-      f.h_acc_m = static_cast<float>(std::sqrt(gst_.lat_err * gst_.lat_err + gst_.lon_err * gst_.lon_err));
-      f.flags |= kFixHasHAcc;
-    }
-    if (!std::isnan(gst_.alt_err)) {
-      f.v_acc_m = static_cast<float>(gst_.alt_err);
-      f.flags |= kFixHasVAcc;
-    }
-  }
   f.sats_used = e.sats;
   if (e.no_checksum) f.flags |= kFixNoChecksum;
   return f;
 }
 
+// ---- one sentence into the epoch ----------------------------------------------
+
+bool FixAssembler::Epoch::hasFix() const { return any_position_sentence && !invalid && !nofix_vote && has_pos; }
+
+void FixAssembler::Epoch::position(const NmeaRecord& r) {
+  if (!r.has_pos) return;
+  has_pos = true;
+  lat = r.lat;
+  lon = r.lon;
+}
+
+void FixAssembler::Epoch::motion(const NmeaRecord& r) {
+  if (!std::isnan(r.speed_mps)) {
+    has_speed = true;
+    speed = r.speed_mps;
+  }
+  if (!std::isnan(r.track_deg)) {
+    has_track = true;
+    track = r.track_deg;
+  }
+}
+
+void FixAssembler::Epoch::rmc(const NmeaRecord& r) {
+  any_position_sentence = true;
+  const bool ok = r.status == 'A' || r.status == 'D';
+  if (!ok || r.faa == 'N') {
+    invalid = true;
+    return;
+  }
+  nofix_vote = false;
+  if (r.has_date) {
+    has_date = true;
+    days = daysFromCivil(r.year, static_cast<unsigned>(r.month), static_cast<unsigned>(r.day));
+  }
+  position(r);
+  motion(r);
+  if (faa_status == kStatusUnknown) faa_status = statusFromFaa(r.faa, r.status == 'D' ? kStatusDgps : kStatusGps);
+}
+
+// GGA and GNS carry the same fix fields; both merge them the same way.
+void FixAssembler::Epoch::ggaGns(const NmeaRecord& r) {
+  gga_or_gns = true;
+  nofix_vote = false;
+  position(r);
+  if (r.sats >= 0) sats = r.sats;
+  if (!std::isnan(r.alt)) {
+    has_alt = true;
+    alt = r.alt;
+    alt_3d = alt_3d || r.sats >= 4;
+  }
+  if (!std::isnan(r.geoid_sep)) {
+    has_geoid = true;
+    geoid_sep = r.geoid_sep;
+  }
+  if (!std::isnan(r.hdop) && r.hdop < 99.0) {  // 99.99: "unknown" on BT-451 and others
+    has_hdop = true;
+    hdop = r.hdop;
+  }
+}
+
+void FixAssembler::Epoch::gga(const NmeaRecord& r) {
+  any_position_sentence = true;
+  if (r.quality <= 0) {
+    invalid = true;
+    return;
+  }
+  ggaGns(r);
+  // gpsd's processGGA: fewer than 3 satellites used (an empty field reads 0) is no fix.
+  nofix_vote = r.has_pos && r.sats < 3;
+  static constexpr int kQuality[] = {kStatusUnknown,  kStatusGps,      kStatusDgps,          kStatusPps,
+                                     kStatusRtkFixed, kStatusRtkFloat, kStatusDeadReckoning, kStatusManual,
+                                     kStatusSimulated, kStatusUnknown};
+  gga_status = kQuality[r.quality];
+}
+
+void FixAssembler::Epoch::gns(const NmeaRecord& r) {
+  any_position_sentence = true;
+  // FAA mode of the first system ('N': no fix); navigational status U/V: unusable.
+  if (r.faa == '\0' || r.faa == 'N') {
+    invalid = true;
+    return;
+  }
+  if (r.nav_status == 'U' || r.nav_status == 'V') return;
+  ggaGns(r);
+  if (faa_status == kStatusUnknown) faa_status = statusFromFaa(r.faa, kStatusGps);
+}
+
+void FixAssembler::Epoch::gll(const NmeaRecord& r) {
+  any_position_sentence = true;
+  if (r.status == 'V' || r.faa == 'N') {
+    invalid = true;
+    return;
+  }
+  nofix_vote = false;
+  position(r);
+}
+
+void FixAssembler::Epoch::gsa(const NmeaRecord& r) {
+  if (r.gsa_mode > gsa_mode) gsa_mode = r.gsa_mode;
+  if (r.gsa_mode > 0) nofix_vote = r.gsa_mode == kModeNoFix;  // gpsd: the last sentence that states a mode wins
+  if (!std::isnan(r.pdop) && r.pdop < 99.0) {
+    has_pdop = true;
+    pdop = r.pdop;
+    vdop = r.vdop;
+  }
+  if (!std::isnan(r.hdop) && r.hdop < 99.0) {
+    has_hdop = true;
+    hdop = r.hdop;
+  }
+}
+
+void FixAssembler::Epoch::date(const NmeaRecord& r) {
+  if (!r.has_date) return;
+  has_date = true;
+  days = daysFromCivil(r.year, static_cast<unsigned>(r.month), static_cast<unsigned>(r.day));
+}
+
+void FixAssembler::Epoch::heading(const NmeaRecord& r) {
+  if (r.type == SentenceType::THS && r.faa == 'V') return;
+  if (std::isnan(r.heading_deg)) return;
+  has_heading = true;
+  heading_deg = r.heading_deg;
+}
+
+void FixAssembler::applyGst(const NmeaRecord& r) {
+  if (!r.has_tod) return;
+  gst_.valid = true;
+  gst_.tod_ms = r.tod_ms;
+  gst_.lat_err = r.lat_err;
+  gst_.lon_err = r.lon_err;
+  gst_.alt_err = r.alt_err;
+}
+
 void FixAssembler::apply(const NmeaRecord& r) {
   Epoch& e = cur_;
-  // GGA and GNS carry the same fix fields; both merge them the same way.
-  auto mergeGgaGns = [](const NmeaRecord& rec, Epoch& ep) {
-    if (rec.has_pos) {
-      ep.has_pos = true;
-      ep.lat = rec.lat;
-      ep.lon = rec.lon;
-    }
-    if (rec.sats >= 0) ep.sats = rec.sats;
-    if (!std::isnan(rec.alt)) {
-      ep.has_alt = true;
-      ep.alt = rec.alt;
-      ep.alt_3d = ep.alt_3d || rec.sats >= 4;
-    }
-    if (!std::isnan(rec.geoid_sep)) {
-      ep.has_geoid = true;
-      ep.geoid_sep = rec.geoid_sep;
-    }
-    if (!std::isnan(rec.hdop) && rec.hdop < 99.0) {  // 99.99: "unknown" on BT-451 and others
-      ep.has_hdop = true;
-      ep.hdop = rec.hdop;
-    }
-  };
   if (!r.has_checksum) e.no_checksum = true;
   if (r.has_tod && !e.has_tod && r.type != SentenceType::GST) {
     e.has_tod = true;
     e.tod_ms = r.tod_ms;
   }
   switch (r.type) {
-    case SentenceType::RMC: {
-      e.any_position_sentence = true;
-      const bool ok = r.status == 'A' || r.status == 'D';
-      if (!ok || r.faa == 'N') {
-        e.invalid = true;
-        break;
-      }
-      if (r.has_date) {
-        e.has_date = true;
-        e.days = daysFromCivil(r.year, static_cast<unsigned>(r.month), static_cast<unsigned>(r.day));
-      }
-      if (r.has_pos) {
-        e.has_pos = true;
-        e.lat = r.lat;
-        e.lon = r.lon;
-      }
-      if (!std::isnan(r.speed_mps)) {
-        e.has_speed = true;
-        e.speed = r.speed_mps;
-      }
-      if (!std::isnan(r.track_deg)) {
-        e.has_track = true;
-        e.track = r.track_deg;
-      }
-      if (e.faa_status == kStatusUnknown) e.faa_status = statusFromFaa(r.faa, r.status == 'D' ? kStatusDgps : kStatusGps);
+    case SentenceType::RMC: e.rmc(r); break;
+    case SentenceType::GGA: e.gga(r); break;
+    case SentenceType::GNS: e.gns(r); break;
+    case SentenceType::GLL: e.gll(r); break;
+    case SentenceType::VTG:
+      if (r.faa != 'N' && r.faa != 'E') e.motion(r);  // not valid / dead reckoning only
       break;
-    }
-    case SentenceType::GGA: {
-      e.any_position_sentence = true;
-      if (r.quality == 0 || r.quality < 0) {
-        e.invalid = true;
-        break;
-      }
-      mergeGgaGns(r, e);
-      static constexpr int kQuality[] = {kStatusUnknown, kStatusGps,           kStatusDgps,   kStatusPps,
-                                         kStatusRtkFixed, kStatusRtkFloat,      kStatusDeadReckoning,
-                                         kStatusManual,  kStatusSimulated,     kStatusUnknown};
-      e.gga_status = kQuality[r.quality];
-      break;
-    }
-    case SentenceType::GNS: {
-      e.any_position_sentence = true;
-      // FAA mode of the first system ('N': no fix); navigational status U/V: unusable.
-      if (r.faa == '\0' || r.faa == 'N' || r.nav_status == 'U' || r.nav_status == 'V') {
-        if (r.faa == '\0' || r.faa == 'N') e.invalid = true;
-        break;
-      }
-      mergeGgaGns(r, e);
-      if (e.faa_status == kStatusUnknown) e.faa_status = statusFromFaa(r.faa, kStatusGps);
-      break;
-    }
-    case SentenceType::GLL: {
-      e.any_position_sentence = true;
-      if (r.status == 'V' || r.faa == 'N') {
-        e.invalid = true;
-        break;
-      }
-      if (r.has_pos) {
-        e.has_pos = true;
-        e.lat = r.lat;
-        e.lon = r.lon;
-      }
-      break;
-    }
-    case SentenceType::VTG: {
-      if (r.faa == 'N' || r.faa == 'E') break;  // not valid / dead reckoning only
-      if (!std::isnan(r.speed_mps)) {
-        e.has_speed = true;
-        e.speed = r.speed_mps;
-      }
-      if (!std::isnan(r.track_deg)) {
-        e.has_track = true;
-        e.track = r.track_deg;
-      }
-      break;
-    }
-    case SentenceType::GSA: {
-      if (r.gsa_mode > e.gsa_mode) e.gsa_mode = r.gsa_mode;
-      if (!std::isnan(r.pdop) && r.pdop < 99.0) {
-        e.has_pdop = true;
-        e.pdop = r.pdop;
-        e.vdop = r.vdop;
-      }
-      if (!std::isnan(r.hdop) && r.hdop < 99.0) {
-        e.has_hdop = true;
-        e.hdop = r.hdop;
-      }
-      break;
-    }
-    case SentenceType::GST: {
-      if (!r.has_tod) break;
-      gst_.valid = true;
-      gst_.tod_ms = r.tod_ms;
-      gst_.lat_err = r.lat_err;
-      gst_.lon_err = r.lon_err;
-      gst_.alt_err = r.alt_err;
-      break;
-    }
-    case SentenceType::ZDA: {
-      if (r.has_date) {
-        e.has_date = true;
-        e.days = daysFromCivil(r.year, static_cast<unsigned>(r.month), static_cast<unsigned>(r.day));
-      }
-      break;
-    }
+    case SentenceType::GSA: e.gsa(r); break;
+    case SentenceType::GST: applyGst(r); break;
+    case SentenceType::ZDA: e.date(r); break;
     case SentenceType::HDT:
-    case SentenceType::THS: {
-      if (r.type == SentenceType::THS && r.faa == 'V') break;
-      if (!std::isnan(r.heading_deg)) {
-        e.has_heading = true;
-        e.heading = r.heading_deg;
-      }
-      break;
-    }
+    case SentenceType::THS: e.heading(r); break;
     case SentenceType::Unknown: break;
   }
 }
@@ -1005,7 +1019,7 @@ void FixAssembler::closeEpoch(Handler& h, bool learn) {
       have_date_ = true;
       last_days_ = cur_.days;
       last_tod_ms_ = cur_.tod_ms;
-    } else if (have_date_ && cur_.any_position_sentence && !cur_.invalid && cur_.has_pos) {
+    } else if (have_date_ && cur_.hasFix()) {
       // Only epochs with a fix move the clock on: receivers without a fix send
       // junk times (gp-320fw: 23:59:48 between 00:03 and 00:04), which would
       // otherwise fake a midnight.

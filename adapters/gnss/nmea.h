@@ -233,14 +233,25 @@ bool decodeSentence(const Sentence& s, NmeaRecord* rec, NmeaDiagnostic* diag);
 //   trusted: receivers send junk dates before they have a fix (gp-320fw
 //   cold boot: 2006, 2010, 1999 within seconds). No date seen yet: no time.
 // - validity: the epoch has no fix if any position sentence says so (RMC/GLL
-//   status V, GGA quality 0, GNS mode N) or none carried a position.
+//   status V, GGA quality 0, GNS mode N), if none carried a position, or if
+//   the last sentence that states a mode said "no fix": a GSA of fix type 1,
+//   or a GGA from fewer than 3 satellites (an empty count reads 0). gpsd lets
+//   the last mode-setting sentence of a cycle win (gps_merge_fix); an RMC,
+//   GLL, GNS or GGA with a fix after such a GSA gives the fix back.
 // - mode: the GSA fix type when a GSA came with the epoch; else 3 when GGA or
 //   GNS gave an altitude from 4 or more satellites, or when the last GSA (at
-//   most 10 s old) said 3D and the epoch has an altitude, else 2 (gpsd's
-//   heuristics). A 2D GSA does not downgrade a fix whose GGA/GNS altitude came
-//   from 4 or more satellites: gpsd keeps 3D there ("don't downgrade mode if
-//   holding previous fix"), and Telit PLS83 reports GSA 2 while giving an
-//   altitude from 14 satellites.
+//   most 10 s old) said 3D and the epoch has an altitude or no GGA/GNS at all
+//   (gpsd's RMC takes 3D from the satellites the last GSA listed), else 2. A
+//   2D GSA does not downgrade a fix whose GGA/GNS altitude came from 4 or
+//   more satellites: gpsd keeps 3D there ("don't downgrade mode if holding
+//   previous fix"), and Telit PLS83 reports GSA 2 while giving an altitude
+//   from 14 satellites.
+//   Where gpsd's rule looks at the previous cycle we do not follow it, and
+//   tests/adapters/gnss/test_nmea.cpp (ModeAsGpsdDecidesIt) pins both: a 2D
+//   receiver that keeps sending an altitude from 3 satellites reads 3D in
+//   gpsd from its second epoch on (its RMC sees the previous altitude), 2D
+//   here; and when the altitude goes, gpsd reports one more 3D epoch without
+//   one, 2D here. Each epoch's mode here is what that epoch's sentences say.
 // - position, altitude: the last sentence of the epoch that gave them.
 // - speed, track: RMC or VTG; VTG's km/h only when the knots field is empty.
 // - errors: GST of the epoch's time (it may come before the GGA it refers to).
@@ -278,7 +289,9 @@ class FixAssembler {
     bool has_date = false;
     int64_t days = 0;  // date of the epoch from its own RMC/ZDA
     bool any_position_sentence = false;
-    bool invalid = false;
+    bool invalid = false;     // a position sentence said "no fix"
+    bool nofix_vote = false;  // the last sentence that states a mode said "no fix" (GSA 1, GGA < 3 satellites)
+    bool gga_or_gns = false;  // a usable GGA/GNS came (it would have given any altitude)
     bool has_pos = false;
     double lat = 0, lon = 0;
     bool has_alt = false;
@@ -290,11 +303,24 @@ class FixAssembler {
     int gsa_mode = 0;
     double hdop = 0, pdop = 0, vdop = 0;
     bool has_hdop = false, has_pdop = false;
-    double speed = 0, track = 0, heading = 0;
+    double speed = 0, track = 0, heading_deg = 0;
     bool has_speed = false, has_track = false, has_heading = false;
     int gga_status = kStatusUnknown;  // from GGA quality
     int faa_status = kStatusUnknown;  // from the first FAA mode letter (RMC, GNS)
     bool no_checksum = false;
+
+    bool hasFix() const;
+    // One sentence's fields into the epoch (apply() picks by type).
+    void rmc(const NmeaRecord& r);
+    void gga(const NmeaRecord& r);
+    void gns(const NmeaRecord& r);
+    void gll(const NmeaRecord& r);
+    void gsa(const NmeaRecord& r);
+    void date(const NmeaRecord& r);
+    void heading(const NmeaRecord& r);
+    void motion(const NmeaRecord& r);  // speed and track
+    void position(const NmeaRecord& r);
+    void ggaGns(const NmeaRecord& r);
   };
   struct Gst {
     bool valid = false;
@@ -309,7 +335,12 @@ class FixAssembler {
 
   void closeEpoch(Handler& h, bool learn);
   void apply(const NmeaRecord& r);
+  void applyGst(const NmeaRecord& r);
   Fix build(const Epoch& e) const;
+  void buildTime(const Epoch& e, Fix& f) const;
+  void buildPosition(const Epoch& e, Fix& f) const;
+  void buildErrors(const Epoch& e, Fix& f) const;
+  int modeOf(const Epoch& e) const;
   void emit(Handler& h, const Fix& f);
   uint16_t countOf(std::string_view address);
   bool seenInEpoch(std::string_view address) const;

@@ -588,6 +588,53 @@ TEST(NmeaEpoch, ModeRules) {
   EXPECT_EQ(mode(rmc_a + gga_2sats + gsa3 + later), kMode2D);
 }
 
+// gpsd's mode across epochs (drivers/driver_nmea0183.c: the last sentence of a
+// cycle that states a mode wins; RMC takes 3D from the last GSA's satellites).
+// Each epoch ends with a ZDA; `modes` gives one mode per epoch, in order.
+TEST(NmeaEpoch, ModeAsGpsdDecidesIt) {
+  const auto rmc = [](const char* t, const char* faa = "A") {
+    return withSum(std::string("$GPRMC,") + t + ",A,4807.038,N,01131.000,E,0.0,0.0,010124,,," + faa);
+  };
+  const auto gga = [](const char* t, int q, const char* sats, const char* alt) {
+    return withSum(std::string("$GPGGA,") + t + ",4807.038,N,01131.000,E," + std::to_string(q) + "," + sats + ",0.9," +
+                   alt + ",M,46.9,M,,");
+  };
+  const auto zda = [](const char* t) { return withSum(std::string("$GPZDA,") + t + ",01,01,2024,00,00"); };
+  const auto gll = [](const char* t) { return withSum(std::string("$GPGLL,4807.038,N,01131.000,E,") + t + ",A,A"); };
+  const std::string gsa3 = withSum("$GPGSA,A,3,01,02,03,04,05,06,07,08,,,,,1.5,0.9,1.2");
+  const std::string gsa2 = withSum("$GPGSA,A,2,01,02,03,,,,,,,,,,2.5,2.3,1.0");
+  const std::string gsa1 = withSum("$GPGSA,A,1,,,,,,,,,,,,,,,");
+  const char* t[] = {"120000.00", "120001.00", "120002.00"};
+  const auto modes = [](const std::string& in) {
+    std::vector<int> m;
+    for (const Fix& f : decode(in).fixes) {
+      if (f.flags & kFixUpdate) m.back() = f.mode;
+      else m.push_back(f.mode);
+    }
+    return m;
+  };
+  const auto full3d = [&](int i) { return rmc(t[i]) + gga(t[i], 1, "08", "545.4") + gsa3 + zda(t[i]); };
+  // A GSA of fix type 1 as the epoch's last word on the mode: no fix (gpsd 3, 1, 3).
+  EXPECT_EQ(modes(full3d(0) + rmc(t[1]) + gga(t[1], 1, "08", "545.4") + gsa1 + zda(t[1]) + full3d(2)),
+            (std::vector<int>{kMode3D, kModeNoFix, kMode3D}));
+  // ...unless a position sentence follows it (gpsd 3: u-blox sends GLL last).
+  EXPECT_EQ(modes(rmc(t[0]) + gga(t[0], 1, "08", "545.4") + gsa1 + gll(t[0])), (std::vector<int>{kMode3D}));
+  // RMC-only epochs between GSAs: the last GSA's 3D holds (gpsd 3, 3, 3).
+  const auto rmc_gsa = [&](int i) { return rmc(t[i]) + gsa3 + zda(t[i]); };
+  EXPECT_EQ(modes(rmc_gsa(0) + rmc(t[1]) + zda(t[1]) + rmc_gsa(2)),
+            (std::vector<int>{kMode3D, kMode3D, kMode3D}));
+  // Dead reckoning from no satellites: GGA quality 6 with 00 used is no fix (gpsd 3, 1).
+  EXPECT_EQ(modes(full3d(0) + rmc(t[1], "E") + gga(t[1], 6, "00", "545.4") + zda(t[1])),
+            (std::vector<int>{kMode3D, kModeNoFix}));
+  // Where gpsd looks at the previous cycle and we do not (nmea.h, "mode"):
+  // a 2D receiver holding an altitude from 3 satellites (gpsd 2, 3, 3),
+  const auto held = [&](int i) { return rmc(t[i]) + gga(t[i], 1, "03", "50.0") + gsa2 + zda(t[i]); };
+  EXPECT_EQ(modes(held(0) + held(1) + held(2)), (std::vector<int>{kMode2D, kMode2D, kMode2D}));
+  // and the altitude going away (gpsd 3, 3, 2).
+  const auto lost = [&](int i) { return rmc(t[i]) + gga(t[i], 1, "03", "") + gsa2 + zda(t[i]); };
+  EXPECT_EQ(modes(full3d(0) + lost(1) + lost(2)), (std::vector<int>{kMode3D, kMode2D, kMode2D}));
+}
+
 TEST(NmeaEpoch, GstBeforeItsGgaStillApplies) {
   const Decoded d = decode(kGst + kRmc + kGga);
   ASSERT_EQ(d.fixes.size(), 1u);
