@@ -124,7 +124,7 @@ void addBake(CLI::App& app, Runner& run) {
         unsigned n = 0;
         if (std::sscanf(o->only_route.c_str(), "auto:%u", &n) != 1 || n == 0)
           throw core::Error(core::Status::InvalidArg, "--impostor-route must be auto:N");
-        o->bake.select_cells = [n, seed = o->seed](const graph::StreetGraph& g) { return autoRoute(g, n, seed); };
+        o->bake.select_cells = [n, seed = o->seed](const graph::StreetGraph& g) { return graph::seededRoute(g, {n, seed}); };
       }
       if (!o->report_dir.empty())
         o->bake.on_impostors = [o](const graph::StreetGraph& g, const bake::ImpostorBakeResult& r,

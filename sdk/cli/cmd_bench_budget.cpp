@@ -265,7 +265,7 @@ void routeOf(const BudgetOpts& o, Bench& b) {
   if (st != core::Status::Ok) throw core::Error(st, err);
   if (!city.hasImpostors())
     throw core::Error(core::Status::Unsupported, o.package + " has no impostors: bake it with --impostor both");
-  b.route = autoRoute(city.graph(), n, o.seed);
+  b.route = graph::seededRoute(city.graph(), {n, o.seed});
   b.poses = samplePoses(city.graph(), b.route, b.step);
 }
 

@@ -164,7 +164,7 @@ int runMemory(const MemoryOpts& o) {
   if (st != core::Status::Ok) throw core::Error(st, err);
   st = b.open(o.pkg_4x, err);
   if (st != core::Status::Ok) throw core::Error(st, err);
-  const std::vector<uint32_t> route = autoRoute(a.graph(), n, o.seed);
+  const std::vector<uint32_t> route = graph::seededRoute(a.graph(), {n, o.seed});
   checkSameRoute(a, b, route);
   std::string cells;
   for (uint32_t c : route) cells += (cells.empty() ? "" : ",") + std::to_string(c);

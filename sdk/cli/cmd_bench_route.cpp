@@ -208,7 +208,7 @@ void RouteBench::open() {
   if (st != core::Status::Ok) throw core::Error(st, err);
   if (!city_.hasImpostors())
     throw core::Error(core::Status::Unsupported, o_.package + " has no impostors: bake it with --impostor both");
-  route_ = autoRoute(city_.graph(), n, o_.seed);
+  route_ = graph::seededRoute(city_.graph(), {n, o_.seed});
   poses_ = routePoses(city_, route_, o_.step);
   blvd_runtime_desc desc{};
   desc.struct_size = sizeof desc;

@@ -132,7 +132,7 @@ int run(const ViewOpts& o) {
   std::string err;
   const core::Status st = city.open(o.package, err);
   if (st != core::Status::Ok) throw core::Error(st, err);
-  const auto route = autoRoute(city.graph(), n, o.seed);
+  const auto route = graph::seededRoute(city.graph(), {n, o.seed});
   const auto poses = samplePoses(city.graph(), route, o.step);
   ::mkdir(o.out.c_str(), 0755);
   std::vector<double> ms;

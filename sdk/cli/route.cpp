@@ -2,50 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
-#include <unordered_map>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
 
 namespace blvd::cli {
-
-std::vector<uint32_t> autoRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed) {
-  std::vector<uint32_t> route;
-  if (g.halfedges.empty() || cells == 0) return route;
-  std::mt19937_64 rng(seed);
-  std::vector<uint32_t> starts;
-  for (uint32_t h = 0; h < g.halfedges.size(); ++h)
-    if (g.halfedges[h].length >= 30 && g.halfedges[h].road_class <= graph::RoadClass::Residential &&
-        !(g.halfedges[h].flags & graph::kTunnel) && g.successors.count(h) > 0)
-      starts.push_back(h);
-  if (starts.empty()) starts.push_back(0);
-  // Straight on scores highest and seeded noise picks among turns. A cell
-  // already driven is allowed again (a long route in a small city must loop)
-  // but costs a penalty per earlier visit, and a U-turn only at a dead end.
-  std::unordered_map<uint32_t, int> visits;
-  std::vector<uint32_t> r{starts[rng() % starts.size()]};
-  visits[r[0]] = 1;
-  while (r.size() < cells) {
-    const uint32_t h = r.back();
-    const glm::dvec2 d = graph::cellDirection(g, h, true);
-    uint32_t best = graph::kNone;
-    double best_score = -1e9;
-    for (const uint32_t* s = g.successors.begin(h); s != g.successors.end(h); ++s) {
-      if (g.halfedges[*s].flags & graph::kTunnel) continue;
-      const bool uturn = *s == g.halfedges[h].twin;
-      const double score = glm::dot(d, graph::cellDirection(g, *s, false)) + 0.6 * std::uniform_real_distribution<>(0, 1)(rng) -
-                           3.0 * visits[*s] - (uturn ? 10.0 : 0.0);
-      if (score > best_score) best_score = score, best = *s;
-    }
-    if (best == graph::kNone) break;  // only tunnels ahead
-    r.push_back(best);
-    ++visits[best];
-  }
-  route = r;
-  return route;
-}
 
 std::vector<Pose> samplePoses(const graph::StreetGraph& g, const std::vector<uint32_t>& route, double step_m,
                               double look_ahead_m, double lateral_m) {

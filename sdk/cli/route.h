@@ -1,11 +1,11 @@
-// Deterministic drives along the street graph for `blvd view --path` (and the
-// route benchmarks later): a chain of connected cells and camera poses sampled
-// along it.
+// Camera poses along a route (graph/route.h's seededRoute) for `blvd view
+// --path` and the route, budget and memory benchmarks.
 #pragma once
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "graph/route.h"
 #include "graph/street_graph.h"
 
 namespace blvd::cli {
@@ -15,11 +15,6 @@ struct Pose {
   double heading_deg = 0;   // clockwise from north
   uint32_t cell = 0;
 };
-
-// N connected cells from a seeded start (a street of at least 30 m): prefers
-// going straight on at junctions and cells not yet driven; U-turns only at
-// dead ends. Deterministic for a graph and seed.
-std::vector<uint32_t> autoRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed);
 
 // Poses every `step_m` metres along the route, heading toward a point
 // `look_ahead_m` further on (so turns are smooth), offset `lateral_m` to the right.

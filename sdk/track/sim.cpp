@@ -1,12 +1,13 @@
 #include "track/sim.h"
-#include "core/math.h"
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 
 #include <glm/geometric.hpp>
 
+#include "core/math.h"
+#include "core/rng.h"
+#include "graph/route.h"
 #include "track/lane.h"
 
 namespace blvd::track {
@@ -16,20 +17,7 @@ constexpr double kDeg = kPi / 180.0;
 
 // Portable random numbers: mt19937_64's output sequence is fixed by the
 // standard; the distributions are not, so they are written out here.
-class Rng {
- public:
-  explicit Rng(uint64_t seed) : g_(seed) {}
-  double uniform() { return static_cast<double>(g_() >> 11) * (1.0 / 9007199254740992.0); }
-  double gauss() {  // Box-Muller
-    double u1 = uniform();
-    if (u1 < 1e-300) u1 = 1e-300;
-    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * kPi * uniform());
-  }
-  uint64_t next() { return g_(); }
-
- private:
-  std::mt19937_64 g_;
-};
+using core::Rng;
 
 double wrap(double a) {
   a = std::fmod(a + kPi, 2 * kPi);
@@ -94,43 +82,13 @@ struct State {
 }  // namespace
 
 std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed, uint32_t first) {
-  std::vector<uint32_t> route;
-  if (g.halfedges.empty() || cells == 0) return route;
-  Rng rng(seed);
-  std::vector<uint32_t> starts;
-  for (uint32_t h = 0; h < g.halfedges.size(); ++h)
-    if (g.halfedges[h].length >= 30 && g.halfedges[h].road_class <= graph::RoadClass::Residential &&
-        !(g.halfedges[h].flags & graph::kTunnel) && g.successors.count(h) > 0)
-      starts.push_back(h);
-  if (starts.empty()) starts.push_back(0);
-  std::vector<uint8_t> used(g.halfedges.size(), 0);
-  for (int attempt = 0; attempt < 16 && route.size() < cells; ++attempt) {
-    std::fill(used.begin(), used.end(), 0);
-    const uint64_t pick = rng.next();  // drawn either way: a given start does not shift the turns' noise
-    std::vector<uint32_t> r{first < g.halfedges.size() ? first : starts[pick % starts.size()]};
-    auto use = [&](uint32_t h) {
-      used[h] = 1;
-      if (g.halfedges[h].twin < used.size()) used[g.halfedges[h].twin] = 1;
-    };
-    use(r[0]);
-    while (r.size() < cells) {
-      const uint32_t h = r.back();
-      const glm::dvec2 d = graph::cellDirection(g, h, true);
-      uint32_t best = graph::kNone;
-      double best_score = -1e9;
-      for (const uint32_t* s = g.successors.begin(h); s != g.successors.end(h); ++s) {
-        if (used[*s] || (g.halfedges[*s].flags & graph::kTunnel) || g.halfedges[*s].pts_count < 2) continue;
-        // Straight on scores highest; a little seeded noise picks among turns.
-        const double score = glm::dot(d, graph::cellDirection(g, *s, false)) + 0.6 * rng.uniform();
-        if (score > best_score) best_score = score, best = *s;
-      }
-      if (best == graph::kNone) break;
-      r.push_back(best);
-      use(best);
-    }
-    if (r.size() > route.size()) route = r;
-  }
-  return route;
+  graph::RouteRules rules;
+  rules.cells = cells;
+  rules.seed = seed;
+  rules.first = first;
+  rules.revisit = false;
+  rules.attempts = 16;
+  return graph::seededRoute(g, rules);
 }
 
 SimTrace simulateDrive(const graph::StreetGraph& g, const geo::LocalFrame& frame, const SimDesc& d) {

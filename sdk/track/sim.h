@@ -5,11 +5,9 @@
 // odometry (speed and yaw rate with scale, bias and noise), with the truth at
 // every GNSS epoch.
 //
-// The route choice is the logic of sdk/cli/route.cpp's autoRoute (straight on
-// preferred, no cell twice, a 30 m start street), copied here because the CLI
-// is an executable that sdk/ cannot link, and made independent of the standard
-// library's distributions (their output is implementation-defined): the same
-// seed gives the same drive everywhere.
+// The route is graph/route.h's seededRoute with no cell driven twice (the
+// truth is a cell sequence); the noise draws from core/rng.h, so the same seed
+// gives the same drive with every standard library.
 //
 // Contract: pure function of (graph, frame, desc); allocates its outputs.
 #pragma once
@@ -90,8 +88,8 @@ struct SimTrace {
   double end_e = 0, end_n = 0, end_heading_deg = 0;
 };
 
-// A route of `cells` connected cells from a seeded start (autoRoute's logic),
-// or from `first` when it is a cell of the graph.
+// A route of `cells` connected cells, no cell twice, from a seeded start or
+// from `first` when it is a cell of the graph (graph::seededRoute).
 std::vector<uint32_t> simRoute(const graph::StreetGraph& g, uint32_t cells, uint64_t seed, uint32_t first = kNoCell);
 
 // Drives the route for `desc`; an empty trace when the graph has no usable route.
