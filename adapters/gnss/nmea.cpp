@@ -498,6 +498,142 @@ int statusFromFaa(char faa, int fallback) {
 
 }  // namespace
 
+namespace {
+
+// RMC,hhmmss,status,lat,N,lon,E,knots,track,ddmmyy,magvar,E/W[,faa[,navstatus]]
+void decodeRmc(FieldReader& f, NmeaRecord& r) {
+  const Sentence& s = f.s;
+  r.has_tod = f.time(1, &r.tod_ms);
+  r.status = f.letter(2, "status", "AVD");
+  r.has_pos = f.position(3, &r.lat, &r.lon);
+  r.speed_mps = f.number(7, "speed") * kKnotsToMps;
+  r.track_deg = f.number(8, "track");
+  const std::string_view d = s.field(9);
+  if (!d.empty()) {
+    bool good = d.size() == 6;
+    for (size_t k = 0; good && k < 6; ++k) good = d[k] >= '0' && d[k] <= '9';
+    if (!good) {
+      f.fail(9, "date", "expected ddmmyy");
+    } else {
+      r.day = (d[0] - '0') * 10 + (d[1] - '0');
+      r.month = (d[2] - '0') * 10 + (d[3] - '0');
+      const int yy = (d[4] - '0') * 10 + (d[5] - '0');
+      // Two-digit years: 1980..2079, as gpsd (GPS time starts in 1980).
+      r.year = yy < 80 ? 2000 + yy : 1900 + yy;
+      if (r.month < 1 || r.month > 12 || r.day < 1 || r.day > 31)
+        f.fail(9, "date", "day or month out of range");
+      else
+        r.has_date = true;
+    }
+  }
+  if (s.field_count >= 12) r.faa = f.letter(12, "mode", kModeLetters);
+  if (s.field_count >= 13) r.nav_status = f.letter(13, "navigational status", kModeLetters);
+}
+
+// GGA,hhmmss,lat,N,lon,E,quality,sats,hdop,alt,M,geoid,M,age,station
+void decodeGga(FieldReader& f, NmeaRecord& r) {
+  r.has_tod = f.time(1, &r.tod_ms);
+  r.has_pos = f.position(2, &r.lat, &r.lon);
+  r.quality = f.integer(6, "quality", 0, 9);
+  r.sats = f.integer(7, "satellites", 0, 255);
+  r.hdop = f.number(8, "HDOP");
+  r.alt = f.number(9, "altitude");
+  r.geoid_sep = f.number(11, "geoid separation");
+}
+
+// GNS,hhmmss,lat,N,lon,E,modes,sats,hdop,alt,geoid,age,station[,navstatus]
+void decodeGns(FieldReader& f, NmeaRecord& r) {
+  const Sentence& s = f.s;
+  r.has_tod = f.time(1, &r.tod_ms);
+  r.has_pos = f.position(2, &r.lat, &r.lon);
+  const std::string_view m = s.field(6);
+  for (const char ch : m)
+    if (ch < 'A' || ch > 'Z') f.fail(6, "mode", "mode indicators must be letters");
+  r.faa = m.empty() ? '\0' : m[0];
+  r.sats = f.integer(7, "satellites", 0, 255);
+  r.hdop = f.number(8, "HDOP");
+  r.alt = f.number(9, "altitude");
+  r.geoid_sep = f.number(10, "geoid separation");
+  if (s.field_count >= 13) r.nav_status = f.letter(13, "navigational status", kModeLetters);
+}
+
+// VTG,track,T,magtrack,M,knots,N,kph,K[,faa]; the pre-2.0 form is
+// VTG,track,magtrack,knots,kph.
+void decodeVtg(FieldReader& f, NmeaRecord& r) {
+  const Sentence& s = f.s;
+  if (s.field(2) == "T") {
+    r.track_deg = f.number(1, "track");
+    r.speed_mps = f.number(5, "speed (knots)") * kKnotsToMps;
+    if (std::isnan(r.speed_mps)) r.speed_mps = f.number(7, "speed (km/h)") * kKphToMps;
+    if (s.field_count >= 9) r.faa = f.letter(9, "mode", kModeLetters);
+  } else {
+    r.track_deg = f.number(1, "track");
+    r.speed_mps = f.number(3, "speed (knots)") * kKnotsToMps;
+  }
+}
+
+// GSA,A/M,fixtype,sv1..sv12,pdop,hdop,vdop[,systemid]
+void decodeGsa(FieldReader& f, NmeaRecord& r) {
+  const Sentence& s = f.s;
+  r.gsa_mode = f.integer(2, "fix type", 1, 3);
+  if (r.gsa_mode < 0) r.gsa_mode = 0;
+  if (s.field_count >= 17) {
+    r.pdop = f.number(15, "PDOP");
+    r.hdop = f.number(16, "HDOP");
+    r.vdop = f.number(17, "VDOP");
+  }
+}
+
+// GST,hhmmss,rms,smajor,sminor,orient,lat_err,lon_err,alt_err
+void decodeGst(FieldReader& f, NmeaRecord& r) {
+  r.has_tod = f.time(1, &r.tod_ms);
+  r.rms = f.number(2, "RMS");
+  (void)f.number(3, "semi-major");
+  (void)f.number(4, "semi-minor");
+  (void)f.number(5, "orientation");
+  r.lat_err = f.number(6, "latitude error");
+  r.lon_err = f.number(7, "longitude error");
+  r.alt_err = f.number(8, "altitude error");
+}
+
+// GLL,lat,N,lon,E[,hhmmss,status[,faa]]
+void decodeGll(FieldReader& f, NmeaRecord& r) {
+  const Sentence& s = f.s;
+  r.has_pos = f.position(1, &r.lat, &r.lon);
+  r.has_tod = f.time(5, &r.tod_ms);
+  r.status = f.letter(6, "status", "AV");
+  if (s.field_count >= 7) r.faa = f.letter(7, "mode", kModeLetters);
+}
+
+// ZDA,hhmmss,dd,mm,yyyy,zone_h,zone_m
+void decodeZda(FieldReader& f, NmeaRecord& r) {
+  r.has_tod = f.time(1, &r.tod_ms);
+  const int d = f.integer(2, "day", 1, 31);
+  const int m = f.integer(3, "month", 1, 12);
+  const int y = f.integer(4, "year", 1980, 2200);
+  if (d > 0 && m > 0 && y > 0) {
+    r.has_date = true;
+    r.day = d;
+    r.month = m;
+    r.year = y;
+  }
+}
+
+// HDT,heading,T
+void decodeHdt(FieldReader& f, NmeaRecord& r) {
+  r.heading_deg = f.number(1, "heading");
+  if (!std::isnan(r.heading_deg) && (r.heading_deg < 0 || r.heading_deg > 360)) f.fail(1, "heading", "out of range");
+}
+
+// THS,heading,mode (A autonomous, E estimated, M manual, S simulator, V invalid)
+void decodeThs(FieldReader& f, NmeaRecord& r) {
+  r.heading_deg = f.number(1, "heading");
+  r.faa = f.letter(2, "mode", kModeLetters);
+  if (!std::isnan(r.heading_deg) && (r.heading_deg < 0 || r.heading_deg > 360)) f.fail(1, "heading", "out of range");
+}
+
+}  // namespace
+
 bool decodeSentence(const Sentence& s, NmeaRecord* rec, NmeaDiagnostic* diag) {
   if (diag) diag->code = NmeaError::None;
   if (s.proprietary || !isGnssTalker(s.talker)) return false;
@@ -529,133 +665,16 @@ bool decodeSentence(const Sentence& s, NmeaRecord* rec, NmeaDiagnostic* diag) {
 
   FieldReader f{s, diag};
   switch (type) {
-    case SentenceType::RMC: {
-      // RMC,hhmmss,status,lat,N,lon,E,knots,track,ddmmyy,magvar,E/W[,faa[,navstatus]]
-      r.has_tod = f.time(1, &r.tod_ms);
-      r.status = f.letter(2, "status", "AVD");
-      r.has_pos = f.position(3, &r.lat, &r.lon);
-      r.speed_mps = f.number(7, "speed") * kKnotsToMps;
-      r.track_deg = f.number(8, "track");
-      const std::string_view d = s.field(9);
-      if (!d.empty()) {
-        bool good = d.size() == 6;
-        for (size_t k = 0; good && k < 6; ++k) good = d[k] >= '0' && d[k] <= '9';
-        if (!good) {
-          f.fail(9, "date", "expected ddmmyy");
-        } else {
-          r.day = (d[0] - '0') * 10 + (d[1] - '0');
-          r.month = (d[2] - '0') * 10 + (d[3] - '0');
-          const int yy = (d[4] - '0') * 10 + (d[5] - '0');
-          // Two-digit years: 1980..2079, as gpsd (GPS time starts in 1980).
-          r.year = yy < 80 ? 2000 + yy : 1900 + yy;
-          if (r.month < 1 || r.month > 12 || r.day < 1 || r.day > 31)
-            f.fail(9, "date", "day or month out of range");
-          else
-            r.has_date = true;
-        }
-      }
-      if (s.field_count >= 12) r.faa = f.letter(12, "mode", kModeLetters);
-      if (s.field_count >= 13) r.nav_status = f.letter(13, "navigational status", kModeLetters);
-      break;
-    }
-    case SentenceType::GGA: {
-      // GGA,hhmmss,lat,N,lon,E,quality,sats,hdop,alt,M,geoid,M,age,station
-      r.has_tod = f.time(1, &r.tod_ms);
-      r.has_pos = f.position(2, &r.lat, &r.lon);
-      r.quality = f.integer(6, "quality", 0, 9);
-      r.sats = f.integer(7, "satellites", 0, 255);
-      r.hdop = f.number(8, "HDOP");
-      r.alt = f.number(9, "altitude");
-      r.geoid_sep = f.number(11, "geoid separation");
-      break;
-    }
-    case SentenceType::GNS: {
-      // GNS,hhmmss,lat,N,lon,E,modes,sats,hdop,alt,geoid,age,station[,navstatus]
-      r.has_tod = f.time(1, &r.tod_ms);
-      r.has_pos = f.position(2, &r.lat, &r.lon);
-      const std::string_view m = s.field(6);
-      for (const char ch : m)
-        if (ch < 'A' || ch > 'Z') f.fail(6, "mode", "mode indicators must be letters");
-      r.faa = m.empty() ? '\0' : m[0];
-      r.sats = f.integer(7, "satellites", 0, 255);
-      r.hdop = f.number(8, "HDOP");
-      r.alt = f.number(9, "altitude");
-      r.geoid_sep = f.number(10, "geoid separation");
-      if (s.field_count >= 13) r.nav_status = f.letter(13, "navigational status", kModeLetters);
-      break;
-    }
-    case SentenceType::VTG: {
-      // VTG,track,T,magtrack,M,knots,N,kph,K[,faa]; the pre-2.0 form is
-      // VTG,track,magtrack,knots,kph.
-      if (s.field(2) == "T") {
-        r.track_deg = f.number(1, "track");
-        r.speed_mps = f.number(5, "speed (knots)") * kKnotsToMps;
-        if (std::isnan(r.speed_mps)) r.speed_mps = f.number(7, "speed (km/h)") * kKphToMps;
-        if (s.field_count >= 9) r.faa = f.letter(9, "mode", kModeLetters);
-      } else {
-        r.track_deg = f.number(1, "track");
-        r.speed_mps = f.number(3, "speed (knots)") * kKnotsToMps;
-      }
-      break;
-    }
-    case SentenceType::GSA: {
-      // GSA,A/M,fixtype,sv1..sv12,pdop,hdop,vdop[,systemid]
-      r.gsa_mode = f.integer(2, "fix type", 1, 3);
-      if (r.gsa_mode < 0) r.gsa_mode = 0;
-      if (s.field_count >= 17) {
-        r.pdop = f.number(15, "PDOP");
-        r.hdop = f.number(16, "HDOP");
-        r.vdop = f.number(17, "VDOP");
-      }
-      break;
-    }
-    case SentenceType::GST: {
-      // GST,hhmmss,rms,smajor,sminor,orient,lat_err,lon_err,alt_err
-      r.has_tod = f.time(1, &r.tod_ms);
-      r.rms = f.number(2, "RMS");
-      (void)f.number(3, "semi-major");
-      (void)f.number(4, "semi-minor");
-      (void)f.number(5, "orientation");
-      r.lat_err = f.number(6, "latitude error");
-      r.lon_err = f.number(7, "longitude error");
-      r.alt_err = f.number(8, "altitude error");
-      break;
-    }
-    case SentenceType::GLL: {
-      // GLL,lat,N,lon,E[,hhmmss,status[,faa]]
-      r.has_pos = f.position(1, &r.lat, &r.lon);
-      r.has_tod = f.time(5, &r.tod_ms);
-      r.status = f.letter(6, "status", "AV");
-      if (s.field_count >= 7) r.faa = f.letter(7, "mode", kModeLetters);
-      break;
-    }
-    case SentenceType::ZDA: {
-      // ZDA,hhmmss,dd,mm,yyyy,zone_h,zone_m
-      r.has_tod = f.time(1, &r.tod_ms);
-      const int d = f.integer(2, "day", 1, 31);
-      const int m = f.integer(3, "month", 1, 12);
-      const int y = f.integer(4, "year", 1980, 2200);
-      if (d > 0 && m > 0 && y > 0) {
-        r.has_date = true;
-        r.day = d;
-        r.month = m;
-        r.year = y;
-      }
-      break;
-    }
-    case SentenceType::HDT: {
-      // HDT,heading,T
-      r.heading_deg = f.number(1, "heading");
-      if (!std::isnan(r.heading_deg) && (r.heading_deg < 0 || r.heading_deg > 360)) f.fail(1, "heading", "out of range");
-      break;
-    }
-    case SentenceType::THS: {
-      // THS,heading,mode (A autonomous, E estimated, M manual, S simulator, V invalid)
-      r.heading_deg = f.number(1, "heading");
-      r.faa = f.letter(2, "mode", kModeLetters);
-      if (!std::isnan(r.heading_deg) && (r.heading_deg < 0 || r.heading_deg > 360)) f.fail(1, "heading", "out of range");
-      break;
-    }
+    case SentenceType::RMC: decodeRmc(f, r); break;
+    case SentenceType::GGA: decodeGga(f, r); break;
+    case SentenceType::GNS: decodeGns(f, r); break;
+    case SentenceType::VTG: decodeVtg(f, r); break;
+    case SentenceType::GSA: decodeGsa(f, r); break;
+    case SentenceType::GST: decodeGst(f, r); break;
+    case SentenceType::GLL: decodeGll(f, r); break;
+    case SentenceType::ZDA: decodeZda(f, r); break;
+    case SentenceType::HDT: decodeHdt(f, r); break;
+    case SentenceType::THS: decodeThs(f, r); break;
     case SentenceType::Unknown: return false;
   }
   if (!f.ok) return false;

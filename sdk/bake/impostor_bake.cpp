@@ -300,20 +300,14 @@ double displayFovX(const ImpostorOptions& opt) {
   return glm::degrees(2.0 * std::atan(ty * opt.display_width / opt.display_height));
 }
 
-ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<geo::MeshData>& block_meshes,
-                                 const ImpostorOptions& opt, package::PackageWriter& writer,
-                                 const std::function<void(const char*, double, double)>& progress) {
-  ImpostorBakeResult res;
-  const size_t H = g.halfedges.size(), B = block_meshes.size();
-  const double fov_x_display = displayFovX(opt);
-  const double ppr = 0.5 * opt.display_height / std::tan(glm::radians(opt.display_fov_y_deg) * 0.5);
-  // Largest capture the cell frustum rule can ask for.
-  CaptureRig rig(block_meshes, std::max(opt.texture_max, opt.item_resolution),
-                 std::max(opt.texture_max, opt.item_resolution));
-  BLVD_LOG_INFO("impostors: capturing on %s", rig.backendName());
+namespace {
 
-  std::vector<BlockInfo> info(B);
-  for (size_t b = 0; b < B; ++b) {
+using Progress = std::function<void(const char*, double, double)>;
+
+// Bounds, footprint hull and top of every block mesh, for the layer split.
+std::vector<BlockInfo> blockInfo(const std::vector<geo::MeshData>& block_meshes) {
+  std::vector<BlockInfo> info(block_meshes.size());
+  for (size_t b = 0; b < block_meshes.size(); ++b) {
     const auto& m = block_meshes[b];
     if (m.empty()) continue;
     std::vector<glm::dvec2> pts;
@@ -327,59 +321,152 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
     info[b].hull = convexHull(std::move(pts));
     info[b].top = info[b].hi.y;
   }
+  return info;
+}
 
-  // 1. PVS + ACH from item buffers at samples along every street.
-  auto t0 = Clock::now();
-  std::vector<bool> want(H, opt.only_cells.empty());
-  for (uint32_t c : opt.only_cells)
-    if (c < H) want[c] = true;
+// Item-buffer samples along the street of half-edge h, shared by both
+// directions. Marvie's ACH: 8 positions along the cell (its two ends, shared
+// with the neighbouring streets through `vertex_samples`, and 6 between) × 6
+// directions; blocks any sample saw, with the cell's local blocks at 0.
+graph::CellVisibility streetVisibility(const graph::StreetGraph& g, uint32_t h, CaptureRig& rig,
+                                       const ImpostorOptions& opt, std::unordered_map<uint32_t, Counts>& vertex_samples,
+                                       std::vector<uint32_t>& scratch, size_t& samples_taken) {
+  const graph::HalfEdge& e = g.halfedges[h];
+  std::vector<const Counts*> samples;
+  for (uint32_t v : {e.origin, g.endVertex(h)}) {
+    auto it = vertex_samples.find(v);
+    if (it == vertex_samples.end()) {
+      it = vertex_samples.emplace(v, sampleAt(rig, g.vertices[v].p, opt.item_resolution, scratch)).first;
+      ++samples_taken;
+    }
+    samples.push_back(&it->second);
+  }
+  const int n_in = std::max(0, opt.positions_per_cell - 2);
+  std::vector<Counts> interior;
+  interior.reserve(n_in);
+  for (int i = 1; i <= n_in; ++i) {
+    const double s = e.length * i / (n_in + 1);
+    interior.push_back(sampleAt(rig, pointAt(g, e, s), opt.item_resolution, scratch));
+    ++samples_taken;
+  }
+  for (const Counts& c : interior) samples.push_back(&c);
+  std::map<uint32_t, double> acc;
+  for (const Counts* c : samples)
+    for (const auto& [b, px] : *c) acc[b] += px;
+  for (uint32_t l = g.local_blocks.offsets[h]; l < g.local_blocks.offsets[h + 1]; ++l)
+    acc.emplace(g.local_blocks.items[l], 0.0);
+  const double norm = 1.0 / (double(samples.size()) * 6.0 * opt.item_resolution * opt.item_resolution);
+  graph::CellVisibility vis;
+  for (const auto& [b, px] : acc) {
+    vis.blocks.push_back(b);
+    vis.ach.push_back(static_cast<float>(px * norm));
+  }
+  return vis;
+}
+
+// 1. PVS + ACH from item buffers at samples along every wanted street.
+void bakeVisibility(const graph::StreetGraph& g, CaptureRig& rig, const ImpostorOptions& opt,
+                    const std::vector<bool>& want, ImpostorBakeResult& res, const Progress& progress) {
+  const size_t H = g.halfedges.size();
   res.tables.visibility.assign(H, {});
   std::unordered_map<uint32_t, Counts> vertex_samples;  // shared by every street at a junction
-  std::vector<uint32_t> scratch(B);
+  std::vector<uint32_t> scratch(rig.blockCount());
   size_t done = 0;
   for (uint32_t h = 0; h < H; ++h) {
     const graph::HalfEdge& e = g.halfedges[h];
     if (h > e.twin) continue;  // both directions share the samples
     if (!want[h] && !want[e.twin]) continue;
-    std::vector<const Counts*> samples;
-    std::vector<Counts> interior;
-    for (uint32_t v : {e.origin, g.endVertex(h)}) {
-      auto it = vertex_samples.find(v);
-      if (it == vertex_samples.end()) {
-        it = vertex_samples.emplace(v, sampleAt(rig, g.vertices[v].p, opt.item_resolution, scratch)).first;
-        ++res.samples;
-      }
-      samples.push_back(&it->second);
-    }
-    // Marvie's ACH: 8 positions along the cell (its two ends, shared with
-    // the neighbouring streets, and 6 between) × 6 directions.
-    const int n_in = std::max(0, opt.positions_per_cell - 2);
-    interior.reserve(n_in);
-    for (int i = 1; i <= n_in; ++i) {
-      const double s = e.length * i / (n_in + 1);
-      interior.push_back(sampleAt(rig, pointAt(g, e, s), opt.item_resolution, scratch));
-      ++res.samples;
-    }
-    for (const Counts& c : interior) samples.push_back(&c);
-    std::map<uint32_t, double> acc;
-    for (const Counts* c : samples)
-      for (const auto& [b, px] : *c) acc[b] += px;
-    for (uint32_t l = g.local_blocks.offsets[h]; l < g.local_blocks.offsets[h + 1]; ++l)
-      acc.emplace(g.local_blocks.items[l], 0.0);
-    const double norm = 1.0 / (double(samples.size()) * 6.0 * opt.item_resolution * opt.item_resolution);
-    graph::CellVisibility vis;
-    for (const auto& [b, px] : acc) {
-      vis.blocks.push_back(b);
-      vis.ach.push_back(static_cast<float>(px * norm));
-    }
-    res.tables.visibility[h] = vis;
-    res.tables.visibility[e.twin] = vis;
+    res.tables.visibility[h] = streetVisibility(g, h, rig, opt, vertex_samples, scratch, res.samples);
+    res.tables.visibility[e.twin] = res.tables.visibility[h];
     if (progress) progress("visibility (item buffers)", double(++done), double(H / 2));
   }
+}
+
+// What the impostors of every cell share: the rig, the blocks, the options.
+struct CellBake {
+  const graph::StreetGraph& g;
+  const std::vector<geo::MeshData>& block_meshes;
+  const std::vector<BlockInfo>& info;
+  CaptureRig& rig;
+  const ImpostorOptions& opt;
+  CapturePlanOptions popt;
+  double T = 0;  // the threshold angle, radians (Décoret 99 §4.2)
+};
+
+// One capture's blocks: a layer (D99 §4.2), or S97's single impostor, of one run.
+struct CaptureJob {
+  bool single;
+  float run_from;
+  std::vector<uint32_t> blocks;
+};
+
+// 2–4. One cell: per run (cellRuns), its layers and/or single impostor, each
+// planned from the run's vantage point; every capture of the cell planned
+// first, then sized to the cell's texel budget, then captured as textured
+// depth meshes.
+void bakeCellImpostors(const CellBake& cb, uint32_t h, const std::vector<uint32_t>& far,
+                       package::PackageWriter& writer, ImpostorBakeResult& res) {
+  const graph::HalfEdge& e = cb.g.halfedges[h];
+  const ImpostorOptions& opt = cb.opt;
+  std::vector<CaptureJob> jobs;
+  std::vector<std::vector<CaptureShot>> plans;
+  for (const auto& [s0, s1] : cellRuns(cb.g, e, opt)) {
+    const CellView view = cellView(cb.g, e, s0, s1, opt, cb.rig);
+    std::vector<CaptureJob> run;
+    if (opt.mode == ImpostorMode::Layered || opt.mode == ImpostorMode::Both)
+      for (auto& blocks : layerBlocks(view, far, cb.info, opt, cb.T, res)) run.push_back({false, float(s0), blocks});
+    if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both) run.push_back({true, float(s0), far});
+    for (CaptureJob& j : run) {
+      plans.push_back(planCaptures(cb.rig, view.eye_enu, view.heading_deg, view.az_lo, view.az_hi, j.blocks, cb.popt));
+      jobs.push_back(std::move(j));
+    }
+  }
+  fitTexelBudget(plans, opt, cb.popt, res);
+  uint32_t layer_index = 0;
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    if (plans[j].empty()) continue;
+    ImpostorRecord rec;
+    rec.cell = h;
+    rec.single = jobs[j].single;
+    rec.layer = layer_index++;
+    rec.run_from_m = jobs[j].run_from;
+    graph::ImpostorLayer il;
+    il.run_from_m = jobs[j].run_from;
+    if (!captureLayer(cb.rig, plans[j], jobs[j].blocks, opt, cb.popt, writer, il, rec)) continue;
+    (rec.single ? res.tables.impostors[h].single : res.tables.impostors[h].layered).push_back(std::move(il));
+    res.records.push_back(std::move(rec));
+  }
+}
+
+// The cell's potentially visible blocks that are not its local blocks.
+std::vector<uint32_t> farBlocks(const CellBake& cb, uint32_t h, const graph::CellVisibility& vis) {
+  std::vector<uint32_t> local(cb.g.local_blocks.begin(h), cb.g.local_blocks.end(h));
+  std::vector<uint32_t> far;
+  for (uint32_t b : vis.blocks)
+    if (std::find(local.begin(), local.end(), b) == local.end() && !cb.block_meshes[b].empty()) far.push_back(b);
+  return far;
+}
+
+}  // namespace
+
+ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<geo::MeshData>& block_meshes,
+                                 const ImpostorOptions& opt, package::PackageWriter& writer, const Progress& progress) {
+  ImpostorBakeResult res;
+  const size_t H = g.halfedges.size();
+  // Largest capture the cell frustum rule can ask for.
+  CaptureRig rig(block_meshes, std::max(opt.texture_max, opt.item_resolution),
+                 std::max(opt.texture_max, opt.item_resolution));
+  BLVD_LOG_INFO("impostors: capturing on %s", rig.backendName());
+  const std::vector<BlockInfo> info = blockInfo(block_meshes);
+  std::vector<bool> want(H, opt.only_cells.empty());
+  for (uint32_t c : opt.only_cells)
+    if (c < H) want[c] = true;
+
+  auto t0 = Clock::now();
+  bakeVisibility(g, rig, opt, want, res, progress);
   res.pvs_seconds = since(t0);
   BLVD_LOG_INFO("impostors: %zu item-buffer samples in %.1f s", res.samples, res.pvs_seconds);
 
-  // 2–4. Per cell: frustum, layers, textured depth meshes.
   t0 = Clock::now();
   res.tables.impostors.assign(H, {});
   res.tables.threshold_px = static_cast<float>(opt.threshold_px);
@@ -387,60 +474,18 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
   res.tables.display_width = static_cast<uint16_t>(opt.display_width);
   res.tables.display_height = static_cast<uint16_t>(opt.display_height);
   if (opt.mode == ImpostorMode::None) return res;
-  const double T = pixelsToRadians(opt.threshold_px, opt.display_width, fov_x_display);
-  CapturePlanOptions popt;
-  popt.texture_max = opt.texture_max;
-  popt.max_span_deg = opt.max_span_deg;
-  popt.display_ppr = ppr;
-  done = 0;
-  size_t todo = 0;
+  CellBake cb{g, block_meshes, info, rig, opt, {}, 0};
+  cb.T = pixelsToRadians(opt.threshold_px, opt.display_width, displayFovX(opt));
+  cb.popt.texture_max = opt.texture_max;
+  cb.popt.max_span_deg = opt.max_span_deg;
+  cb.popt.display_ppr = 0.5 * opt.display_height / std::tan(glm::radians(opt.display_fov_y_deg) * 0.5);
+  size_t done = 0, todo = 0;
   for (uint32_t h = 0; h < H; ++h) todo += want[h];
   for (uint32_t h = 0; h < H; ++h) {
     if (!want[h]) continue;
-    const graph::HalfEdge& e = g.halfedges[h];
-    std::vector<uint32_t> local(g.local_blocks.begin(h), g.local_blocks.end(h));
-    std::vector<uint32_t> far;
-    for (uint32_t b : res.tables.visibility[h].blocks)
-      if (std::find(local.begin(), local.end(), b) == local.end() && !block_meshes[b].empty()) far.push_back(b);
+    const std::vector<uint32_t> far = farBlocks(cb, h, res.tables.visibility[h]);
     if (progress) progress("impostors (capture + depth mesh)", double(++done), double(todo));
-    if (far.empty()) continue;
-
-    // Per run (cellRuns): layers (D99 §4.2), or one layer for S97's single
-    // impostor, each planned from the run's vantage point.
-    struct Job {
-      bool single;
-      float run_from;
-      std::vector<uint32_t> blocks;
-    };
-    std::vector<Job> jobs;
-    std::vector<std::vector<CaptureShot>> plans;
-    for (const auto& [s0, s1] : cellRuns(g, e, opt)) {
-      const CellView view = cellView(g, e, s0, s1, opt, rig);
-      std::vector<Job> run;
-      if (opt.mode == ImpostorMode::Layered || opt.mode == ImpostorMode::Both)
-        for (auto& blocks : layerBlocks(view, far, info, opt, T, res)) run.push_back({false, float(s0), blocks});
-      if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both) run.push_back({true, float(s0), far});
-      for (Job& j : run) {
-        plans.push_back(planCaptures(rig, view.eye_enu, view.heading_deg, view.az_lo, view.az_hi, j.blocks, popt));
-        jobs.push_back(std::move(j));
-      }
-    }
-    // Every capture of the cell planned first, then sized to the cell's texel budget.
-    fitTexelBudget(plans, opt, popt, res);
-    uint32_t layer_index = 0;
-    for (size_t j = 0; j < jobs.size(); ++j) {
-      if (plans[j].empty()) continue;
-      ImpostorRecord rec;
-      rec.cell = h;
-      rec.single = jobs[j].single;
-      rec.layer = layer_index++;
-      rec.run_from_m = jobs[j].run_from;
-      graph::ImpostorLayer il;
-      il.run_from_m = jobs[j].run_from;
-      if (!captureLayer(rig, plans[j], jobs[j].blocks, opt, popt, writer, il, rec)) continue;
-      (rec.single ? res.tables.impostors[h].single : res.tables.impostors[h].layered).push_back(std::move(il));
-      res.records.push_back(std::move(rec));
-    }
+    if (!far.empty()) bakeCellImpostors(cb, h, far, writer, res);
   }
   res.impostor_seconds = since(t0);
   BLVD_LOG_INFO("impostors: %zu meshes in %.1f s", res.records.size(), res.impostor_seconds);

@@ -16,13 +16,13 @@
 //                      Targets >= 0.99 / >= 0.95.
 //   on_cell_sigma5_calibrated / on_cell_sigma15_calibrated
 //                      the same drives, each after the first starting from the odometry
-//                      calibration the previous one ended with (not issue keys).
+//                      calibration the previous one ended with (not target keys).
 //   on_cell_sigma5_chained / _resumed, on_cell_sigma15_chained / _resumed
 //                      the seeded drives chained: each parks halfway along its last cell and
 //                      the next pulls away from there (towed to its seeded street when no
 //                      route of half the cells goes on), tracked cold and resumed from the
 //                      previous drive's last pose (Tracker::setStartPose) and calibration.
-//                      --check requires resumed > chained (not issue keys).
+//                      --check requires resumed > chained (not target keys).
 //   update_us_p50      median wall time of one map-matching step (MapMatcher::step),
 //                      replaying the drives' observations (steady_clock per step, 3 passes).
 //                      Target <= 20 us (tests/bench/bench_tracker.cpp measures the same

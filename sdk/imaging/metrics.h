@@ -49,7 +49,7 @@ constexpr int ssimMapExtent(int n) { return n >= kSsimWindow ? n - (kSsimWindow 
 // Returns the same value as ssim().
 double ssimMap(const uint8_t* a, const uint8_t* b, int w, int h, float* map);
 
-// Threshold of badPixelShare(): 10 % of full scale, the issue's "colour more
+// Threshold of badPixelShare(): 10 % of full scale, the target's "colour more
 // than 10 % off".
 constexpr double kBadPixelThreshold = 0.10;
 

@@ -2,7 +2,7 @@
 // update). Drives on the fixture package (sdk/track/sim.h, 1 Hz fixes at
 // sigma 5 m, 50 Hz odometry) are tracked once to record the map matcher's
 // observations; then
-//   BM_MatcherStep   one HMM step (MapMatcher::step), the "update" the issue bounds
+//   BM_MatcherStep   one HMM step (MapMatcher::step), the "update" the target bounds
 //                    (`blvd bench track` reports the same as update_us_p50);
 //   BM_TrackerSecond one second of input: a fix, 50 odometry samples and
 //                    Tracker::update (EKF + HMM + pose).

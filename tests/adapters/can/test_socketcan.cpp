@@ -1,6 +1,6 @@
 // SocketCAN source: a clear error where the kernel has no AF_CAN (this build
 // machine, most containers), error-frame decoding on synthesized frames, and,
-// where a vcan0 exists (the qemu job of a later issue), a loopback round trip.
+// where a vcan0 exists (the qemu guest of tests/vcan), a loopback round trip.
 #include <gtest/gtest.h>
 
 #include <linux/can.h>

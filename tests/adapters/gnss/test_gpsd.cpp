@@ -308,7 +308,7 @@ TEST(GpsdClient, ReceivesTheLogsPositionsFromARealGpsd) {
   EXPECT_GE(timed_same + 4, with_position) << "positions whose time differs from ours";
 }
 
-// The setup: gpsd fed by gpsfake (Debian's gpsd-clients), which starts
+// The setup a host uses: gpsd fed by gpsfake (Debian's gpsd-clients), which starts
 // its own gpsd on a pty, waits for a client and plays the log once.
 TEST(GpsdClient, ReceivesTheLogsPositionsThroughGpsfake) {
   const std::string gpsd = findGpsd();

@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""Rewrites the measured tables of docs/benchmarks.md from the benches' JSON.
+
+    tools/bench_doc.py OUT_DIR docs/benchmarks.md
+
+OUT_DIR is what packaging/scripts/bench.sh writes: NAME.json per benchmark and
+commands.tsv (NAME <tab> the command that produced it). Each table sits
+between `<!-- bench:NAME -->` and `<!-- /bench:NAME -->` in the document and
+is replaced whole, with the command under it; the prose around the markers is
+kept. A marker whose JSON is missing is an error: a table is never left stale
+beside fresh ones.
+"""
+import json
+import os
+import re
+import sys
+
+
+def pct(x, digits=1):
+    return "–" if x is None else f"{100 * x:.{digits}f} %"
+
+
+def num(x, digits=2):
+    if x is None:
+        return "–"
+    if isinstance(x, (int,)) or (isinstance(x, float) and digits == 0):
+        return f"{x:,.0f}"
+    return f"{x:.{digits}f}"
+
+
+def table(header, rows):
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def route(j):
+    rows = []
+    order = ["full", "local", "radius100", "radius250", "single", "blvd"]
+    for mode in sorted(j["modes"], key=lambda m: order.index(m) if m in order else len(order)):
+        g = j["modes"][mode].get
+        rows.append([mode, num(g("frame_ms_p50")), num(g("frame_ms_p95")), num(g("triangles_p50"), 0),
+                     num(g("ssim_p50"), 3), pct(g("bad_pixels_p50"), 2), pct(g("far_bad_p50")),
+                     pct(g("far_bad_p95")), pct(g("holes_p95"), 2), pct(g("spurious_p95"), 3),
+                     num(g("missing_objects_poses"), 0), num(g("visibility_error_px_p95"), 1)])
+    t = table(["mode", "frame ms p50", "p95", "triangles p50", "SSIM p50", "bad px p50", "far_bad p50", "p95",
+               "holes p95", "spurious p95", "missing-object poses", "silhouette px p95"], rows)
+    return t + f"\n\nSpeed-up full ÷ blvd (median frame time): {num(j.get('speedup_p50'))}×, " \
+               f"triangles ÷ {num(1 / j['triangle_ratio_p50'], 1) if j.get('triangle_ratio_p50') else '–'}; " \
+               f"{len(j.get('blvd_poses', []))} poses, {j.get('far_scored_poses', '–')} scored for the far metrics, " \
+               f"on {j.get('gl_renderer', '?')}."
+
+
+def budget(j):
+    target = j["target_ms"]
+    rows = [["target (auto)", num(target), "–", "–", "–", "–"],
+             ["local model at LOD 0", num(j["local_lod0_ms_p50"]), "–", "–", "–", "–"],
+             ["unbudgeted", num(j["unbudgeted_ms_p50"]), "–", "–", "–", "–"],
+             ["floor (coarsest, smallest scale)", num(j["floor_ms_p50"]), num(j["floor_ms_p95"]), "–", "–", "–"],
+             ["budgeted", num(j["frame_ms_p50"]), num(j["frame_ms_p95"]),
+              f"{100 * (j['frame_ms_p50'] / target - 1):+.1f} % / {j['frame_ms_p95'] / target:.2f}×",
+              f"{num(j['stutter_ratio'])} (ci90 {num(j['stutter_ratio_ci90'][0])}–{num(j['stutter_ratio_ci90'][1])})",
+              f"{num(j['render_scale_p50'])}, SSIM cost {num(j['ssim_cost_p50'], 3)}"]]
+    checks = ", ".join(f"{k} {'met' if v else 'NOT met'}" for k, v in j.get("checks", {}).items())
+    return table(["run", "frame ms p50", "p95", "p50 ÷ target − 1 / p95 ÷ target", "stutter", "render scale p50"],
+                 rows) + f"\n\nTargets: {checks}. Boundary spike rate {num(j['boundary_spike_rate'], 3)}, inside " \
+                         f"{num(j['inside_spike_rate'], 3)}; degraded frames {j['degraded_frames']} of {j['frames']}."
+
+
+def memory(j):
+    rows = [[name, f"{r['rss_peak']:,}", f"{r['table_bytes']:,}", f"{r['tracking_bytes']:,}",
+             r["allocs_per_frame_max"], r["driver_allocs_per_frame_max"]] for name, r in j["runs"].items()]
+    return table(["package", "peak RSS bytes", "tables bytes", "tracker bytes", "blvd allocations a frame (max)",
+                  "GL driver's (max)"], rows) + \
+        f"\n\nPeak RSS 4× ÷ 1× − 1: **{j['rss_diff_pct']:+.2f} %** (target ≤ 2 %), {j['route_cells']} cells " \
+        f"driven; {'pass' if j['pass'] else 'FAIL'}."
+
+
+def decode(j):
+    rows = [[os.path.basename(p["package"]), f"{p['bytes']:,}", num(p["bytes_vs_first"]),
+             num(p["blocks"]["ms_total"], 0), num(p["impostors"]["ms_total"], 0), num(p["ms_total"], 0),
+             num(p["ms_total_vs_first"])] for p in j]
+    return table(["package", "bytes", "÷ first", "block decode ms", "impostor decode ms", "total ms", "÷ first"], rows)
+
+
+def track(j):
+    t = j.get("targets", {})
+    def target(k):
+        if k not in t:
+            return ""
+        b = t[k]
+        return (f"≥ {b['min']}" if "min" in b else f"≤ {b['max']}") + (" met" if b.get("met") else " **NOT met**")
+    keys = ["on_cell_sigma5", "on_cell_sigma15", "on_cell_sigma5_calibrated", "on_cell_sigma15_calibrated",
+            "on_cell_sigma5_chained", "on_cell_sigma15_chained", "on_cell_sigma5_resumed",
+            "on_cell_sigma15_resumed", "update_us_p50", "fusion_err_m_p50", "dr_drift_pct"]
+    rows = [[k, num(j.get(k), 4), target(k)] for k in keys if k in j]
+    return table(["figure", "value", "target"], rows)
+
+
+RENDER = {"route": route, "budget": budget, "memory": memory, "decode": decode, "track": track}
+
+
+def bake(out_dir, name):
+    info = json.load(open(os.path.join(out_dir, f"{name}.json")))
+    secs = open(os.path.join(out_dir, f"{name}.time")).read().strip()
+    c = info["counts"]
+    return table(["package", "bake", "bytes", "blocks", "cells", "buildings", "triangles (level 0)"],
+                 [[os.path.basename(info["file"]), secs, f"{info['bytes']:,}", c["blocks"], c["cells"],
+                   f"{c['buildings']:,}", f"{c['triangles']:,}"]])
+
+
+def command_text(cmd):
+    # bench.sh times bakes with /usr/bin/time -f FMT -o FILE: show the blvd command alone.
+    return re.sub(r"^/usr/bin/time -f \S+ s -o \S+ ", "", cmd)
+
+
+def main():
+    out_dir, doc = sys.argv[1], sys.argv[2]
+    commands = {}
+    for line in open(os.path.join(out_dir, "commands.tsv")):
+        name, cmd = line.rstrip("\n").split("\t", 1)
+        commands[name] = command_text(cmd)
+    text = open(doc).read()
+
+    def replace(m):
+        name = m.group(1)
+        if name not in commands:
+            sys.exit(f"bench_doc: {doc}: no run of '{name}' in {out_dir}/commands.tsv")
+        if name.startswith("bake."):
+            body = bake(out_dir, "bake-" + name.split(".", 1)[1])
+        else:
+            body = RENDER[name](json.load(open(os.path.join(out_dir, f"{name}.json"))))
+        return f"<!-- bench:{name} -->\n{body}\n\n`{commands[name]}`\n<!-- /bench:{name} -->"
+
+    text, n = re.subn(r"<!-- bench:([\w.]+) -->.*?<!-- /bench:\1 -->", replace, text, flags=re.S)
+    if n == 0:
+        sys.exit(f"bench_doc: {doc} has no <!-- bench:NAME --> markers")
+    open(doc, "w").write(text)
+    print(f"bench_doc: {n} tables rewritten in {doc}")
+
+
+if __name__ == "__main__":
+    main()
