@@ -12,8 +12,7 @@
 #include <osmium/handler.hpp>
 #include <osmium/handler/node_locations_for_ways.hpp>
 #include <osmium/index/map/flex_mem.hpp>
-#include <osmium/io/pbf_input.hpp>
-#include <osmium/io/xml_input.hpp>
+#include <osmium/io/any_input.hpp>
 #include <osmium/relations/relations_manager.hpp>
 #include <osmium/visitor.hpp>
 
@@ -230,6 +229,11 @@ OsmCity readOsm(const std::string& path, const OsmReadOptions& opt,
   city.source_bytes = static_cast<uint64_t>(st.st_size);
   Collector col(opt);
   try {
+    // .osm.pbf, .osm, and either compressed with gzip or bzip2 (libosmium
+    // picks the format from the name). Three passes: relations (the
+    // multipolygon buildings' members), nodes, then ways. Reading nodes on a
+    // pass of their own lets an extract that is not sorted by type (a way
+    // before its nodes) bake exactly as its sorted copy does.
     osmium::io::File file{path};
     osmium::area::Assembler::config_type acfg;
     osmium::TagsFilter filter{false};
@@ -242,21 +246,28 @@ OsmCity readOsm(const std::string& path, const OsmReadOptions& opt,
     Index index;
     osmium::handler::NodeLocationsForWays<Index> locations{index};
     locations.ignore_errors();  // clipped extracts reference nodes they do not hold
-    osmium::io::Reader reader{file, osmium::osm_entity_bits::all};
-    while (osmium::memory::Buffer buffer = reader.read()) {
-      osmium::apply(buffer, locations, col, mp.handler([&col](osmium::memory::Buffer&& area_buffer) {
-        osmium::apply(area_buffer, col);
-      }));
-      if (progress) progress(reader.offset(), city.source_bytes);
-    }
-    reader.close();
+    const auto pass = [&](osmium::osm_entity_bits::type entities, uint64_t done_before) {
+      osmium::io::Reader reader{file, entities};
+      while (osmium::memory::Buffer buffer = reader.read()) {
+        osmium::apply(buffer, locations, col, mp.handler([&col](osmium::memory::Buffer&& area_buffer) {
+          osmium::apply(area_buffer, col);
+        }));
+        if (progress) progress(done_before + reader.offset(), 2 * city.source_bytes);
+      }
+      reader.close();
+    };
+    pass(osmium::osm_entity_bits::node, 0);
+    pass(osmium::osm_entity_bits::way | osmium::osm_entity_bits::relation, city.source_bytes);
     city.bad_polygons = col.bad + mp.stats().area_really_complex_case;
   } catch (const core::Error&) {
     throw;
   } catch (const std::exception& e) {
     throw core::Error(core::Status::Corrupt, path + ": " + e.what());
   }
-  if (col.streets.empty()) throw core::Error(core::Status::Corrupt, path + ": no drivable highway=* ways found");
+  if (col.streets.empty())
+    throw core::Error(core::Status::NotFound, path + ": no drivable street (highway=* way) in the extract: nothing to drive on");
+  if (col.buildings.empty())
+    throw core::Error(core::Status::NotFound, path + ": no building (building=* way or multipolygon) in the extract: nothing to render");
 
   // Origin: centre of the streets' bounding box, on the ellipsoid.
   double lo_lon = 1e9, lo_lat = 1e9, hi_lon = -1e9, hi_lat = -1e9;

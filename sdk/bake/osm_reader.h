@@ -1,4 +1,5 @@
-// Reads an OpenStreetMap .osm.pbf (libosmium) into what the bake needs:
+// Reads an OpenStreetMap extract (libosmium: .osm.pbf, .osm, .osm.gz,
+// .osm.bz2; sorted by type or not) into what the bake needs:
 // drivable streets as polylines and building footprints (closed ways and
 // multipolygon relations, with inner rings) with their heights, all in the
 // local ENU frame of the extract.
@@ -56,7 +57,9 @@ struct OsmCity {
 };
 
 // Throws core::Error(Io) if the file cannot be read, core::Error(Corrupt) with
-// the file name if libosmium rejects it. `progress(done, total)` gets bytes.
+// the file name if libosmium rejects it, core::Error(NotFound) naming what is
+// missing when the extract has no drivable street or no building.
+// `progress(done, total)` gets bytes (total: twice the file, read twice).
 OsmCity readOsm(const std::string& path, const OsmReadOptions& opt,
                 const std::function<void(uint64_t, uint64_t)>& progress = {});
 

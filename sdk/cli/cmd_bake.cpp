@@ -29,7 +29,7 @@ std::vector<double> parseRatios(const std::string& text) {
 }  // namespace
 
 void addBake(CLI::App& app, Runner& run) {
-  auto* cmd = app.add_subcommand("bake", "bake an OpenStreetMap .osm.pbf into a .blvd package");
+  auto* cmd = app.add_subcommand("bake", "bake an OpenStreetMap extract into a .blvd package");
   struct Opts {
     std::string in, out, report_dir;
     bake::BakeOptions bake;
@@ -39,7 +39,7 @@ void addBake(CLI::App& app, Runner& run) {
     uint64_t seed = 1;
   };
   auto o = std::make_shared<Opts>();
-  cmd->add_option("input", o->in, "OpenStreetMap extract (.osm.pbf)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("input", o->in, "OpenStreetMap extract: .osm.pbf, .osm, .osm.gz or .osm.bz2")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", o->out, "package to write (.blvd)")->required();
   cmd->add_option("--default-height", o->bake.osm.default_height_m,
                   "height of buildings without height or building:levels tags, metres")

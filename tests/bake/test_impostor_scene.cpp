@@ -23,6 +23,7 @@
 #include "bake/bake.h"
 #include "blvd/blvd.h"
 #include "cli/far_metrics.h"
+#include "common/osm_writer.h"
 #include "stream/city.h"
 
 namespace blvd {
@@ -33,37 +34,7 @@ constexpr uint32_t kW = 400, kH = 240;
 constexpr double kDisplayFovY = 45.0;
 
 // ---- The city, in metres east (x) and north (y) of (kLat0, kLon0).
-struct OsmWriter {
-  std::string nodes, ways;
-  int next_node = 1, next_way = 1;
-  int node(double x, double y) {
-    const double lat = kLat0 + y / 111320.0, lon = kLon0 + x / (111320.0 * std::cos(kLat0 * M_PI / 180.0));
-    char b[160];
-    std::snprintf(b, sizeof b, "  <node id=\"%d\" version=\"1\" lat=\"%.8f\" lon=\"%.8f\"/>\n", next_node, lat, lon);
-    nodes += b;
-    return next_node++;
-  }
-  void way(const std::vector<int>& ids, const std::string& tags) {
-    ways += "  <way id=\"" + std::to_string(next_way++) + "\" version=\"1\">\n";
-    for (int id : ids) ways += "    <nd ref=\"" + std::to_string(id) + "\"/>\n";
-    ways += tags + "  </way>\n";
-  }
-  void street(const std::vector<glm::dvec2>& pts, std::vector<int>* ids = nullptr) {
-    std::vector<int> v;
-    for (glm::dvec2 p : pts) v.push_back(node(p.x, p.y));
-    way(v, "    <tag k=\"highway\" v=\"residential\"/>\n");
-    if (ids) *ids = v;
-  }
-  void building(double x0, double y0, double x1, double y1, double height) {
-    const int a = node(x0, y0), b = node(x1, y0), c = node(x1, y1), d = node(x0, y1);
-    way({a, b, c, d, a}, "    <tag k=\"building\" v=\"yes\"/>\n    <tag k=\"height\" v=\"" + std::to_string(height) +
-                             "\"/>\n");
-  }
-  std::string str() const {
-    return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<osm version=\"0.6\" generator=\"blvd test\">\n" + nodes +
-           ways + "</osm>\n";
-  }
-};
+using test::OsmWriter;
 
 // A street grid (columns and rows below), every crossing a shared node so the
 // bake makes junctions there, plus a hairpin from (0, 0) north and back to
