@@ -97,7 +97,24 @@ def track(j):
     return table(["figure", "value", "target"], rows)
 
 
-RENDER = {"route": route, "budget": budget, "memory": memory, "decode": decode, "track": track}
+def scale(j):
+    rows = []
+    for r in j["runs"]:
+        b, f = r["blvd"], r["full"]
+        rows.append([f"{r['copies']:.0f}", f"{r['cells']:,}", num(b["frame_ms_p50"]), num(b["frame_ms_p95"]),
+                     num(b["triangles_p50"], 0), num(f["frame_ms_p50"]), num(f["frame_ms_p95"]),
+                     num(f["triangles_p50"], 0), f"{num(r['speedup_p50'])}×", f"{int(r['rss_peak']):,}",
+                     f"{r['gpu_high_water']:,}"])
+    t = table(["copies", "cells", "blvd ms p50", "p95", "blvd triangles p50", "full ms p50", "p95",
+               "full triangles p50", "speed-up", "peak RSS bytes", "GPU high water bytes"], rows)
+    c = j["checks"]
+    return t + f"\n\nLargest against the first: blvd frame time p50 {j['blvd_ms_p50_change_pct']:+.1f} % " \
+               f"(goal ±5 %: {'met' if c['blvd_ms_within'] else '**not met**'}), full model " \
+               f"{j['full_ms_p50_change_pct']:+.1f} %, peak RSS {j['rss_peak_change_pct']:+.2f} % " \
+               f"(goal ±1 %: {'met' if c['rss_within'] else '**not met**'})."
+
+
+RENDER = {"route": route, "budget": budget, "memory": memory, "decode": decode, "track": track, "scale": scale}
 
 
 def bake(out_dir, name):
@@ -128,8 +145,8 @@ def main():
             sys.exit(f"bench_doc: {doc}: no run of '{name}' in {out_dir}/commands.tsv")
         if name.startswith("bake."):
             body = bake(out_dir, "bake-" + name.split(".", 1)[1])
-        else:
-            body = RENDER[name](json.load(open(os.path.join(out_dir, f"{name}.json"))))
+        else:  # route, route.sf, ...: the renderer of the part before the dot
+            body = RENDER[name.split(".")[0]](json.load(open(os.path.join(out_dir, f"{name}.json"))))
         return f"<!-- bench:{name} -->\n{body}\n\n`{commands[name]}`\n<!-- /bench:{name} -->"
 
     text, n = re.subn(r"<!-- bench:([\w.]+) -->.*?<!-- /bench:\1 -->", replace, text, flags=re.S)

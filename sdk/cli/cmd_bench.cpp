@@ -23,6 +23,7 @@ void addBench(CLI::App& app, Runner& run) {
   r->callback([o, &run] { run = [o] { return runRouteBench(*o); }; });
   addBenchMemory(*bench, run);
   addBenchBudget(*bench, run);
+  addBenchScale(*bench, run);
   addBenchDecode(*bench, run);
 #ifdef BLVD_HAVE_BENCH_TRACK
   addBenchTrack(*bench, run);

@@ -21,6 +21,7 @@
 
 #include "cli/bench_util.h"
 #include "cli/commands.h"
+#include "cli/drive_child.h"
 #include "cli/malloc_probe.h"
 #include "cli/route.h"
 #include "stream/city.h"
@@ -28,13 +29,6 @@
 namespace blvd::cli {
 namespace {
 
-struct MemoryOpts {
-  std::string pkg_1x, pkg_4x, route = "auto:60", size = "800x480", json_path, cells;
-  uint64_t seed = 1;
-  double step = 10;
-  int laps = 3;
-  double max_rss_diff_pct = 2.0;
-};
 
 long statusKiB(const char* key) {
   std::ifstream f("/proc/self/status");
@@ -51,6 +45,29 @@ std::vector<uint32_t> parseCells(const std::string& s) {
   std::string item;
   while (std::getline(ss, item, ',')) out.push_back(static_cast<uint32_t>(std::stoul(item)));
   return out;
+}
+
+// Frame time and triangles of every pose in `mode`, each pose resident first,
+// one untimed frame, then `repeat` timed ones (their median is the pose's).
+nlohmann::json timeFrames(blvd_runtime* rt, const std::vector<Pose>& poses, blvd_render_mode mode, int repeat) {
+  check(blvd_set_render_mode(rt, mode, 0.f), rt, "mode");
+  std::vector<double> ms, tris;
+  for (const Pose& p : poses) {
+    check(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), rt, "pose");
+    check(blvd_wait_resident(rt, 60000), rt, "wait");
+    blvd_frame_stats fs{};
+    fs.struct_size = sizeof fs;
+    check(blvd_render(rt, &fs), rt, "render");
+    std::vector<double> pose_ms;
+    for (int r = 0; r < repeat; ++r) {
+      check(blvd_render(rt, &fs), rt, "render");
+      pose_ms.push_back(fs.frame_ms);
+    }
+    ms.push_back(pct(pose_ms, 50));
+    tris.push_back(double(fs.triangles));
+  }
+  return {{"frame_ms_p50", pct(ms, 50)}, {"frame_ms_p95", pct(ms, 95)}, {"triangles_p50", pct(tris, 50)},
+          {"poses", poses.size()}};
 }
 
 // The child: one package, one route, `laps` laps; lap 1 is the warm-up.
@@ -109,7 +126,11 @@ int runDrive(const MemoryOpts& o) {
   s.struct_size = sizeof s;
   check(blvd_runtime_stats(rt, &s), rt, "stats");
   nlohmann::json j;
-  j["rss_peak"] = statusKiB("VmHWM:") * 1024;
+  j["rss_peak"] = statusKiB("VmHWM:") * 1024;  // before the full model's frames, which hold every block
+  if (o.frame_repeat > 0) {
+    j["blvd"] = timeFrames(rt, poses, desc.mode, o.frame_repeat);
+    j["full"] = timeFrames(rt, poses, BLVD_MODE_FULL, o.frame_repeat);
+  }
   j["rss_anon_end"] = statusKiB("RssAnon:") * 1024;  // heap and GL buffers
   j["rss_file_end"] = statusKiB("RssFile:") * 1024;  // mapped libraries and package pages
   j["allocs_per_frame_max"] = blvd_max;
@@ -125,37 +146,6 @@ int runDrive(const MemoryOpts& o) {
   return 0;
 }
 
-// The same cells, with the same geometry, must exist in the larger package.
-void checkSameRoute(const stream::City& a, const stream::City& b, const std::vector<uint32_t>& route) {
-  for (uint32_t c : route) {
-    if (c >= b.graph().cellCount())
-      throw core::Error(core::Status::InvalidArg, "the larger package has no cell " + std::to_string(c));
-    const auto &ea = a.graph().halfedges[c], &eb = b.graph().halfedges[c];
-    const glm::dvec2 pa = a.graph().points[ea.pts_begin], pb = b.graph().points[eb.pts_begin];
-    if (std::fabs(ea.length - eb.length) > 0.01 || glm::length(pa - pb) > 0.01)
-      throw core::Error(core::Status::InvalidArg,
-                        "cell " + std::to_string(c) + " differs between the packages: the larger one must keep the "
-                        "smaller one's cells first (blvd bake --tile keeps tile 0 as the original)");
-  }
-}
-
-nlohmann::json child(const std::string& exe, const std::string& pkg, const std::string& cells, const MemoryOpts& o) {
-  char step[32];
-  std::snprintf(step, sizeof step, "%g", o.step);
-  const std::string cmd = "'" + exe + "' bench memory-drive '" + pkg + "' --cells " + cells + " --step " + step +
-                          " --size " + o.size + " --laps " + std::to_string(o.laps);
-  FILE* f = ::popen(cmd.c_str(), "r");
-  if (!f) throw core::Error(core::Status::Io, "cannot run " + cmd);
-  std::string out;
-  char buf[4096];
-  while (size_t n = std::fread(buf, 1, sizeof buf, f)) out.append(buf, n);
-  const int rc = ::pclose(f);
-  if (rc != 0) throw core::Error(core::Status::Internal, "child failed (" + std::to_string(rc) + "): " + cmd);
-  const size_t brace = out.rfind('{');
-  if (brace == std::string::npos) throw core::Error(core::Status::Internal, "child printed no JSON: " + out);
-  return nlohmann::json::parse(out.substr(brace));
-}
-
 int runMemory(const MemoryOpts& o) {
   const unsigned n = parseAutoRoute(o.route);
   stream::City a, b;
@@ -166,15 +156,10 @@ int runMemory(const MemoryOpts& o) {
   if (st != core::Status::Ok) throw core::Error(st, err);
   const std::vector<uint32_t> route = graph::seededRoute(a.graph(), {n, o.seed});
   checkSameRoute(a, b, route);
-  std::string cells;
-  for (uint32_t c : route) cells += (cells.empty() ? "" : ",") + std::to_string(c);
-  char exe[4096];
-  const ssize_t len = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
-  if (len <= 0) throw core::Error(core::Status::Io, "cannot find this executable (/proc/self/exe)");
-  exe[len] = 0;
+  const std::string cells = cellList(route), exe = selfExe();
   std::fprintf(stderr, "bench memory: %zu cells, %d laps, on %s then %s\n", route.size(), o.laps, o.pkg_1x.c_str(),
                o.pkg_4x.c_str());
-  const nlohmann::json r1 = child(exe, o.pkg_1x, cells, o), r4 = child(exe, o.pkg_4x, cells, o);
+  const nlohmann::json r1 = driveChild(exe, o.pkg_1x, cells, o), r4 = driveChild(exe, o.pkg_4x, cells, o);
   nlohmann::json j;
   j["route_cells"] = route.size();
   j["route"] = route;
@@ -198,6 +183,56 @@ int runMemory(const MemoryOpts& o) {
 
 }  // namespace
 
+// The same cells, with the same geometry, must exist in the larger package.
+void checkSameRoute(const stream::City& a, const stream::City& b, const std::vector<uint32_t>& route) {
+  for (uint32_t c : route) {
+    if (c >= b.graph().cellCount())
+      throw core::Error(core::Status::InvalidArg, "the larger package has no cell " + std::to_string(c));
+    const auto &ea = a.graph().halfedges[c], &eb = b.graph().halfedges[c];
+    const glm::dvec2 pa = a.graph().points[ea.pts_begin], pb = b.graph().points[eb.pts_begin];
+    if (std::fabs(ea.length - eb.length) > 0.01 || glm::length(pa - pb) > 0.01)
+      throw core::Error(core::Status::InvalidArg,
+                        "cell " + std::to_string(c) + " differs between the packages: the larger one must keep the "
+                        "smaller one's cells first (blvd bake --tile keeps tile 0 as the original)");
+  }
+}
+
+nlohmann::json driveChild(const std::string& exe, const std::string& pkg, const std::string& cells, const MemoryOpts& o) {
+  char step[32];
+  std::snprintf(step, sizeof step, "%g", o.step);
+  const std::string cmd = "'" + exe + "' bench memory-drive '" + pkg + "' --cells " + cells + " --step " + step +
+                          " --size " + o.size + " --laps " + std::to_string(o.laps) +
+                          " --frame-repeat " + std::to_string(o.frame_repeat);
+  FILE* f = ::popen(cmd.c_str(), "r");
+  if (!f) throw core::Error(core::Status::Io, "cannot run " + cmd);
+  std::string out;
+  char buf[4096];
+  while (size_t n = std::fread(buf, 1, sizeof buf, f)) out.append(buf, n);
+  const int rc = ::pclose(f);
+  if (rc != 0) throw core::Error(core::Status::Internal, "child failed (" + std::to_string(rc) + "): " + cmd);
+  // The JSON is the child's last line (its objects nest: not the last '{').
+  const size_t end = out.find_last_not_of("\n");
+  const size_t line = end == std::string::npos ? std::string::npos : out.rfind('\n', end);
+  const std::string last = end == std::string::npos ? "" : out.substr(line == std::string::npos ? 0 : line + 1);
+  if (last.empty() || last[0] != '{') throw core::Error(core::Status::Internal, "child printed no JSON: " + out);
+  return nlohmann::json::parse(last);
+}
+
+std::string selfExe() {
+  char exe[4096];
+  const ssize_t len = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (len <= 0) throw core::Error(core::Status::Io, "cannot find this executable (/proc/self/exe)");
+  exe[len] = 0;
+  return exe;
+}
+
+std::string cellList(const std::vector<uint32_t>& route) {
+  std::string cells;
+  for (uint32_t c : route) cells += (cells.empty() ? "" : ",") + std::to_string(c);
+  return cells;
+}
+
+
 void addBenchMemory(CLI::App& bench, Runner& run) {
   auto o = std::make_shared<MemoryOpts>();
   auto* m = bench.add_subcommand("memory", "peak RSS and render-thread allocations on a package and a 4x one");
@@ -219,6 +254,7 @@ void addBenchMemory(CLI::App& bench, Runner& run) {
   c->add_option("--step", d->step);
   c->add_option("--laps", d->laps);
   c->add_option("--size", d->size);
+  c->add_option("--frame-repeat", d->frame_repeat);
   c->callback([d, &run] { run = [d] { return runDrive(*d); }; });
 }
 

@@ -19,6 +19,8 @@ void addView(CLI::App& app, Runner& run);
 void addBench(CLI::App& app, Runner& run);
 // `blvd bench memory` and its per-package child `bench memory-drive`, under `bench`.
 void addBenchMemory(CLI::App& bench, Runner& run);
+// `blvd bench scale` (cmd_bench_scale.cpp).
+void addBenchScale(CLI::App& bench, Runner& run);
 // `blvd bench budget` (cmd_bench_budget.cpp).
 void addBenchBudget(CLI::App& bench, Runner& run);
 // `blvd bench decode` (cmd_bench_decode.cpp).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `blvd bench memory` and `blvd bench budget` end to end on small inputs: the
+# `blvd bench memory`, `scale` and `budget` end to end on small inputs: the
 # JSON keys scripts rely on are there and hold numbers, and the checks that do
 # not depend on the machine's speed hold: no heap allocation by blvd on the
 # render thread after warm-up (1x and a 2x2-tiled 4x package), the same route
@@ -14,6 +14,23 @@ for t in 1x1 2x2; do
 done
 "$blvd" bench memory "$work/1x1.blvd" "$work/2x2.blvd" --route auto:8 --seed 3 --laps 2 --size 320x192 \
   --json "$work/memory.json" > /dev/null
+# Cost against city size on the same two packages: the blvd frame draws the same cells and
+# impostors whatever the size, so its triangles are the same; the full model's are not fewer.
+"$blvd" bench scale "$work/1x1.blvd" "$work/2x2.blvd" --route auto:8 --seed 3 --repeat 1 --rounds 1 --size 320x192 \
+  --json "$work/scale.json" --html "$work/scale_html" > /dev/null
+python3 - "$work/scale.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+a, b = s["runs"]
+assert a["copies"] == 1 and b["copies"] == 4, (a["copies"], b["copies"])
+assert a["blvd"]["triangles_p50"] == b["blvd"]["triangles_p50"], (a["blvd"], b["blvd"])
+assert b["full"]["triangles_p50"] >= a["full"]["triangles_p50"] > a["blvd"]["triangles_p50"], (a["full"], b["full"])
+for r in (a, b):
+    assert r["allocs_per_frame_max"] == 0 and r["blvd"]["poses"] > 0, r
+    assert r["speedup_p50"] > 0 and r["rss_peak"] > 0, r
+assert set(s["checks"]) == {"blvd_ms_within", "rss_within"}, s["checks"]
+PY
+[ "$(grep -o '<svg' "$work/scale_html/index.html" | wc -l)" -ge 2 ] || { echo "FAIL: bench scale --html lacks its plots"; exit 1; }
 "$blvd" bench budget "$pkg" --route auto:6 --seed 7 --laps 2 --size 320x192 --json "$work/budget.json" \
   --html "$work/budget_html" --csv "$work/budget.csv" > /dev/null
 # Paced like a host at vsync (120 Hz, 216 km/h: 0.5 m a frame); --speed-kmh needs --fps.
