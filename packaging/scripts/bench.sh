@@ -34,7 +34,10 @@ monaco() {
   "$blvd" pack info --json "$out/osrm.blvd" > "$out/bake-route.json"
   run route "$blvd" bench route "$out/osrm.blvd" --route auto:200 --seed 1 --json "$out/route.json"
   run budget "$blvd" bench budget "$out/osrm.blvd" --route auto:120 --seed 1 --json "$out/budget.json"
-  run decode "$blvd" bench decode "$out/osrm.blvd" "$out/osrm-none.blvd" --rounds 3 --json "$out/decode.json"
+  "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-webp.blvd" --impostor both \
+    --impostor-route auto:200 --seed 1 --texture-codec webp
+  run decode "$blvd" bench decode "$out/osrm.blvd" "$out/osrm-webp.blvd" "$out/osrm-none.blvd" --rounds 3 \
+    --json "$out/decode.json"
   "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/m1.blvd" --impostor both --impostor-route auto:40 --seed 7
   "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/m4.blvd" --impostor both --impostor-route auto:40 \
     --seed 7 --tile 2x2

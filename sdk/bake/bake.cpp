@@ -172,6 +172,8 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
         {"threshold_px", opt.impostor.threshold_px},
         {"texture_max", opt.impostor.texture_max},
         {"grid_px", opt.impostor.grid_px},
+        {"texture_codec", opt.impostor.texture_codec == TextureCodec::Webp ? "webp" : "jpeg"},
+        {"texture_quality", opt.impostor.texture_quality},
         {"display", {opt.impostor.display_width, opt.impostor.display_height, opt.impostor.display_fov_y_deg}}}},
       {"counts",
        {{"streets", sum.streets}, {"buildings", sum.buildings}, {"height_tagged", city.height_tagged},

@@ -267,8 +267,10 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
     ++rec.shot;
   }
   if (mesh.indices.empty()) return false;
-  mesh.image = encodeTextureJpeg(atlas, opt.jpeg_quality);
-  mesh.image_mime = "image/jpeg";
+  const bool webp = opt.texture_codec == TextureCodec::Webp;
+  mesh.image = webp ? encodeTextureWebp(atlas, opt.texture_quality) : encodeTextureJpeg(atlas, opt.texture_quality);
+  if (mesh.image.empty()) throw core::Error(core::Status::Internal, "impostor texture: the image encoder failed");
+  mesh.image_mime = webp ? "image/webp" : "image/jpeg";
   package::GlbOptions glb_opt;
   glb_opt.normal_bits = 0;
   package::GlbMeshCounts counts;

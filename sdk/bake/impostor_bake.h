@@ -21,6 +21,8 @@ namespace blvd::bake {
 
 enum class ImpostorMode { None, Single, Layered, Both };
 
+enum class TextureCodec : uint8_t { Jpeg, Webp };
+
 struct ImpostorOptions {
   ImpostorMode mode = ImpostorMode::Layered;
   int texture_max = 512;          // largest texture side, pixels
@@ -40,7 +42,10 @@ struct ImpostorOptions {
   int max_runs = 4;
   double landmark_height_m = 60.0;  // blocks with a building at least this tall ...
   double landmark_scale = 2.0;      // ... get their D99 weights scaled by this
-  int jpeg_quality = 75;
+  // How the atlases are stored: JPEG, or lossy WebP (EXT_texture_webp), at
+  // this quality (0..100; decision 0010 chose 75 for JPEG).
+  TextureCodec texture_codec = TextureCodec::Jpeg;
+  int texture_quality = 75;
   std::vector<uint32_t> only_cells; // bake impostors only for these cells (empty: all)
 };
 

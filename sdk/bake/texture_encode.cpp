@@ -1,6 +1,7 @@
 #include "bake/texture_encode.h"
 
 #include <stb_image_write.h>
+#include <webp/encode.h>
 
 namespace blvd::bake {
 
@@ -59,6 +60,19 @@ std::vector<uint8_t> encodeTextureJpeg(const CaptureImage& img, int quality) {
         v->insert(v->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
       },
       &out, img.width, img.height, 4, rgba.data(), quality);
+  return out;
+}
+
+std::vector<uint8_t> encodeTextureWebp(const CaptureImage& img, int quality) {
+  const std::vector<uint8_t> rgba = padTexture(img);
+  // RGB: the alpha is all opaque after padding, and WebP stores no alpha plane then.
+  std::vector<uint8_t> rgb(size_t(img.width) * size_t(img.height) * 3);
+  for (size_t i = 0, n = size_t(img.width) * size_t(img.height); i < n; ++i)
+    for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = rgba[i * 4 + c];
+  uint8_t* data = nullptr;
+  const size_t size = WebPEncodeRGB(rgb.data(), img.width, img.height, img.width * 3, float(quality), &data);
+  std::vector<uint8_t> out(data, data + size);
+  WebPFree(data);
   return out;
 }
 

@@ -35,7 +35,7 @@ void addBake(CLI::App& app, Runner& run) {
     bake::BakeOptions bake;
     bool no_draco = false;
     std::string block_codec = "meshopt";
-    std::string impostor = "layered", only_route, lod = "chain", lod_ratios = "0.5,0.25,0.1", tile = "1x1";
+    std::string impostor = "layered", texture_codec = "jpeg", only_route, lod = "chain", lod_ratios = "0.5,0.25,0.1", tile = "1x1";
     uint64_t seed = 1;
   };
   auto o = std::make_shared<Opts>();
@@ -72,7 +72,9 @@ void addBake(CLI::App& app, Runner& run) {
       ->capture_default_str()->check(CLI::IsMember({"layered", "single", "both", "none"}));
   cmd->add_option("--texture", o->bake.impostor.texture_max, "largest impostor texture side, pixels")
       ->capture_default_str()->check(CLI::Range(32, 4096));
-  cmd->add_option("--jpeg-quality", o->bake.impostor.jpeg_quality, "impostor texture JPEG quality")
+  cmd->add_option("--texture-codec", o->texture_codec, "impostor textures: jpeg, or webp (EXT_texture_webp)")
+      ->capture_default_str()->check(CLI::IsMember({"jpeg", "webp"}));
+  cmd->add_option("--texture-quality,--jpeg-quality", o->bake.impostor.texture_quality, "impostor texture quality")
       ->capture_default_str()->check(CLI::Range(10, 100));
   cmd->add_option("--cell-texels", o->bake.impostor.cell_texels,
                   "texel budget of one cell's impostor captures together (docs/decisions/0010)")
@@ -120,6 +122,7 @@ void addBake(CLI::App& app, Runner& run) {
                               : m == "single" ? bake::ImpostorMode::Single
                               : m == "both"   ? bake::ImpostorMode::Both
                                               : bake::ImpostorMode::Layered;
+      o->bake.impostor.texture_codec = o->texture_codec == "webp" ? bake::TextureCodec::Webp : bake::TextureCodec::Jpeg;
       if (!o->only_route.empty()) {
         unsigned n = 0;
         if (std::sscanf(o->only_route.c_str(), "auto:%u", &n) != 1 || n == 0)

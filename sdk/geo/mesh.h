@@ -18,7 +18,7 @@ struct MeshData {
   std::vector<uint32_t> indices; // triangles, counter-clockwise seen from outside
   // An embedded texture (PNG or JPEG bytes) sampled with texcoords, or empty.
   std::vector<uint8_t> image;
-  std::string image_mime;        // "image/png" or "image/jpeg"
+  std::string image_mime;        // "image/png", "image/jpeg" or "image/webp"
 
   size_t vertexCount() const { return positions.size() / 3; }
   size_t triangleCount() const { return indices.size() / 3; }

@@ -798,18 +798,27 @@ class Decoder {
                             "materials[0].pbrMetallicRoughness.baseColorTexture", count("textures"), "textures");
     const json& tex = element("textures", ti);
     const std::string tw = "textures[" + std::to_string(ti) + "]";
-    if (!tex.contains("source")) return;
-    const size_t ii = index(tex, "source", tw, count("images"), "images");
+    // The image: EXT_texture_webp's source when there is one, else the texture's.
+    const json* src = &tex;
+    std::string sw = tw;
+    if (const auto ext = tex.find("extensions"); ext != tex.end() && ext->is_object() && ext->contains("EXT_texture_webp")) {
+      src = &object(ext->at("EXT_texture_webp"), tw + ".extensions.EXT_texture_webp");
+      sw = tw + ".extensions.EXT_texture_webp";
+    }
+    if (!src->contains("source")) return;
+    const size_t ii = index(*src, "source", sw, count("images"), "images");
     const json& img = element("images", ii);
     const std::string iw = "images[" + std::to_string(ii) + "]";
     if (!img.contains("bufferView")) return;  // uri images: dropped like other unusable ones below
     const View v = bufferView(index(img, "bufferView", iw, count("bufferViews"), "bufferViews"));
-    // The bytes decide the type, not mimeType (it can lie); anything but PNG
-    // or JPEG is dropped, keeping the geometry usable.
+    // The bytes decide the type, not mimeType (it can lie); anything but PNG,
+    // JPEG or WebP ("RIFF", size, "WEBP") is dropped, keeping the geometry usable.
     static const uint8_t kPng[4] = {0x89, 'P', 'N', 'G'}, kJpeg[3] = {0xFF, 0xD8, 0xFF};
     const uint8_t* d = v.bytes.data;
     if (v.bytes.size >= 4 && std::memcmp(d, kPng, 4) == 0) out.image_mime = "image/png";
     else if (v.bytes.size >= 3 && std::memcmp(d, kJpeg, 3) == 0) out.image_mime = "image/jpeg";
+    else if (v.bytes.size >= 12 && std::memcmp(d, "RIFF", 4) == 0 && std::memcmp(d + 8, "WEBP", 4) == 0)
+      out.image_mime = "image/webp";
     else return;
     out.image.assign(d, d + v.bytes.size);
   }

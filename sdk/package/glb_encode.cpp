@@ -63,8 +63,8 @@ void validateMesh(const geo::MeshData& m, const GlbOptions& opt, const std::stri
   for (size_t i = 0; i < m.texcoords.size(); ++i)
     if (!std::isfinite(m.texcoords[i])) bad("texcoord component " + std::to_string(i) + " is not finite");
   if (!m.image.empty() && m.texcoords.empty()) bad("an image without texcoords");
-  if (!m.image.empty() && m.image_mime != "image/png" && m.image_mime != "image/jpeg")
-    bad("image_mime must be image/png or image/jpeg, is '" + m.image_mime + "'");
+  if (!m.image.empty() && m.image_mime != "image/png" && m.image_mime != "image/jpeg" && m.image_mime != "image/webp")
+    bad("image_mime must be image/png, image/jpeg or image/webp, is '" + m.image_mime + "'");
   if (m.indices.size() % 3) bad("indices.size() is not a multiple of 3");
   for (size_t i = 0; i < m.indices.size(); ++i)
     if (m.indices[i] >= n)
@@ -197,7 +197,12 @@ void addImage(const geo::MeshData& mesh, json& doc, Parts& parts) {
   doc["images"] = json::array({{{"bufferView", view}, {"mimeType", mesh.image_mime}}});
   // 9729 LINEAR, 9987 LINEAR_MIPMAP_LINEAR, 33071 CLAMP_TO_EDGE.
   doc["samplers"] = json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 33071}, {"wrapT", 33071}}});
-  doc["textures"] = json::array({{{"source", 0}, {"sampler", 0}}});
+  // A WebP image is the texture's source through EXT_texture_webp (required:
+  // there is no PNG/JPEG fallback), as that extension's specification says.
+  if (mesh.image_mime == "image/webp")
+    doc["textures"] = json::array({{{"sampler", 0}, {"extensions", {{"EXT_texture_webp", {{"source", 0}}}}}}});
+  else
+    doc["textures"] = json::array({{{"source", 0}, {"sampler", 0}}});
   json& mat = doc["materials"][0];
   mat["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
   mat["extensions"] = {{"KHR_materials_unlit", json::object()}};
@@ -538,6 +543,7 @@ std::vector<uint8_t> encodeGlbLevels(const std::vector<geo::MeshData>& levels, c
   if (opt.codec == GlbCodec::Draco) required.push_back("KHR_draco_mesh_compression");
   if (opt.codec == GlbCodec::Meshopt) required.push_back("EXT_meshopt_compression");
   if (parts.quantized) required.push_back("KHR_mesh_quantization");
+  if (levels[0].image_mime == "image/webp" && !levels[0].image.empty()) required.push_back("EXT_texture_webp");
   used = required;
   if (levels.size() > 1) used.push_back("MSFT_lod");
   if (!levels[0].image.empty()) used.push_back("KHR_materials_unlit");

@@ -7,6 +7,7 @@
 
 #include <glm/glm.hpp>
 #include <stb_image.h>
+#include <webp/decode.h>
 
 namespace blvd::render {
 namespace {
@@ -82,6 +83,35 @@ void downsample(const uint8_t* src, int sw, int sh, uint8_t* dst, int dw, int dh
         dst[(size_t(y) * dw + x) * 4 + c] = static_cast<uint8_t>((sum + 2) / 4);
       }
     }
+}
+
+bool isWebp(const std::vector<uint8_t>& b) {
+  return b.size() >= 12 && std::memcmp(b.data(), "RIFF", 4) == 0 && std::memcmp(b.data() + 8, "WEBP", 4) == 0;
+}
+
+// The mesh's image as RGBA8, the top of a mip chain taken from the arena:
+// WebP decodes straight into it (libwebp), PNG and JPEG through stb_image.
+// Null with `err` set when the image cannot be decoded or does not fit.
+void* decodeImage(const geo::MeshData& mesh, StagingArena& arena, int& w, int& h, int& levels, std::string& err) {
+  const uint8_t* d = mesh.image.data();
+  const size_t n = mesh.image.size();
+  if (n > 0x7fffffff) return failWith(err, "mesh image cannot be decoded"), nullptr;
+  if (isWebp(mesh.image)) {
+    if (!WebPGetInfo(d, n, &w, &h) || w <= 0 || h <= 0) return failWith(err, "mesh image cannot be decoded"), nullptr;
+    void* rgba = arena.take(mipChainBytes(w, h, &levels));
+    if (!rgba) return failWith(err, "staging arena too small for the mesh's texture"), nullptr;
+    if (!WebPDecodeRGBAInto(d, n, static_cast<uint8_t*>(rgba), size_t(w) * size_t(h) * 4, w * 4))
+      return failWith(err, "mesh image cannot be decoded"), nullptr;
+    return rgba;
+  }
+  int channels = 0;
+  stbi_uc* texels = stbi_load_from_memory(d, static_cast<int>(n), &w, &h, &channels, 4);
+  if (!texels) return failWith(err, "mesh image cannot be decoded"), nullptr;
+  void* rgba = arena.take(mipChainBytes(w, h, &levels));
+  if (rgba) std::memcpy(rgba, texels, size_t(w) * size_t(h) * 4);
+  stbi_image_free(texels);
+  if (!rgba) return failWith(err, "staging arena too small for the mesh's texture"), nullptr;
+  return rgba;
 }
 }  // namespace
 
@@ -162,16 +192,9 @@ bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& o
   }
 
   if (!mesh.image.empty() && !mesh.texcoords.empty()) {
-    int tw = 0, th = 0, tc = 0;
-    stbi_uc* texels = nullptr;
-    if (mesh.image.size() > 0x7fffffff ||
-        !(texels = stbi_load_from_memory(mesh.image.data(), static_cast<int>(mesh.image.size()), &tw, &th, &tc, 4)))
-      return failWith(err, "mesh image cannot be decoded");
-    int levels = 0;
-    void* rgba = arena.take(mipChainBytes(tw, th, &levels));
-    if (rgba) std::memcpy(rgba, texels, size_t(tw) * size_t(th) * 4);
-    stbi_image_free(texels);
-    if (!rgba) return failWith(err, "staging arena too small for the mesh's texture");
+    int tw = 0, th = 0, levels = 0;
+    void* rgba = decodeImage(mesh, arena, tw, th, levels, err);
+    if (!rgba) return false;
     auto* level = static_cast<uint8_t*>(rgba);
     for (int l = 1, w = tw, h = th; l < levels; ++l) {
       const int dw = std::max(1, w / 2), dh = std::max(1, h / 2);

@@ -38,6 +38,35 @@ assert j["meta"]["lod"]["mode"] == "none", j["meta"]["lod"]
 print("bake options: ok")
 PY
 
+# --texture-codec webp: impostor atlases as lossy WebP (EXT_texture_webp), recorded in the meta,
+# smaller than JPEG at the same quality, and drawn by the runtime with the far city no worse
+# than 2 points of far_bad p50 from JPEG's along the same route.
+for c in jpeg webp; do
+  "$blvd" bake --quiet "$osm" -o "$work/tex-$c.blvd" --impostor layered --impostor-route auto:4 --seed 5 \
+    --texture-codec $c > "$work/tex-$c.txt"
+  "$blvd" pack verify "$work/tex-$c.blvd" > /dev/null
+  "$blvd" pack info "$work/tex-$c.blvd" --json > "$work/tex-$c.json"
+  "$blvd" bench route "$work/tex-$c.blvd" --route auto:4 --seed 5 --size 400x240 --json "$work/route-$c.json" > /dev/null 2>&1
+done
+python3 - "$work" <<'PY'
+import json, re, sys, os
+w = sys.argv[1]
+info = {c: json.load(open(os.path.join(w, f"tex-{c}.json"))) for c in ("jpeg", "webp")}
+route = {c: json.load(open(os.path.join(w, f"route-{c}.json"))) for c in ("jpeg", "webp")}
+bytes_ = {}
+for c in ("jpeg", "webp"):
+    assert info[c]["meta"]["impostors"]["texture_codec"] == c, info[c]["meta"]["impostors"]
+    m = re.search(r"impostors \d+ meshes on \d+ cells, \d+ triangles, (\d+) bytes", open(os.path.join(w, f"tex-{c}.txt")).read())
+    bytes_[c] = int(m.group(1))
+assert 0 < bytes_["webp"] < bytes_["jpeg"], bytes_
+fj, fw = (route[c]["modes"]["blvd"]["far_bad_p50"] for c in ("jpeg", "webp"))
+assert (fj is None) == (fw is None), (fj, fw)  # the same poses are scored
+assert route["webp"]["far_scored_poses"] == route["jpeg"]["far_scored_poses"] > 0, route["webp"]["far_scored_poses"]
+if fj is not None:
+    assert fw <= fj + 0.02, (fj, fw)
+print("texture codecs: impostor bytes jpeg %d, webp %d; far_bad p50 %s, %s" % (bytes_["jpeg"], bytes_["webp"], fj, fw))
+PY
+
 # --block-codec and --draco-level: recorded in the package's meta. Draco level 0
 # (fastest Draco decode) is bigger than the default 3; meshopt (the default) is
 # bigger than Draco and plain bigger still. The four decode to the same meshes

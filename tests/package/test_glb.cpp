@@ -200,6 +200,30 @@ TEST(Glb, TexcoordsAndImage) {
   EXPECT_NE(err.find("TEXCOORD_0 element 0 is not finite"), std::string::npos) << err;
 }
 
+// A WebP image is the texture's source through EXT_texture_webp, required (no
+// fallback image), and comes back as image/webp from its RIFF/WEBP bytes.
+TEST(Glb, WebpImageThroughExtTextureWebp) {
+  MeshData src = box();
+  for (size_t v = 0; v < src.vertexCount(); ++v) src.texcoords.insert(src.texcoords.end(), {0.5f, 0.5f});
+  src.image = {'R', 'I', 'F', 'F', 20, 0, 0, 0, 'W', 'E', 'B', 'P', 'V', 'P', '8', ' ', 1, 2, 3, 4};
+  src.image_mime = "image/webp";
+  for (GlbCodec codec : {GlbCodec::Plain, GlbCodec::Draco, GlbCodec::Meshopt}) {
+    GlbOptions opt;
+    opt.codec = codec;
+    const auto glb = encodeGlb(src, opt);
+    const auto doc = glbJson(glb);
+    EXPECT_EQ(doc["textures"][0]["extensions"]["EXT_texture_webp"]["source"], 0);
+    EXPECT_FALSE(doc["textures"][0].contains("source"));
+    const auto& req = doc["extensionsRequired"];
+    EXPECT_NE(std::find(req.begin(), req.end(), "EXT_texture_webp"), req.end()) << req.dump();
+    MeshData out;
+    std::string err;
+    ASSERT_EQ(decodeGlb(glb.data(), glb.size(), out, err), Status::Ok) << err;
+    EXPECT_EQ(out.image, src.image);
+    EXPECT_EQ(out.image_mime, "image/webp");
+  }
+}
+
 TEST(Glb, InvalidMeshIsRefused) {
   MeshData m = box();
   m.indices.back() = 24;

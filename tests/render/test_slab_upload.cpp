@@ -5,6 +5,7 @@
 // another slab (a block two cells share) draws what the original draws.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <memory>
@@ -16,6 +17,7 @@
 #include "render/renderer.h"
 #include "scene.h"
 #include <stb/stb_image_write.h>
+#include <webp/encode.h>
 
 namespace blvd::render {
 namespace {
@@ -32,6 +34,35 @@ std::vector<uint8_t> png(const std::vector<uint8_t>& rgba, int w, int h) {
       },
       &out, w, h, 4, rgba.data(), w * 4);
   return out;
+}
+
+// A WebP texture (lossless here, so every texel is known) decodes straight
+// into the staging arena, as the top of its mip chain.
+TEST(MipChain, WebpTexturesDecodeIntoTheArena) {
+  geo::MeshData m = test::makeFlat(0, 0, 1, 1, 0, std::array<uint8_t, 4>{255, 255, 255, 255}.data());
+  m.texcoords = {0, 0, 1, 0, 1, 1, 0, 1};
+  std::vector<uint8_t> texels(6 * 4 * 4, 255);
+  for (int i = 0; i < 24; ++i) texels[size_t(i) * 4] = uint8_t(i * 10), texels[size_t(i) * 4 + 1] = uint8_t(255 - i);
+  uint8_t* webp = nullptr;
+  const size_t n = WebPEncodeLosslessRGBA(texels.data(), 6, 4, 6 * 4, &webp);
+  ASSERT_GT(n, 0u);
+  m.image.assign(webp, webp + n);
+  WebPFree(webp);
+  m.image_mime = "image/webp";
+  std::vector<uint8_t> block(preparedBytes(4, 6, 6, 4));
+  StagingArena arena{block.data(), block.size(), 0};
+  PreparedMesh p;
+  std::string err;
+  ASSERT_TRUE(prepareMesh(m, arena, p, err)) << err;
+  EXPECT_EQ(p.texture_width, 6);
+  EXPECT_EQ(p.texture_height, 4);
+  EXPECT_EQ(p.mip_levels, 3);
+  EXPECT_TRUE(std::equal(texels.begin(), texels.end(), p.rgba));
+  // Bytes that only look like WebP are refused, not drawn.
+  m.image.resize(20);
+  arena.used = 0;
+  EXPECT_FALSE(prepareMesh(m, arena, p, err));
+  EXPECT_EQ(err, "mesh image cannot be decoded");
 }
 
 TEST(MipChain, BoxFiltersEachLevelFromTheOneAbove) {
