@@ -121,9 +121,15 @@ def bake(out_dir, name):
     info = json.load(open(os.path.join(out_dir, f"{name}.json")))
     secs = open(os.path.join(out_dir, f"{name}.time")).read().strip()
     c = info["counts"]
-    return table(["package", "bake", "bytes", "blocks", "cells", "buildings", "triangles (level 0)"],
+    # The bake's own summary (stdout) says what a cell with impostors cost.
+    summary = open(os.path.join(out_dir, f"{name}.txt")).read()
+    m = re.search(r"per impostor cell ([\d.]+) s \(item buffers ([\d.]+) ms a sample\), ([\d.]+) ms an impostor mesh",
+                  summary)
+    per_cell = f"{m.group(1)} s ({m.group(2)} ms a sample, {m.group(3)} ms a mesh)" if m else "–"
+    return table(["package", "bake", "bytes", "blocks", "cells", "buildings", "triangles (level 0)",
+                  "a cell with impostors"],
                  [[os.path.basename(info["file"]), secs, f"{info['bytes']:,}", c["blocks"], c["cells"],
-                   f"{c['buildings']:,}", f"{c['triangles']:,}"]])
+                   f"{c['buildings']:,}", f"{c['triangles']:,}", per_cell]])
 
 
 def command_text(cmd):

@@ -26,11 +26,11 @@ run() {
 
 monaco() {
   run bake.none /usr/bin/time -f "%e s" -o "$out/bake-none.time" \
-    "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-none.blvd" --impostor none
+    "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-none.blvd" --impostor none > "$out/bake-none.txt"
   "$blvd" pack info --json "$out/osrm-none.blvd" > "$out/bake-none.json"
   run bake.route /usr/bin/time -f "%e s" -o "$out/bake-route.time" \
     "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm.blvd" \
-    --impostor both --impostor-route auto:200 --seed 1
+    --impostor both --impostor-route auto:200 --seed 1 > "$out/bake-route.txt"
   "$blvd" pack info --json "$out/osrm.blvd" > "$out/bake-route.json"
   run route "$blvd" bench route "$out/osrm.blvd" --route auto:200 --seed 1 --json "$out/route.json"
   run budget "$blvd" bench budget "$out/osrm.blvd" --route auto:120 --seed 1 --json "$out/budget.json"
@@ -52,7 +52,7 @@ monaco() {
 sf() {
   run bake.sf /usr/bin/time -f "%e s" -o "$out/bake-sf.time" \
     "$blvd" bake --quiet "$osm/sf-downtown-2023.osm.pbf" -o "$out/sf.blvd" \
-    --impostor both --impostor-route auto:100 --seed 1
+    --impostor both --impostor-route auto:100 --seed 1 > "$out/bake-sf.txt"
   "$blvd" pack info --json "$out/sf.blvd" > "$out/bake-sf.json"
   run route.sf "$blvd" bench route "$out/sf.blvd" --route auto:100 --seed 1 --json "$out/route.sf.json"
   run budget.sf "$blvd" bench budget "$out/sf.blvd" --route auto:100 --seed 1 --json "$out/budget.sf.json"

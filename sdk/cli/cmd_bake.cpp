@@ -26,6 +26,36 @@ std::vector<double> parseRatios(const std::string& text) {
   }
   return r;
 }
+
+// The bake's summary on stdout; with impostors, what a cell and a layer cost.
+void printSummary(const bake::BakeSummary& s, const std::string& in, const std::string& out, double default_height_m) {
+  std::printf(
+      "baked %s -> %s in %.2f s\n"
+      "  streets %zu, junctions %zu, graph vertices %zu, cells %zu, blocks %zu\n"
+      "  buildings %zu (%zu at the default height %.1f m, %zu skipped, %zu unassembled polygons)\n"
+      "  triangles %llu; LOD levels 0-3: %llu/%llu/%llu/%llu blocks, %llu/%llu/%llu/%llu triangles, "
+      "%llu sloppy, max error %.2f m, simplification %.1f s\n"
+      "  impostors %zu meshes on %zu cells, %llu triangles, %llu bytes; %zu item-buffer samples in %.1f s, "
+      "impostors in %.1f s\n"
+      "  package %llu bytes, source %llu bytes, package/source = %.2f\n",
+      in.c_str(), out.c_str(), s.seconds, s.streets, s.junctions, s.vertices, s.cells, s.blocks,
+      s.buildings, s.defaulted_heights, default_height_m, s.skipped_buildings, s.bad_polygons,
+      static_cast<unsigned long long>(s.triangles), static_cast<unsigned long long>(s.lod.blocks[0]),
+      static_cast<unsigned long long>(s.lod.blocks[1]), static_cast<unsigned long long>(s.lod.blocks[2]),
+      static_cast<unsigned long long>(s.lod.blocks[3]), static_cast<unsigned long long>(s.lod.triangles[0]),
+      static_cast<unsigned long long>(s.lod.triangles[1]), static_cast<unsigned long long>(s.lod.triangles[2]),
+      static_cast<unsigned long long>(s.lod.triangles[3]), static_cast<unsigned long long>(s.lod.sloppy_levels),
+      s.lod.max_error_m, s.lod.seconds, s.impostors, s.impostor_cells,
+      static_cast<unsigned long long>(s.impostor_triangles), static_cast<unsigned long long>(s.impostor_bytes),
+      s.item_samples, s.pvs_seconds, s.impostor_seconds, static_cast<unsigned long long>(s.package_bytes),
+      static_cast<unsigned long long>(s.source_bytes),
+      s.source_bytes ? double(s.package_bytes) / double(s.source_bytes) : 0.0);
+  if (s.impostor_cells > 0 && s.impostors > 0 && s.item_samples > 0)
+    std::printf("  per impostor cell %.2f s (item buffers %.1f ms a sample), %.1f ms an impostor mesh\n",
+                (s.pvs_seconds + s.impostor_seconds) / double(s.impostor_cells),
+                1000.0 * s.pvs_seconds / double(s.item_samples), 1000.0 * s.impostor_seconds / double(s.impostors));
+}
+
 }  // namespace
 
 void addBake(CLI::App& app, Runner& run) {
@@ -134,28 +164,7 @@ void addBake(CLI::App& app, Runner& run) {
                                    const bake::LodStats& lod) {
           writeBakeReport(o->report_dir, o->in, g, r, lod);
         };
-      const bake::BakeSummary s = bake::bakeCity(o->in, o->out, o->bake);
-      std::printf(
-          "baked %s -> %s in %.2f s\n"
-          "  streets %zu, junctions %zu, graph vertices %zu, cells %zu, blocks %zu\n"
-          "  buildings %zu (%zu at the default height %.1f m, %zu skipped, %zu unassembled polygons)\n"
-          "  triangles %llu; LOD levels 0-3: %llu/%llu/%llu/%llu blocks, %llu/%llu/%llu/%llu triangles, "
-          "%llu sloppy, max error %.2f m, simplification %.1f s\n"
-          "  impostors %zu meshes on %zu cells, %llu triangles, %llu bytes; %zu item-buffer samples in %.1f s, "
-          "impostors in %.1f s\n"
-          "  package %llu bytes, source %llu bytes, package/source = %.2f\n",
-          o->in.c_str(), o->out.c_str(), s.seconds, s.streets, s.junctions, s.vertices, s.cells, s.blocks,
-          s.buildings, s.defaulted_heights, o->bake.osm.default_height_m, s.skipped_buildings, s.bad_polygons,
-          static_cast<unsigned long long>(s.triangles), static_cast<unsigned long long>(s.lod.blocks[0]),
-          static_cast<unsigned long long>(s.lod.blocks[1]), static_cast<unsigned long long>(s.lod.blocks[2]),
-          static_cast<unsigned long long>(s.lod.blocks[3]), static_cast<unsigned long long>(s.lod.triangles[0]),
-          static_cast<unsigned long long>(s.lod.triangles[1]), static_cast<unsigned long long>(s.lod.triangles[2]),
-          static_cast<unsigned long long>(s.lod.triangles[3]), static_cast<unsigned long long>(s.lod.sloppy_levels),
-          s.lod.max_error_m, s.lod.seconds, s.impostors, s.impostor_cells,
-          static_cast<unsigned long long>(s.impostor_triangles), static_cast<unsigned long long>(s.impostor_bytes),
-          s.item_samples, s.pvs_seconds, s.impostor_seconds, static_cast<unsigned long long>(s.package_bytes),
-          static_cast<unsigned long long>(s.source_bytes),
-          s.source_bytes ? double(s.package_bytes) / double(s.source_bytes) : 0.0);
+      printSummary(bake::bakeCity(o->in, o->out, o->bake), o->in, o->out, o->bake.osm.default_height_m);
       return 0;
     };
   });
