@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Every benchmark of docs/benchmarks.md on the bundled data, one after
 # another, then the tables rewritten from their JSON (tools/bench_doc.py).
-# Needs a built tree (either README command). Takes about 20 minutes on
-# 2 cores. Usage: packaging/scripts/bench.sh [OUT_DIR [monaco|sf|all]]
+# Needs a built tree (either README command).
+# Usage: packaging/scripts/bench.sh [OUT_DIR [monaco|sf|all]]
 # (default out/bench all); a partial run keeps the other cities' results.
 set -euo pipefail
 cd "$(dirname "$0")/../.."

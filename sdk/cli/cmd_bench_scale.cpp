@@ -100,11 +100,13 @@ int runScale(const ScaleOpts& o) {
     checkSameRoute(first, c, route);
     cell_counts.push_back(c.graph().cellCount());
   }
-  // The packages take turns, round after round, so that the shared machine's
-  // drifting speed reaches them alike.
+  // The packages take turns, round after round, in alternating order (first
+  // to last, then last to first), so that the shared machine's drifting speed
+  // and what one process leaves warm for the next reach them alike.
   std::vector<std::vector<nlohmann::json>> rounds(o.packages.size());
   for (int k = 0; k < o.rounds; ++k)
-    for (size_t i = 0; i < o.packages.size(); ++i) {
+    for (size_t j = 0; j < o.packages.size(); ++j) {
+      const size_t i = k % 2 == 0 ? j : o.packages.size() - 1 - j;
       std::fprintf(stderr, "bench scale: round %d, %s (%zu cells) ...\n", k + 1, o.packages[i].c_str(), cell_counts[i]);
       rounds[i].push_back(driveChild(exe, o.packages[i], cells, o.drive));
     }
