@@ -16,19 +16,13 @@ blvd_status CanFeed::open(const std::string& dbc_path, blvd_vehicle vehicle, std
     err = blvd_last_error(nullptr);
     return st;
   }
-  ids_ = messageIds();
-  std::sort(ids_.begin(), ids_.end());
-  return BLVD_OK;
-}
-
-std::vector<std::pair<uint32_t, bool>> CanFeed::messageIds() const {
   uint32_t n = 0;
-  if (blvd_can_profile_message_ids(profile_, nullptr, 0, &n) != BLVD_OK) return {};
+  blvd_can_profile_message_ids(profile_, nullptr, 0, &n);
   std::vector<blvd_can_message_id> ids(n);
   blvd_can_profile_message_ids(profile_, ids.data(), n, &n);
-  std::vector<std::pair<uint32_t, bool>> out;
-  for (const blvd_can_message_id& m : ids) out.emplace_back(m.id, (m.flags & BLVD_CAN_EXTENDED) != 0);
-  return out;
+  for (const blvd_can_message_id& m : ids) ids_.emplace_back(m.id, (m.flags & BLVD_CAN_EXTENDED) != 0);
+  std::sort(ids_.begin(), ids_.end());  // (id, extended), for binary_search in feed()
+  return BLVD_OK;
 }
 
 bool CanFeed::feed(const blvd::can::Frame& f, Tracking& tracking, blvd_odometry& odo) {

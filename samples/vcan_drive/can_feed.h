@@ -41,12 +41,12 @@ class CanFeed {
   bool feed(const blvd::can::Frame& f, Tracking& tracking, blvd_odometry& odo);
 
   // (id, extended) of the messages the profile reads: the socket's filters.
-  std::vector<std::pair<uint32_t, bool>> messageIds() const;
+  const std::vector<std::pair<uint32_t, bool>>& messageIds() const { return ids_; }
   const CanFeedStats& stats() const { return stats_; }
 
  private:
   blvd_can_profile* profile_ = nullptr;
-  std::vector<std::pair<uint32_t, bool>> ids_;  // messageIds(), sorted
+  std::vector<std::pair<uint32_t, bool>> ids_;  // what the profile reads, sorted
   CanFeedStats stats_;
 };
 

@@ -190,8 +190,9 @@ class GraphBuilder {
     return idx;
   }
 
-  // The twin pair of one chain: the street's attributes, the polyline both ways, the length.
-  void addEdgePair(const std::vector<Arr::Halfedge_const_handle>& chain) {
+  // The twin pair of one chain: the street's attributes, the polyline both ways,
+  // the length. Returns the forward half-edge; its twin follows it.
+  uint32_t addEdgePair(const std::vector<Arr::Halfedge_const_handle>& chain) {
     const uint32_t h = static_cast<uint32_t>(g_.halfedges.size()), t = h + 1;
     graph::HalfEdge fwd, bwd;
     fwd.origin = vertex_index_.at(&*chain.front()->source());
@@ -222,6 +223,7 @@ class GraphBuilder {
     fwd.length = bwd.length = static_cast<float>(len);
     g_.halfedges.push_back(fwd);
     g_.halfedges.push_back(bwd);
+    return h;
   }
 
   // Follows arrangement half-edges from he0 to the next graph vertex, adds the
@@ -233,8 +235,7 @@ class GraphBuilder {
       chain.push_back(chain.back()->next());
       if (chain.size() > arr_.number_of_halfedges()) throw core::Error(core::Status::Internal, "street chain does not end");
     }
-    const uint32_t h = static_cast<uint32_t>(g_.halfedges.size()), t = h + 1;
-    addEdgePair(chain);
+    const uint32_t h = addEdgePair(chain), t = h + 1;
     first_of_[&*chain.front()] = h;
     first_of_[&*chain.back()->twin()] = t;
     for (const auto& he : chain) {

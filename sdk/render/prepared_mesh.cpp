@@ -85,18 +85,15 @@ void downsample(const uint8_t* src, int sw, int sh, uint8_t* dst, int dw, int dh
     }
 }
 
-bool isWebp(const std::vector<uint8_t>& b) {
-  return b.size() >= 12 && std::memcmp(b.data(), "RIFF", 4) == 0 && std::memcmp(b.data() + 8, "WEBP", 4) == 0;
-}
-
 // The mesh's image as RGBA8, the top of a mip chain taken from the arena:
 // WebP decodes straight into it (libwebp), PNG and JPEG through stb_image.
+// The type is the one the GLB decoder read from the image's bytes.
 // Null with `err` set when the image cannot be decoded or does not fit.
 void* decodeImage(const geo::MeshData& mesh, StagingArena& arena, int& w, int& h, int& levels, std::string& err) {
   const uint8_t* d = mesh.image.data();
   const size_t n = mesh.image.size();
   if (n > 0x7fffffff) return failWith(err, "mesh image cannot be decoded"), nullptr;
-  if (isWebp(mesh.image)) {
+  if (mesh.image_mime == "image/webp") {
     if (!WebPGetInfo(d, n, &w, &h) || w <= 0 || h <= 0) return failWith(err, "mesh image cannot be decoded"), nullptr;
     void* rgba = arena.take(mipChainBytes(w, h, &levels));
     if (!rgba) return failWith(err, "staging arena too small for the mesh's texture"), nullptr;
