@@ -22,6 +22,13 @@ double bearing(double dx, double dy) {
   const double a = std::atan2(dx, dy);
   return a < 0 ? a + 2 * kPi : a;
 }
+
+// Bounds of the per-cell scratch: half-edges (one per twin pair) a candidate
+// search may hold, and cells a route search may reach per heap entry. Both far
+// above what a search within its radius and expansion cap meets in San
+// Francisco's grid; past them a search counts what it dropped.
+constexpr uint32_t kSeenCells = 2048;
+constexpr uint32_t kReachedPerExpansion = 8;
 }  // namespace
 
 MatcherDesc matcherDefaults(const MatcherDesc& in) {
@@ -45,9 +52,14 @@ MatcherDesc matcherDefaults(const MatcherDesc& in) {
   return d;
 }
 
-MapMatcher::MapMatcher(const graph::StreetGraph& g, const MatcherDesc& desc) : g_(g), d_(matcherDefaults(desc)) {
+MapMatcher::MapMatcher(const graph::StreetGraph& g, const MatcherDesc& desc)
+    : g_(g),
+      d_(matcherDefaults(desc)),
+      seen_(kSeenCells),
+      reached_(kReachedPerExpansion * d_.max_expansions),
+      targets_(d_.max_candidates) {
   grid_.build(g_, d_.grid_cell_m);
-  const size_t K = d_.max_candidates, W = d_.lag + 1, H = g_.halfedges.size();
+  const size_t K = d_.max_candidates, W = d_.lag + 1;
   cols_.resize(W);
   cand_store_.resize(K * W);
   delta_store_.resize(K * W);
@@ -60,24 +72,15 @@ MapMatcher::MapMatcher(const graph::StreetGraph& g, const MatcherDesc& desc) : g
     cols_[w].alpha = &alpha_store_[w * K];
     cols_[w].back = &back_store_[w * K];
   }
-  seen_stamp_.assign(H, 0);
-  seen_dist_.assign(H, 0);
-  seen_point_.assign(H, 0);
-  seen_t_.assign(H, 0);
-  touched_.assign(H, 0);
-  route_stamp_.assign(H, 0);
-  route_dist_.assign(H, 0);
-  target_stamp_.assign(H, 0);
-  target_idx_.assign(H, 0);
+  touched_.assign(seen_.capacity(), 0);
   heap_.resize(d_.max_expansions);
 }
 
 size_t MapMatcher::bytes() const {
   return grid_.bytes() + cols_.capacity() * sizeof(Column) + cand_store_.capacity() * sizeof(Candidate) +
          (delta_store_.capacity() + alpha_store_.capacity() + dist_store_.capacity()) * sizeof(double) +
-         back_store_.capacity() + (seen_stamp_.capacity() + seen_point_.capacity() + touched_.capacity()) * 4 +
-         (seen_dist_.capacity() + seen_t_.capacity()) * 4 + (route_stamp_.capacity() + target_stamp_.capacity()) * 4 +
-         route_dist_.capacity() * 4 + target_idx_.capacity() + heap_.capacity() * sizeof(HeapItem);
+         back_store_.capacity() + seen_.bytes() + touched_.capacity() * 4 + reached_.bytes() + targets_.bytes() +
+         heap_.capacity() * sizeof(HeapItem);
 }
 
 uint32_t MapMatcher::candidateCount() const { return steps_ ? cols_[(steps_ - 1) % cols_.size()].count : 0; }
@@ -125,10 +128,7 @@ CellPoint MapMatcher::project(uint32_t h, double e, double n) const {
 void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
   const uint32_t K = d_.max_candidates;
   const double r = std::clamp(d_.search_sigmas * obs.sigma_m, d_.search_min_m, d_.search_max_m);
-  if (++stamp_ == 0) {
-    std::fill(seen_stamp_.begin(), seen_stamp_.end(), 0);
-    stamp_ = 1;
-  }
+  seen_.clear();
   size_t touched = 0;
   const double px = obs.e, py = obs.n;
   const auto& pts = g_.points;
@@ -141,15 +141,15 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
     const double dist = std::sqrt(qx * qx + qy * qy);
     if (dist > r) return;
     const uint32_t h = en.halfedge;
-    if (seen_stamp_[h] != stamp_) {
-      seen_stamp_[h] = stamp_;
-      touched_[touched++] = h;
-    } else if (dist >= seen_dist_[h]) {
+    bool fresh = false;
+    Seen* s = seen_.insert(h, &fresh);
+    if (!s) {
+      ++stats_.candidates_dropped;
       return;
     }
-    seen_dist_[h] = static_cast<float>(dist);
-    seen_point_[h] = en.point;
-    seen_t_[h] = static_cast<float>(t);
+    if (fresh) touched_[touched++] = h;
+    else if (dist >= s->dist) return;
+    *s = Seen{static_cast<float>(dist), en.point, static_cast<float>(t)};
   });
 
   // Emission log-likelihoods; keep the K best (sorted, ties to the lower cell id).
@@ -179,17 +179,18 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
   };
   for (size_t k = 0; k < touched; ++k) {
     const uint32_t h = touched_[k];
-    const glm::dvec2 a = pts[seen_point_[h]], b = pts[seen_point_[h] + 1];
+    const Seen& s = *seen_.find(h);
+    const glm::dvec2 a = pts[s.point], b = pts[s.point + 1];
     const double hd = bearing(b.x - a.x, b.y - a.y);
-    const double dist = seen_dist_[h];
+    const double dist = s.dist;
     const auto& he = g_.halfedges[h];
     // Past either end of the street, the distance has an along-street part
     // (the overshoot) that the lane offset does not explain: it is weighed with
     // the position's own sigma, so a position just past a junction belongs to
     // the next street rather than to the end of this one.
     double overshoot = 0;
-    const float t = seen_t_[h];
-    if ((t <= 0.0f && seen_point_[h] == he.pts_begin) || (t >= 1.0f && seen_point_[h] + 2 == he.pts_begin + he.pts_count)) {
+    const float t = s.t;
+    if ((t <= 0.0f && s.point == he.pts_begin) || (t >= 1.0f && s.point + 2 == he.pts_begin + he.pts_count)) {
       const glm::dvec2 d = b - a;
       const double len = glm::length(d);
       if (len > 1e-9) overshoot = std::min(dist, std::fabs(((px - (t <= 0 ? a.x : b.x)) * d.x + (py - (t <= 0 ? a.y : b.y)) * d.y) / len));
@@ -211,20 +212,21 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
     const bool reversed = c.p.lateral_m < 0;
     const auto& he = g_.halfedges[listed];
     double along = 0, total = 0;
-    const uint32_t seg = seen_point_[listed];
+    const Seen& s = *seen_.find(listed);
+    const uint32_t seg = s.point;
     for (uint32_t i = he.pts_begin; i + 1 < he.pts_begin + he.pts_count; ++i) {
       const double l = glm::length(pts[i + 1] - pts[i]);
       if (i < seg) along += l;
-      else if (i == seg) along += l * seen_t_[listed];
+      else if (i == seg) along += l * s.t;
       total += l;
     }
     const glm::dvec2 a = pts[seg], b = pts[seg + 1];
-    const glm::dvec2 q = a + (b - a) * static_cast<double>(seen_t_[listed]);
+    const glm::dvec2 q = a + (b - a) * static_cast<double>(s.t);
     const double len = glm::length(b - a);
     const double lat = len > 1e-9 ? ((px - q.x) * (b.y - a.y) - (py - q.y) * (b.x - a.x)) / len : 0.0;
     c.p.arc_m = reversed ? std::max(0.0, total - along) : along;
     c.p.lateral_m = reversed ? -lat : lat;
-    c.p.dist_m = seen_dist_[listed];
+    c.p.dist_m = s.dist;
     c.p.e = q.x;
     c.p.n = q.y;
   }
@@ -241,23 +243,17 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
 void MapMatcher::routeDistances(const Candidate& from, const Column& to, double cap, double* out) {
   ++stats_.route_searches;
   for (uint32_t j = 0; j < to.count; ++j) out[j] = -1;
-  if (route_run_ >= 0x7ffffff0u) {
-    std::fill(route_stamp_.begin(), route_stamp_.end(), 0);
-    std::fill(target_stamp_.begin(), target_stamp_.end(), 0);
-    route_run_ = 0;
-  }
-  ++route_run_;
-  const uint32_t tentative = route_run_ * 2, done = route_run_ * 2 + 1;
+  reached_.clear();
+  targets_.clear();
   uint32_t remaining = 0;
   for (uint32_t j = 0; j < to.count; ++j) {
-    const uint32_t c = to.cand[j].p.cell;
-    target_stamp_[c] = route_run_;
-    target_idx_[c] = static_cast<uint8_t>(j);
+    bool fresh = false;
+    *targets_.insert(to.cand[j].p.cell, &fresh) = static_cast<uint8_t>(j);
     ++remaining;
   }
   const uint32_t src = from.p.cell;
-  if (target_stamp_[src] == route_run_) {
-    const uint32_t j = target_idx_[src];
+  if (const uint8_t* t = targets_.find(src)) {
+    const uint32_t j = *t;
     const double da = to.cand[j].p.arc_m - from.p.arc_m;
     if (da >= -d_.backward_tolerance_m) {
       out[j] = std::max(0.0, da);
@@ -270,13 +266,15 @@ void MapMatcher::routeDistances(const Candidate& from, const Column& to, double 
   size_t hs = 0;
   const size_t hcap = heap_.size();
   auto push = [&](uint32_t c, double d) {
-    if (route_stamp_[c] == done || (route_stamp_[c] == tentative && route_dist_[c] <= d)) return;
-    if (hs == hcap) {
+    const Reached* r = reached_.find(c);
+    if (r && (r->done || r->dist <= d)) return;
+    bool fresh = false;
+    Reached* w = hs == hcap ? nullptr : reached_.insert(c, &fresh);
+    if (!w) {
       ++stats_.route_truncated;
       return;
     }
-    route_stamp_[c] = tentative;
-    route_dist_[c] = static_cast<float>(d);
+    *w = Reached{static_cast<float>(d), false};
     heap_[hs++] = HeapItem{static_cast<float>(d), c};
     std::push_heap(heap_.begin(), heap_.begin() + hs, heapGreater);
   };
@@ -286,11 +284,12 @@ void MapMatcher::routeDistances(const Candidate& from, const Column& to, double 
   while (hs > 0 && remaining > 0) {
     std::pop_heap(heap_.begin(), heap_.begin() + hs, heapGreater);
     const HeapItem it = heap_[--hs];
-    if (route_stamp_[it.cell] == done || it.d > route_dist_[it.cell]) continue;
-    route_stamp_[it.cell] = done;
+    Reached& r = *reached_.find(it.cell);
+    if (r.done || it.d > r.dist) continue;
+    r.done = true;
     ++stats_.route_expansions;
-    if (target_stamp_[it.cell] == route_run_) {
-      const uint32_t j = target_idx_[it.cell];
+    if (const uint8_t* t = targets_.find(it.cell)) {
+      const uint32_t j = *t;
       if (out[j] < 0) {
         out[j] = it.d + to.cand[j].p.arc_m;
         --remaining;

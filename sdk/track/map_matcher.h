@@ -27,8 +27,9 @@
 //   forward filter's posterior probability of the head state.
 //
 // Memory: everything is sized at construction (K candidates x (lag + 1) steps,
-// the route-search heap, per-cell stamps); step() never allocates.
-// Contract: one thread; deterministic (no hashing, no unordered iteration).
+// the route-search heap, per-cell scratch tables sized by the search bounds,
+// not by the city); step() never allocates.
+// Contract: one thread; deterministic (fixed hashing, no unordered iteration).
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -36,6 +37,7 @@
 
 #include "graph/street_graph.h"
 #include "graph/segment_grid.h"
+#include "track/cell_scratch.h"
 
 namespace blvd::track {
 
@@ -91,7 +93,8 @@ struct MatchStats {
   uint64_t empty_steps = 0;     // no candidate within the search radius
   uint64_t route_searches = 0;
   uint64_t route_expansions = 0;
-  uint64_t route_truncated = 0;  // searches stopped by the expansion cap
+  uint64_t route_truncated = 0;  // searches stopped by the expansion cap (or the cells they may hold)
+  uint64_t candidates_dropped = 0;  // street segments past the half-edges a candidate search may hold
 };
 
 class MapMatcher {
@@ -169,19 +172,21 @@ class MapMatcher {
   std::vector<Candidate> cand_store_;
   std::vector<double> delta_store_, alpha_store_, dist_store_;
   std::vector<uint8_t> back_store_;
-  // Candidate search scratch (per half-edge of a twin pair).
-  std::vector<uint32_t> seen_stamp_;
-  std::vector<float> seen_dist_;
-  std::vector<uint32_t> seen_point_;
-  std::vector<float> seen_t_;
-  std::vector<uint32_t> touched_;
-  // Route search scratch (per cell).
-  std::vector<uint32_t> route_stamp_;
-  std::vector<float> route_dist_;
-  std::vector<uint32_t> target_stamp_;
-  std::vector<uint8_t> target_idx_;
+  struct Seen {  // the nearest segment of a half-edge (one per twin pair) in the search radius
+    float dist;
+    uint32_t point;
+    float t;
+  };
+  struct Reached {  // a cell the route search pushed
+    float dist;
+    bool done;
+  };
+  // Scratch of the bounded searches, sized by their bounds, not by the city.
+  CellScratch<Seen> seen_;
+  std::vector<uint32_t> touched_;  // the half-edges seen_ holds, in the order found
+  CellScratch<Reached> reached_;
+  CellScratch<uint8_t> targets_;   // candidate cell -> its index in the column
   std::vector<HeapItem> heap_;
-  uint32_t stamp_ = 0, route_run_ = 0;
 
   uint64_t steps_ = 0;  // steps in the current chain window (column index of the next step)
   MatchObservation last_obs_;

@@ -246,5 +246,24 @@ TEST(MapMatcher, StepsDoNotAllocate) {
   EXPECT_EQ(m.stats().steps, 200u);
 }
 
+// The search scratch is sized by the search bounds: a city 16 times larger
+// costs the matcher only its spatial index, and the same drive on the corner
+// both cities share gives the same answers.
+TEST(MapMatcher, ScratchDoesNotGrowWithTheCity) {
+  const auto small = blvd_test::makeGrid(8, 60), large = blvd_test::makeGrid(32, 60);
+  MapMatcher a(small), b(large);
+  EXPECT_EQ(a.bytes() - a.grid().bytes(), b.bytes() - b.grid().bytes());
+  EXPECT_LT(a.grid().bytes(), b.grid().bytes());
+  for (int i = 0; i < 60; ++i) {
+    const double e = std::min(i * 7.0, 400.0), n = std::max(0.0, i * 7.0 - 400.0);
+    const MatchObservation o = obsAt(i, e + 1.5, n, 5, i * 7.0 < 400 ? 90 : 0);
+    ASSERT_EQ(a.step(o), b.step(o));
+    // Cell ids differ between the graphs; the matched point does not.
+    EXPECT_DOUBLE_EQ(a.head().e, b.head().e) << "step " << i;
+    EXPECT_DOUBLE_EQ(a.head().n, b.head().n) << "step " << i;
+  }
+  EXPECT_EQ(a.stats().candidates_dropped + b.stats().candidates_dropped, 0u);
+}
+
 }  // namespace
 }  // namespace blvd::track
