@@ -14,6 +14,7 @@
 #include "bake/triangulate.h"
 #include "core/log.h"
 #include "graph/block_table.h"
+#include "graph/segment_grid.h"
 #include "package/format.h"
 #include "package/glb.h"
 #include "package/writer.h"
@@ -232,6 +233,9 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   writer.setHeader(packageHeader(city, g, blocks, tables, writer, sum));
   writer.addSection(package::kSectionGraph, graph::serializeGraph(g));
   writer.addSection(package::kSectionCells, graph::serializeCells(g));
+  graph::SegmentGrid grid;
+  grid.build(g);
+  writer.addSection(package::kSectionSpatialIndex, graph::serializeSegmentGrid(grid));
   writer.addSection(package::kSectionBlocks, graph::serializeBlocks(blocks));
   if (!tables.visibility.empty()) {
     writer.addSection(package::kSectionVisibility, graph::serializeVisibility(tables));

@@ -145,7 +145,8 @@ blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const char* pack
   return guarded(nullptr, [&] {
     blvd::stream::City city;
     std::string err;
-    const blvd::core::Status st = city.open(d.package_path, err);
+    const blvd::core::Status st =
+        city.open(d.package_path, err, blvd::stream::City::Tables::All, blvd::stream::City::GraphTables::Paged);
     if (st != blvd::core::Status::Ok) throw blvd::core::Error(st, err);
     const blvd::runtime::MemoryPlan plan = blvd::runtime::planMemory(d, city);
     *cpu_bytes = plan.cpu_bytes;

@@ -171,13 +171,14 @@ blvd_status blvd_tracker_create(const blvd_tracker_desc* desc, blvd_tracker** ou
     if (has_package) {
       tr->city = std::make_unique<blvd::stream::City>();
       std::string err;
-      const core::Status s = tr->city->open(d.package_path, err, blvd::stream::City::Tables::Graph);
+      const core::Status s = tr->city->open(d.package_path, err, blvd::stream::City::Tables::Graph,
+                                            blvd::stream::City::GraphTables::Paged);
       if (s != core::Status::Ok) throw core::Error(s, err);
       tr->frame = tr->city->frame();
     } else {
       tr->frame = blvd::geo::LocalFrame(d.origin_lat, d.origin_lon);
     }
-    tr->tracker = std::make_unique<track::Tracker>(tr->frame, tr->city ? &tr->city->graph() : nullptr, td);
+    tr->tracker = std::make_unique<track::Tracker>(tr->frame, tr->city ? &tr->city->streets() : nullptr, td);
   });
   if (st != BLVD_OK) return st;
   *out = tr.release();

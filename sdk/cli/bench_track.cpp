@@ -704,7 +704,7 @@ nlohmann::json runTrackBench(const TrackBenchOptions& opt) {
   d["match_sigma5_gnss_only"] = matchJson(g5);
   d["match_sigma15_gnss_only"] = matchJson(g15);
   d["graph_cells"] = city.graph().cellCount();
-  d["index_entries"] = probe.grid().entryCount();
+  d["index_bytes"] = probe.indexBytes();
   d["matcher_bytes"] = probe.bytes();
   j["detail"] = d;
   return j;

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 
 #include <nlohmann/json.hpp>
 
@@ -11,16 +12,17 @@
 namespace blvd::cli {
 namespace {
 
-stream::City openCity(const std::string& path) {
-  stream::City city;
+std::unique_ptr<stream::City> openCity(const std::string& path) {
+  auto city = std::make_unique<stream::City>();
   std::string err;
-  const core::Status st = city.open(path, err);
+  const core::Status st = city->open(path, err);
   if (st != core::Status::Ok) throw core::Error(st, err);
   return city;
 }
 
 int info(const std::string& path, bool json) {
-  const stream::City city = openCity(path);
+  const auto opened = openCity(path);
+  const stream::City& city = *opened;
   const auto& h = city.header();
   const auto& g = city.graph();
   nlohmann::json j = {
@@ -111,7 +113,8 @@ int verify(const std::string& path) {
 }
 
 int extract(const std::string& path, int block, int cell, const std::string& out) {
-  const stream::City city = openCity(path);
+  const auto opened = openCity(path);
+  const stream::City& city = *opened;
   std::vector<uint8_t> glb;
   std::string err;
   if (block >= 0) {
@@ -147,7 +150,8 @@ int extract(const std::string& path, int block, int cell, const std::string& out
 // One cell as the runtime sees it: its street, local model, PVS with
 // coverage hints, and impostor layers with the blocks each stands for.
 int cellInfo(const std::string& path, int cell) {
-  const stream::City city = openCity(path);
+  const auto opened = openCity(path);
+  const stream::City& city = *opened;
   const auto& g = city.graph();
   if (cell < 0 || size_t(cell) >= g.cellCount())
     throw core::Error(core::Status::NotFound, "cell " + std::to_string(cell) + " does not exist (" +

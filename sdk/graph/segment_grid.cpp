@@ -3,62 +3,139 @@
 #include <algorithm>
 #include <cmath>
 
-namespace blvd::graph {
+#include "core/bytes.h"
+#include "graph/graph_source.h"
 
-void SegmentGrid::build(const StreetGraph& g, double cell_m) {
-  cell_ = cell_m > 0 ? cell_m : 50.0;
-  inv_ = 1.0 / cell_;
-  offsets_.clear();
-  entries_.clear();
-  nx_ = ny_ = 0;
+namespace blvd::graph {
+namespace {
+
+constexpr uint32_t kGridVersion = 1;
+constexpr size_t kGridHeaderBytes = 4 + 3 * 8 + 4 * 3;  // version, ox oy cell, nx ny entries
+
+int clampTo(int v, int n) { return v < 0 ? 0 : v >= n ? n - 1 : v; }
+
+// Builds the grid over any graph G with halfedge(h), point(i) and cellCount().
+template <class G>
+void buildGrid(const G& g, double cell_m, GridShape& shape, std::vector<uint32_t>& offsets,
+               std::vector<SegmentGrid::Entry>& entries) {
+  shape = GridShape{};
+  shape.cell = cell_m > 0 ? cell_m : 50.0;
+  const double inv = 1.0 / shape.cell;
+  offsets.clear();
+  entries.clear();
+  const uint32_t cells = g.cellCount();
+  auto listed = [&](uint32_t h, const HalfEdge& e) { return e.pts_count >= 2 && (e.twin == kNone || e.twin > h || e.twin >= cells); };
   double minx = 1e300, miny = 1e300, maxx = -1e300, maxy = -1e300;
-  auto listed = [&](uint32_t h) {
-    const auto& e = g.halfedges[h];
-    return e.pts_count >= 2 && (e.twin == kNone || e.twin > h || e.twin >= g.halfedges.size());
-  };
-  for (uint32_t h = 0; h < g.halfedges.size(); ++h) {
-    if (!listed(h)) continue;
-    const auto& e = g.halfedges[h];
+  for (uint32_t h = 0; h < cells; ++h) {
+    const HalfEdge e = g.halfedge(h);
+    if (!listed(h, e)) continue;
     for (uint32_t i = 0; i < e.pts_count; ++i) {
-      const glm::dvec2 p = g.points[e.pts_begin + i];
+      const glm::dvec2 p = g.point(e.pts_begin + i);
       minx = std::min(minx, p.x), miny = std::min(miny, p.y);
       maxx = std::max(maxx, p.x), maxy = std::max(maxy, p.y);
     }
   }
-  if (minx > maxx) return;
-  ox_ = minx;
-  oy_ = miny;
-  nx_ = std::max(1, static_cast<int>(std::ceil((maxx - minx) * inv_ + 1e-9)));
-  ny_ = std::max(1, static_cast<int>(std::ceil((maxy - miny) * inv_ + 1e-9)));
-  const size_t cells = static_cast<size_t>(nx_) * ny_;
+  if (minx > maxx) {
+    offsets.assign(1, 0);
+    return;
+  }
+  shape.ox = minx;
+  shape.oy = miny;
+  shape.nx = std::max(1, static_cast<int>(std::ceil((maxx - minx) * inv + 1e-9)));
+  shape.ny = std::max(1, static_cast<int>(std::ceil((maxy - miny) * inv + 1e-9)));
+  const size_t n = shape.cellCount();
   // Two passes (count, then fill) so the CSR arrays are allocated once.
-  std::vector<uint32_t> counts(cells + 1, 0);
+  std::vector<uint32_t> counts(n + 1, 0);
   auto forEachCell = [&](glm::dvec2 a, glm::dvec2 b, auto&& fn) {
-    const int x0 = clampX(static_cast<int>((std::min(a.x, b.x) - ox_) * inv_));
-    const int x1 = clampX(static_cast<int>((std::max(a.x, b.x) - ox_) * inv_));
-    const int y0 = clampY(static_cast<int>((std::min(a.y, b.y) - oy_) * inv_));
-    const int y1 = clampY(static_cast<int>((std::max(a.y, b.y) - oy_) * inv_));
+    const int x0 = clampTo(static_cast<int>((std::min(a.x, b.x) - shape.ox) * inv), shape.nx);
+    const int x1 = clampTo(static_cast<int>((std::max(a.x, b.x) - shape.ox) * inv), shape.nx);
+    const int y0 = clampTo(static_cast<int>((std::min(a.y, b.y) - shape.oy) * inv), shape.ny);
+    const int y1 = clampTo(static_cast<int>((std::max(a.y, b.y) - shape.oy) * inv), shape.ny);
     for (int gy = y0; gy <= y1; ++gy)
-      for (int gx = x0; gx <= x1; ++gx) fn(static_cast<size_t>(gy) * nx_ + gx);
+      for (int gx = x0; gx <= x1; ++gx) fn(static_cast<size_t>(gy) * shape.nx + gx);
   };
   for (int pass = 0; pass < 2; ++pass) {
-    for (uint32_t h = 0; h < g.halfedges.size(); ++h) {
-      if (!listed(h)) continue;
-      const auto& e = g.halfedges[h];
+    for (uint32_t h = 0; h < cells; ++h) {
+      const HalfEdge e = g.halfedge(h);
+      if (!listed(h, e)) continue;
       for (uint32_t i = 0; i + 1 < e.pts_count; ++i) {
         const uint32_t pi = e.pts_begin + i;
-        forEachCell(g.points[pi], g.points[pi + 1], [&](size_t c) {
+        forEachCell(g.point(pi), g.point(pi + 1), [&](size_t c) {
           if (pass == 0) ++counts[c + 1];
-          else entries_[counts[c]++] = Entry{h, pi};
+          else entries[counts[c]++] = SegmentGrid::Entry{h, pi};
         });
       }
     }
     if (pass == 0) {
-      for (size_t c = 0; c < cells; ++c) counts[c + 1] += counts[c];
-      offsets_ = counts;
-      entries_.resize(counts[cells]);
+      for (size_t c = 0; c < n; ++c) counts[c + 1] += counts[c];
+      offsets = counts;
+      entries.resize(counts[n]);
     }
   }
+}
+
+// A StreetGraph seen through the accessors buildGrid uses.
+struct WholeGraph {
+  const StreetGraph& g;
+  uint32_t cellCount() const { return static_cast<uint32_t>(g.halfedges.size()); }
+  const HalfEdge& halfedge(uint32_t h) const { return g.halfedges[h]; }
+  glm::dvec2 point(uint32_t i) const { return g.points[i]; }
+};
+
+}  // namespace
+
+bool GridShape::cellsNear(double x, double y, double r, int* x0, int* x1, int* y0, int* y1) const {
+  if (nx == 0 || !(r >= 0)) return false;
+  if (x + r < ox || y + r < oy || x - r > ox + nx * cell || y - r > oy + ny * cell) return false;
+  const double inv = 1.0 / cell;
+  *x0 = clampTo(static_cast<int>((x - r - ox) * inv), nx);
+  *x1 = clampTo(static_cast<int>((x + r - ox) * inv), nx);
+  *y0 = clampTo(static_cast<int>((y - r - oy) * inv), ny);
+  *y1 = clampTo(static_cast<int>((y + r - oy) * inv), ny);
+  return true;
+}
+
+void SegmentGrid::build(const StreetGraph& g, double cell_m) { buildGrid(WholeGraph{g}, cell_m, shape_, offsets_, entries_); }
+
+void SegmentGrid::build(const GraphSource& g, double cell_m) { buildGrid(g, cell_m, shape_, offsets_, entries_); }
+
+std::vector<uint8_t> serializeSegmentGrid(const SegmentGrid& grid) {
+  core::ByteWriter w;
+  const GridShape& s = grid.shape();
+  w.put(kGridVersion);
+  w.put(s.ox);
+  w.put(s.oy);
+  w.put(s.cell);
+  w.put<uint32_t>(static_cast<uint32_t>(s.nx));
+  w.put<uint32_t>(static_cast<uint32_t>(s.ny));
+  w.put<uint32_t>(static_cast<uint32_t>(grid.entryCount()));
+  for (uint32_t o : grid.offsets()) w.put(o);
+  for (const SegmentGrid::Entry& e : grid.entries()) {
+    w.put(e.halfedge);
+    w.put(e.point);
+  }
+  return std::move(w.bytes());
+}
+
+StoredGrid parseGridShape(const uint8_t* data, size_t size, uint64_t file_offset) {
+  core::ByteReader r(data, size, "package section SIDX", file_offset);
+  if (r.get<uint32_t>() != kGridVersion) r.fail("unknown grid version");
+  StoredGrid g;
+  g.shape.ox = r.get<double>();
+  g.shape.oy = r.get<double>();
+  g.shape.cell = r.get<double>();
+  const uint32_t nx = r.get<uint32_t>(), ny = r.get<uint32_t>();
+  g.entries = r.get<uint32_t>();
+  if (!std::isfinite(g.shape.ox) || !std::isfinite(g.shape.oy) || !(g.shape.cell >= 1 && g.shape.cell <= 1e5))
+    r.fail("grid origin or cell size is not a finite position and size");
+  if ((nx == 0) != (ny == 0) || nx > (1u << 20) || ny > (1u << 20)) r.fail("grid dimensions out of range");
+  g.shape.nx = static_cast<int>(nx);
+  g.shape.ny = static_cast<int>(ny);
+  const uint64_t want = kGridHeaderBytes + (uint64_t(nx) * ny + 1) * 4 + uint64_t(g.entries) * 8;
+  if (want != size) r.fail("section is " + std::to_string(size) + " bytes, its counts say " + std::to_string(want));
+  g.offsets_at = kGridHeaderBytes;
+  g.entries_at = kGridHeaderBytes + (size_t(nx) * ny + 1) * 4;
+  return g;
 }
 
 }  // namespace blvd::graph

@@ -19,6 +19,19 @@
 
 namespace blvd::graph {
 
+class GraphSource;
+
+// Where the grid lies: origin, cell size and cells across. Shared by the grid
+// in memory and the one a package stores (the SIDX section, read by pages).
+struct GridShape {
+  double ox = 0, oy = 0, cell = 50;
+  int nx = 0, ny = 0;
+  // The grid cells overlapping the square of half-size r around (x, y);
+  // false when there are none.
+  bool cellsNear(double x, double y, double r, int* x0, int* x1, int* y0, int* y1) const;
+  size_t cellCount() const { return static_cast<size_t>(nx) * ny; }
+};
+
 class SegmentGrid {
  public:
   struct Entry {
@@ -28,36 +41,47 @@ class SegmentGrid {
 
   // cell_m <= 0 picks 50 m. The graph must outlive the grid.
   void build(const StreetGraph& g, double cell_m = 0);
+  // The same from any source (a paged package without a stored grid).
+  void build(const GraphSource& g, double cell_m = 0);
 
   // Calls fn(const Entry&) for each entry in the grid cells overlapping the
   // square of half-size r around (x, y).
   template <class Fn>
   void query(double x, double y, double r, Fn&& fn) const {
-    if (nx_ == 0) return;
-    const int x0 = clampX(static_cast<int>((x - r - ox_) * inv_)), x1 = clampX(static_cast<int>((x + r - ox_) * inv_));
-    const int y0 = clampY(static_cast<int>((y - r - oy_) * inv_)), y1 = clampY(static_cast<int>((y + r - oy_) * inv_));
-    if (x + r < ox_ || y + r < oy_ || x - r > ox_ + nx_ * cell_ || y - r > oy_ + ny_ * cell_) return;
+    int x0, x1, y0, y1;
+    if (!shape_.cellsNear(x, y, r, &x0, &x1, &y0, &y1)) return;
     for (int gy = y0; gy <= y1; ++gy)
       for (int gx = x0; gx <= x1; ++gx) {
-        const size_t c = static_cast<size_t>(gy) * nx_ + gx;
+        const size_t c = static_cast<size_t>(gy) * shape_.nx + gx;
         for (uint32_t i = offsets_[c]; i < offsets_[c + 1]; ++i) fn(entries_[i]);
       }
   }
 
+  const GridShape& shape() const { return shape_; }
+  const std::vector<uint32_t>& offsets() const { return offsets_; }  // cellCount() + 1
+  const std::vector<Entry>& entries() const { return entries_; }
   size_t entryCount() const { return entries_.size(); }
-  int columns() const { return nx_; }
-  int rows() const { return ny_; }
-  double cellSize() const { return cell_; }
+  int columns() const { return shape_.nx; }
+  int rows() const { return shape_.ny; }
+  double cellSize() const { return shape_.cell; }
   size_t bytes() const { return offsets_.capacity() * sizeof(uint32_t) + entries_.capacity() * sizeof(Entry); }
 
  private:
-  int clampX(int v) const { return v < 0 ? 0 : v >= nx_ ? nx_ - 1 : v; }
-  int clampY(int v) const { return v < 0 ? 0 : v >= ny_ ? ny_ - 1 : v; }
-
-  double ox_ = 0, oy_ = 0, cell_ = 50, inv_ = 1.0 / 50;
-  int nx_ = 0, ny_ = 0;
+  GridShape shape_;
   std::vector<uint32_t> offsets_;
   std::vector<Entry> entries_;
 };
+
+// The SIDX section: a grid built with cell_m, as the runtime pages it
+// (docs/package-format.md has the layout). parseGridShape checks the header
+// and that the section holds the offsets and entries it announces, and
+// returns where they start; it throws core::Error(Corrupt) naming the offset.
+std::vector<uint8_t> serializeSegmentGrid(const SegmentGrid& grid);
+struct StoredGrid {
+  GridShape shape;
+  uint32_t entries = 0;
+  size_t offsets_at = 0, entries_at = 0;  // byte offsets in the section
+};
+StoredGrid parseGridShape(const uint8_t* data, size_t size, uint64_t file_offset);
 
 }  // namespace blvd::graph

@@ -33,7 +33,7 @@ inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
 // counts, the header the pool sizing fields; 3.0: IMPO layers the run of the
 // cell they serve (docs/package-format.md).
 inline constexpr uint16_t kVersionMajor = 3;  // a reader opens only its own major
-inline constexpr uint16_t kVersionMinor = 0;  // minors add, never change (see spec)
+inline constexpr uint16_t kVersionMinor = 1;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
 inline constexpr uint32_t kSectionSpatialIndex = fourcc('S', 'I', 'D', 'X');  // graph spatial index

@@ -195,6 +195,14 @@ void PackageReader::dropPages(const Span& s) const {
   if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_DONTNEED);
 }
 
+void PackageReader::dropEnclosingPages(const Span& s) const {
+  if (!mapped_ || !s.data || s.size == 0) return;
+  const uintptr_t page = static_cast<uintptr_t>(::sysconf(_SC_PAGESIZE));
+  const uintptr_t begin = reinterpret_cast<uintptr_t>(s.data) & ~(page - 1);
+  const uintptr_t end = (reinterpret_cast<uintptr_t>(s.data) + s.size + page - 1) & ~(page - 1);
+  ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_DONTNEED);
+}
+
 core::Status PackageReader::blob(uint32_t i, Span& out, std::string& err) const {
   out = Span{};
   if (!isOpen()) {

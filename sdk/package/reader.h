@@ -95,6 +95,10 @@ class PackageReader {
   // is parsed or a blob decoded, so resident memory follows the cells in use,
   // not the file's size. A no-op for a package read into memory.
   void dropPages(const Span& s) const;
+  // The same for every page the span touches, partly covered ones too (a page
+  // cache's copies, which leave no page wholly read): safe on a read-only
+  // mapping, where a later read of a neighbour refaults from the file.
+  void dropEnclosingPages(const Span& s) const;
 
  private:
   core::Status validate(std::string& err);

@@ -10,8 +10,8 @@ namespace blvd::runtime {
 uint32_t CellSlots::sharedBlocks(uint32_t cell, uint32_t victim, std::vector<BlockCopy>& copies, uint32_t* skip) const {
   copies.clear();
   if (!block_reuse_) return 0;
-  const graph::StreetGraph& g = city_.graph();
-  for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) {
+  for (const uint32_t block : city_.streets().localBlocks(cell)) {
+    const uint32_t* b = &block;
     if (copies.size() >= copies.capacity()) break;  // reserved for min(max local blocks, kMaxSkippedBlocks): the rest decode
     for (uint32_t i = 0; i < slots_.size(); ++i) {
       if (i == victim || slots_[i].state != CellSlot::Resident) continue;

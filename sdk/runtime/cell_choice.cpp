@@ -11,7 +11,7 @@ uint32_t CellChoice::choose(glm::dvec2 p, double heading_deg, double& arc_m) {
 }
 
 uint32_t CellChoice::continued(uint32_t cell, double cost, glm::dvec2 p, double heading_deg, double& arc_m) const {
-  if (last_cell_ == graph::kNone || last_cell_ >= city_.graph().cellCount() || cell == last_cell_) return cell;
+  if (last_cell_ == graph::kNone || last_cell_ >= city_.streets().cellCount() || cell == last_cell_) return cell;
   double arc = 0;
   bool at_end = false;
   if (city_.cellCost(last_cell_, p, heading_deg, &arc, &at_end) <= cost + kStickM && !at_end) {
@@ -27,9 +27,8 @@ uint32_t CellChoice::continued(uint32_t cell, double cost, glm::dvec2 p, double 
   };
   const uint32_t next = residency_.nextOnRoute(last_cell_);
   if (next != graph::kNone) consider(next);
-  const graph::StreetGraph& g = city_.graph();
   if (pick == graph::kNone)
-    for (const uint32_t* s = g.successors.begin(last_cell_); s != g.successors.end(last_cell_); ++s) consider(*s);
+    for (uint32_t s : city_.streets().successors(last_cell_)) consider(s);
   if (pick == graph::kNone) return cell;
   arc_m = pick_arc;
   return pick;

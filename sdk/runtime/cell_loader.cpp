@@ -388,11 +388,11 @@ bool CellLoader::decode(Staging& s) {
     raiseTo(decode_high_water_, scratch_bytes);  // jobs may run at once (two threads, or the host's executor)
     return true;
   };
-  const graph::StreetGraph& g = city_.graph();
   // One open per block: its blob's CRC and GLB JSON once for all its levels
   // (decision 0008 §13); the open's cost counts with level 0's.
   stream::City::BlockBlob blob;
-  for (const uint32_t* b = g.local_blocks.begin(s.cell); b != g.local_blocks.end(s.cell); ++b) {
+  for (const uint32_t block : city_.streets().localBlocks(s.cell)) {
+    const uint32_t* b = &block;
     if (std::find(s.skip, s.skip + s.skip_count, *b) != s.skip + s.skip_count) continue;  // the runtime copies it
     for (uint32_t k = 0; k < city_.blocks()[*b].lod_count; ++k) {
       const graph::BlockRecord& rec = city_.blocks()[*b];

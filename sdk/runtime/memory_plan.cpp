@@ -26,9 +26,8 @@ void addMesh(CellNeed& n, uint64_t v, uint64_t t, int tw, int th) {
 
 CellNeed cellNeed(const stream::City& city, uint32_t cell) {
   CellNeed n;
-  const graph::StreetGraph& g = city.graph();
-  for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) {
-    const graph::BlockRecord& r = city.blocks()[*b];
+  for (const uint32_t b : city.streets().localBlocks(cell)) {
+    const graph::BlockRecord& r = city.blocks()[b];
     for (uint32_t k = 0; k < r.lod_count; ++k)
       if (r.triangles[k]) addMesh(n, r.vertices[k], r.triangles[k], 0, 0);
   }
@@ -58,8 +57,8 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
     for (const auto* list : {&ci.layered, &ci.single})
       for (const graph::ImpostorLayer& l : *list)
         if (l.texture_width > tw || l.texture_height > th) corrupt("an impostor texture is larger than the header says");
-  for (uint32_t c = 0; c < city.graph().cellCount(); ++c) {
-    if (city.graph().local_blocks.count(c) > p.max_local_blocks)
+  for (uint32_t c = 0; c < city.streets().cellCount(); ++c) {
+    if (city.streets().localBlocks(c).size() > p.max_local_blocks)
       corrupt("cell " + std::to_string(c) + " has more local blocks than the header says");
     const CellNeed n = cellNeed(city, c);
     p.slab.vertex_bytes = std::max(p.slab.vertex_bytes, n.vertex_bytes);
@@ -81,7 +80,7 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   p.table_bytes = city.tableBytes();
   track::TrackerDesc td;
   td.ring_capacity = desc.ring_capacity;
-  const track::Tracker probe(city.frame(), &city.graph(), td);
+  const track::Tracker probe(city.frame(), &city.streets(), td);
   p.tracking_bytes = probe.bytes();
   p.cpu_bytes = p.staging_bytes + p.table_bytes + p.tracking_bytes;
   p.gpu_bytes = uint64_t(p.resident_cells) * render::slabGpuBytes(p.slab);

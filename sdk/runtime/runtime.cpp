@@ -24,7 +24,7 @@ Allocator hostAllocator(const blvd_runtime_desc& desc) {
 
 Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   std::string err;
-  Status st = city_.open(desc.package_path, err);
+  Status st = city_.open(desc.package_path, err, stream::City::Tables::All, stream::City::GraphTables::Paged);
   if (st != Status::Ok) throw Error(st, err);
 
   // The plan first: a budget error must come before anything is allocated.
@@ -61,7 +61,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
                                                     rd.scaled_target ? desc.min_render_scale : 1.0);
   }
   stats_.render_scale = 1.f;
-  residency_ = std::make_unique<stream::Residency>(city_.graph(), plan_.resident_cells, desc.route_capacity);
+  residency_ = std::make_unique<stream::Residency>(city_.streets(), plan_.resident_cells, desc.route_capacity);
   choice_ = std::make_unique<CellChoice>(city_, *residency_);
   setMode(desc.mode, desc.radius_m);
   cam_.fov_y_deg = desc.fov_y_deg;
@@ -72,7 +72,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   track::TrackerDesc td;
   td.eye_height_m = desc.eye_height_m;
   td.ring_capacity = desc.ring_capacity;
-  tracker_ = std::make_unique<track::Tracker>(city_.frame(), &city_.graph(), td);
+  tracker_ = std::make_unique<track::Tracker>(city_.frame(), &city_.streets(), td);
   stats_.max_resident_cells = plan_.resident_cells;
   BLVD_LOG_INFO("runtime: %s, %u cell slots of %.1f MiB GPU, %.1f MiB CPU planned, on %s (%s)", desc.package_path,
                 plan_.resident_cells, render::slabGpuBytes(plan_.slab) / 1048576.0, plan_.cpu_bytes / 1048576.0,
@@ -81,6 +81,10 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
 
 Runtime::~Runtime() {
   loader_.reset();  // joins the loader thread before the city goes
+  const stream::PageCacheStats pages = city_.graphPageStats();
+  BLVD_LOG_INFO("runtime: graph page cache %.0f KiB, %llu reads, %llu misses (%.2f %%)",
+                city_.graphCacheBytes() / 1024.0, (unsigned long long)(pages.hits + pages.misses),
+                (unsigned long long)pages.misses, pages.hits + pages.misses ? 100.0 * pages.misses / (pages.hits + pages.misses) : 0.0);
   FrameClocks::release(clock_);
   if (renderer_ && ctx_ && ctx_->makeCurrent()) {
     if (draw_) draw_->releaseReferenceBlocks(*renderer_);

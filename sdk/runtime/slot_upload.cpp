@@ -92,11 +92,17 @@ void CellSlots::finishSlot(CellSlot& slot) {
   // order of local blocks, so that a cell draws (and shares its budget) the
   // same whichever way its blocks arrived. Block ids are unique in a slot.
   if (!slot.copies.empty()) {
-    const graph::StreetGraph& g = city_.graph();
-    const uint32_t *first = g.local_blocks.begin(slot.cell), *last = g.local_blocks.end(slot.cell);
-    std::sort(slot.blocks.begin(), slot.blocks.end(), [&](const SlotBlock& a, const SlotBlock& b) {
-      return std::find(first, last, a.block) < std::find(first, last, b.block);
-    });
+    const graph::GraphSource::List local = city_.streets().localBlocks(slot.cell);
+    auto order = [&](uint32_t block) {
+      uint32_t i = 0;
+      for (uint32_t b : local) {
+        if (b == block) break;
+        ++i;
+      }
+      return i;
+    };
+    std::sort(slot.blocks.begin(), slot.blocks.end(),
+              [&](const SlotBlock& a, const SlotBlock& b) { return order(a.block) < order(b.block); });
   }
   const render::SlabUsage u = renderer_.slabUsage(slot.slab);
   const uint64_t tex = render::mipChainBytes(plan_.slab.texture_width, plan_.slab.texture_height);

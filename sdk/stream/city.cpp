@@ -10,64 +10,95 @@
 
 namespace blvd::stream {
 namespace {
-std::vector<float> cellLengths(const graph::StreetGraph& g) {
-  std::vector<float> v;
-  for (const graph::HalfEdge& e : g.halfedges) v.push_back(static_cast<float>(e.length));
+std::vector<float> cellLengths(const graph::GraphSource& g) {
+  std::vector<float> v(g.cellCount());
+  for (uint32_t h = 0; h < g.cellCount(); ++h) v[h] = g.halfedge(h).length;
   return v;
 }
 }  // namespace
 
 
-core::Status City::open(const std::string& path, std::string& err, Tables tables) {
+core::Status City::open(const std::string& path, std::string& err, Tables tables, GraphTables graph,
+                        const PagedGraphDesc& paging) {
+  graph_ = graph::StreetGraph{};
+  blocks_.clear();
+  tables_ = graph::CellTables{};
+  whole_.reset();
+  paged_.reset();
+  streets_ = nullptr;
   core::Status st = package::PackageReader::open(path, reader_, err);
   if (st != core::Status::Ok) return st;
-  const bool graph_only = tables == Tables::Graph;
+  st = graph == GraphTables::Paged ? openPaged(paging, err) : openWhole(err);
+  if (st != core::Status::Ok) return st;
+  if (tables == Tables::All && (st = openRenderTables(err)) != core::Status::Ok) return st;
+  const auto& h = reader_.header();
+  frame_ = geo::LocalFrame(h.origin_lat, h.origin_lon, h.origin_h);
+  return core::Status::Ok;
+}
+
+core::Status City::openWhole(std::string& err) {
   try {
     package::Span s;
-    for (uint32_t tag : {package::kSectionGraph, package::kSectionCells, package::kSectionBlocks}) {
-      if (graph_only && tag == package::kSectionBlocks) continue;
-      st = reader_.checkedSection(tag, s, err);
-      if (st != core::Status::Ok) {
-        if (st == core::Status::NotFound) {
-          err = path + ": missing section " + package::tagToString(tag);
-          st = core::Status::Corrupt;
-        }
-        return st;
-      }
+    for (uint32_t tag : {package::kSectionGraph, package::kSectionCells}) {
+      const core::Status st = requiredSection(tag, s, err);
+      if (st != core::Status::Ok) return st;
       if (tag == package::kSectionGraph) graph::parseGraph(s.data, s.size, s.offset, graph_);
-      if (tag == package::kSectionCells) graph::parseCells(s.data, s.size, s.offset, graph_);
-      if (tag == package::kSectionBlocks) graph::parseBlocks(s.data, s.size, s.offset, reader_.blobCount(), blocks_);
+      else graph::parseCells(s.data, s.size, s.offset, graph_);
       reader_.dropPages(s);  // parsed: the tables hold it now
     }
-    // Optional sections: present when the bake made impostors.
-    if (graph_only) {
-      const auto& h = reader_.header();
-      frame_ = geo::LocalFrame(h.origin_lat, h.origin_lon, h.origin_h);
-      grid_.build(graph_);
-      return core::Status::Ok;
+  } catch (const core::Error& e) {
+    err = reader_.name() + ": " + e.what();
+    return e.status();
+  }
+  whole_ = std::make_unique<graph::MemoryGraph>(graph_);
+  streets_ = whole_.get();
+  return core::Status::Ok;
+}
+
+core::Status City::openPaged(const PagedGraphDesc& paging, std::string& err) {
+  paged_ = std::make_unique<PagedGraph>();
+  const core::Status st = paged_->open(reader_, err, paging);
+  if (st != core::Status::Ok) return st;
+  streets_ = paged_.get();
+  return core::Status::Ok;
+}
+
+core::Status City::requiredSection(uint32_t tag, package::Span& s, std::string& err) const {
+  const core::Status st = reader_.checkedSection(tag, s, err);
+  if (st == core::Status::NotFound) {
+    err = reader_.name() + ": missing section " + package::tagToString(tag);
+    return core::Status::Corrupt;
+  }
+  return st;
+}
+
+// Blocks, then (present when the bake made impostors) visibility and impostors.
+core::Status City::openRenderTables(std::string& err) {
+  const uint32_t cells = streets_->cellCount();
+  const uint32_t faces = paged_ ? paged_->faceCount() : static_cast<uint32_t>(graph_.faces.size());
+  try {
+    package::Span s;
+    core::Status st = requiredSection(package::kSectionBlocks, s, err);
+    if (st != core::Status::Ok) return st;
+    graph::parseBlocks(s.data, s.size, s.offset, reader_.blobCount(), blocks_);
+    reader_.dropPages(s);
+    if (blocks_.size() != faces) {
+      err = reader_.name() + ": block table has " + std::to_string(blocks_.size()) + " blocks but the graph " +
+            std::to_string(faces) + " faces";
+      return core::Status::Corrupt;
     }
-    const uint32_t cells = static_cast<uint32_t>(graph_.halfedges.size());
     const uint32_t nblocks = static_cast<uint32_t>(blocks_.size());
     for (uint32_t tag : {package::kSectionVisibility, package::kSectionImpostors}) {
       if (!reader_.hasSection(tag)) continue;
-      st = reader_.checkedSection(tag, s, err);
-      if (st != core::Status::Ok) return st;
+      if ((st = reader_.checkedSection(tag, s, err)) != core::Status::Ok) return st;
       if (tag == package::kSectionVisibility) graph::parseVisibility(s.data, s.size, s.offset, cells, nblocks, tables_);
-      else graph::parseImpostors(s.data, s.size, s.offset, cellLengths(graph_), nblocks, reader_.blobCount(), tables_);
+      else graph::parseImpostors(s.data, s.size, s.offset, cellLengths(*streets_), nblocks, reader_.blobCount(), tables_);
       reader_.dropPages(s);
     }
   } catch (const core::Error& e) {
-    err = path + ": " + e.what();
+    err = reader_.name() + ": " + e.what();
     return e.status();
   }
-  if (blocks_.size() != graph_.faces.size()) {
-    err = path + ": block table has " + std::to_string(blocks_.size()) + " blocks but the graph " +
-          std::to_string(graph_.faces.size()) + " faces";
-    return core::Status::Corrupt;
-  }
-  const auto& h = reader_.header();
-  frame_ = geo::LocalFrame(h.origin_lat, h.origin_lon, h.origin_h);
-  grid_.build(graph_);
   return core::Status::Ok;
 }
 
@@ -83,7 +114,7 @@ uint64_t City::tableBytes() const {
   uint64_t n = bytesOf(graph_.vertices) + bytesOf(graph_.halfedges) + bytesOf(graph_.faces) +
                bytesOf(graph_.points) + bytesOf(graph_.successors) + bytesOf(graph_.predecessors) +
                bytesOf(graph_.local_blocks) + bytesOf(blocks_) + bytesOf(tables_.visibility) +
-               bytesOf(tables_.impostors) + grid_.bytes();
+               bytesOf(tables_.impostors) + (whole_ ? whole_->bytes() : 0) + (paged_ ? paged_->bytes() : 0);
   for (const auto& v : tables_.visibility) n += bytesOf(v.blocks) + bytesOf(v.ach);
   for (const auto& c : tables_.impostors) {
     n += bytesOf(c.layered) + bytesOf(c.single);
@@ -205,10 +236,10 @@ glm::dvec2 headingDir(double heading_deg) {
 
 double City::cellCost(uint32_t cell, glm::dvec2 p, double heading_deg, double* arc_m, bool* at_end) const {
   const glm::dvec2 dir = headingDir(heading_deg);
-  const auto& e = graph_.halfedges[cell];
+  const graph::HalfEdge e = streets_->halfedge(cell);
   double best = 1e300, before = 0, best_arc = 0;
   for (uint32_t i = e.pts_begin; i + 1 < e.pts_begin + e.pts_count; ++i) {
-    const glm::dvec2 a = graph_.points[i], d = graph_.points[i + 1] - a;
+    const glm::dvec2 a = streets_->point(i), d = streets_->point(i + 1) - a;
     const double len = glm::length(d);
     if (len < 1e-9) continue;
     const double t = glm::clamp(glm::dot(p - a, d) / (len * len), 0.0, 1.0);
@@ -229,8 +260,8 @@ uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m, doub
   // half-edges the one going our way wins. The grid lists one half-edge of
   // each pair; its twin runs the same segment backwards.
   auto consider = [&](uint32_t h, uint32_t point) {
-    const auto& e = graph_.halfedges[h];
-    const glm::dvec2 a = graph_.points[point], b = graph_.points[point + 1];
+    const graph::HalfEdge e = streets_->halfedge(h);
+    const glm::dvec2 a = streets_->point(point), b = streets_->point(point + 1);
     const glm::dvec2 d = b - a;
     const double len = glm::length(d);
     if (len < 1e-9) return;
@@ -249,7 +280,7 @@ uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m, doub
       // new best: most segments the grid offers are not).
       double before = 0, total = 0;
       for (uint32_t i = e.pts_begin; i + 1 < e.pts_begin + e.pts_count; ++i) {
-        const double l = glm::length(graph_.points[i + 1] - graph_.points[i]);
+        const double l = glm::length(streets_->point(i + 1) - streets_->point(i));
         if (i < point) before += l;
         total += l;
       }
@@ -259,9 +290,10 @@ uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m, doub
   // Growing squares: a segment farther than r cannot beat a cost <= r (the
   // heading penalty is never negative). Past the grid's extent, every
   // segment has been seen.
-  const double extent = grid_.cellSize() * std::max(grid_.columns(), grid_.rows());
-  for (double r = grid_.cellSize(); grid_.entryCount() > 0; r *= 2) {
-    grid_.query(p.x, p.y, r, [&](const graph::SegmentGrid::Entry& en) { consider(en.halfedge, en.point); });
+  const graph::GridShape grid = streets_->gridShape();
+  const double extent = grid.cell * std::max(grid.nx, grid.ny);
+  for (double r = grid.cell; streets_->gridEntryCount() > 0; r *= 2) {
+    streets_->forSegmentsNear(p.x, p.y, r, [&](const graph::SegmentGrid::Entry& en) { consider(en.halfedge, en.point); });
     if (best <= r || r > 2 * extent + glm::length(p)) break;
   }
   if (cost_out) *cost_out = best;

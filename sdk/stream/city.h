@@ -4,6 +4,7 @@
 // uploaded, in fixed pools) builds on it.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,23 +16,39 @@
 #include "graph/segment_grid.h"
 #include "graph/street_graph.h"
 #include "package/glb.h"
+#include "stream/paged_graph.h"
 #include "package/reader.h"
 
 namespace blvd::stream {
 
 class City {
  public:
+  City() = default;
+  City(const City&) = delete;  // the graph sources point into it
+  City& operator=(const City&) = delete;
+
   // Opens and validates `path`: the package container, then the GRPH, CELL and
   // BLCK sections (CRC-checked and parsed with bounds checks). Returns
   // Io/Corrupt/Unsupported with a message naming the file and offset.
   // Tables::Graph reads the graph and cells only (tracking without render
   // data): blocks() and cellTables() stay empty.
   enum class Tables { All, Graph };
-  core::Status open(const std::string& path, std::string& err, Tables tables = Tables::All);
+  // GraphTables::Whole parses the graph into memory (graph() is the whole
+  // StreetGraph: the bake, tools, tests); Paged reads it through a fixed page
+  // cache (stream/paged_graph.h: what the runtime and the tracker hold does
+  // not grow with the city) and graph() stays empty. streets() reads either.
+  enum class GraphTables { Whole, Paged };
+  core::Status open(const std::string& path, std::string& err, Tables tables = Tables::All,
+                    GraphTables graph = GraphTables::Whole, const PagedGraphDesc& paging = {});
 
   const package::PackageReader& package() const { return reader_; }
   const package::PackageHeader& header() const { return reader_.header(); }
-  const graph::StreetGraph& graph() const { return graph_; }
+  const graph::StreetGraph& graph() const { return graph_; }  // empty when paged
+  const graph::GraphSource& streets() const { return *streets_; }
+  bool paged() const { return paged_ != nullptr; }
+  // The page cache's counts (zero when the graph is whole).
+  PageCacheStats graphPageStats() const { return paged_ ? paged_->stats() : PageCacheStats{}; }
+  uint64_t graphCacheBytes() const { return paged_ ? paged_->bytes() : 0; }
   const std::vector<graph::BlockRecord>& blocks() const { return blocks_; }
   // Visibility and impostors per cell; empty tables for a package baked with
   // --impostor none.
@@ -94,11 +111,17 @@ class City {
 
  private:
   core::Status levelMissing(uint32_t b, uint32_t lod, std::string& err) const;  // NotFound, naming both
+  core::Status openWhole(std::string& err);
+  core::Status openPaged(const PagedGraphDesc& paging, std::string& err);
+  core::Status openRenderTables(std::string& err);
+  core::Status requiredSection(uint32_t tag, package::Span& s, std::string& err) const;  // Corrupt when absent
   package::PackageReader reader_;
   graph::StreetGraph graph_;
   std::vector<graph::BlockRecord> blocks_;
   graph::CellTables tables_;
-  graph::SegmentGrid grid_;  // one half-edge per twin pair
+  std::unique_ptr<graph::MemoryGraph> whole_;  // over graph_, with its segment grid
+  std::unique_ptr<PagedGraph> paged_;
+  const graph::GraphSource* streets_ = nullptr;  // whole_ or paged_
   geo::LocalFrame frame_{0, 0, 0};
 };
 

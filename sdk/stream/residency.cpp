@@ -26,7 +26,20 @@ double cellStartHeading(const graph::StreetGraph& g, uint32_t c) {
 
 double cellEndHeading(const graph::StreetGraph& g, uint32_t c) { return headingOf(graph::cellDirection(g, c, true)); }
 
+double cellStartHeading(const graph::GraphSource& g, uint32_t c) {
+  return headingOf(graph::cellDirection(g, c, false));
+}
+
+double cellEndHeading(const graph::GraphSource& g, uint32_t c) { return headingOf(graph::cellDirection(g, c, true)); }
+
 Residency::Residency(const graph::StreetGraph& g, uint32_t max_cells, uint32_t route_capacity)
+    : owned_(std::make_unique<graph::MemoryGraph>(g)), g_(*owned_), max_cells_(std::max(1u, max_cells)) {
+  wanted_.resize(max_cells_);
+  open_.reserve(kOpenCapacity);
+  route_.resize(route_capacity);
+}
+
+Residency::Residency(const graph::GraphSource& g, uint32_t max_cells, uint32_t route_capacity)
     : g_(g), max_cells_(std::max(1u, max_cells)) {
   wanted_.resize(max_cells_);
   open_.reserve(kOpenCapacity);
@@ -75,13 +88,13 @@ void Residency::update(const Motion& m) {
 
   // Best-first over successors (Dijkstra order on metres + turn penalties).
   open_.clear();
-  const double left = std::max(0.0, double(g_.halfedges[m.cell].length) - m.arc_m);
+  const double left = std::max(0.0, double(g_.halfedge(m.cell).length) - m.arc_m);
   auto push = [&](uint32_t from, double base) {
     const double h = cellEndHeading(g_, from);
-    for (const uint32_t* s = g_.successors.begin(from); s != g_.successors.end(from); ++s) {
+    for (uint32_t s : g_.successors(from)) {
       if (open_.size() >= kOpenCapacity) return;
-      const double cost = base + turnPenalty(turnAngle(h, cellStartHeading(g_, *s)), m.speed_mps);
-      open_.push_back({cost, *s});
+      const double cost = base + turnPenalty(turnAngle(h, cellStartHeading(g_, s)), m.speed_mps);
+      open_.push_back({cost, s});
     }
   };
   push(m.cell, left);
@@ -96,7 +109,7 @@ void Residency::update(const Motion& m) {
     for (size_t i = 0; i < wanted_n_; ++i) seen |= wanted_[i] == o.cell;
     if (seen) continue;
     want(o.cell);
-    push(o.cell, o.cost + g_.halfedges[o.cell].length);
+    push(o.cell, o.cost + g_.halfedge(o.cell).length);
   }
 }
 
@@ -118,12 +131,12 @@ uint32_t Residency::victim(const uint32_t* resident, size_t n, uint32_t for_rank
     if (resident[i] == graph::kNone && may_go(i)) return static_cast<uint32_t>(i);
   // Unwanted cells: the furthest from where the current cell starts.
   const glm::dvec2 here =
-      current_ < g_.cellCount() ? g_.points[g_.halfedges[current_].pts_begin] : glm::dvec2(0, 0);
+      current_ < g_.cellCount() ? g_.point(g_.halfedge(current_).pts_begin) : glm::dvec2(0, 0);
   uint32_t best = graph::kNone;
   double best_d = -1;
   for (size_t i = 0; i < n; ++i) {
     if (!may_go(i) || rank(resident[i]) != graph::kNone) continue;
-    const double d = glm::length(g_.points[g_.halfedges[resident[i]].pts_begin] - here);
+    const double d = glm::length(g_.point(g_.halfedge(resident[i]).pts_begin) - here);
     if (d > best_d) best_d = d, best = static_cast<uint32_t>(i);
   }
   if (best != graph::kNone) return best;

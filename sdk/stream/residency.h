@@ -11,8 +11,10 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "graph/graph_source.h"
 #include "graph/street_graph.h"
 
 namespace blvd::stream {
@@ -27,6 +29,9 @@ class Residency {
  public:
   // `max_cells` is the number of cell slots (at least 1); a route holds at
   // most `route_capacity` cells.
+  // The source must outlive the residency.
+  Residency(const graph::GraphSource& g, uint32_t max_cells, uint32_t route_capacity);
+  // Over a whole graph in memory (tests, tools).
   Residency(const graph::StreetGraph& g, uint32_t max_cells, uint32_t route_capacity);
 
   // Sets (or, with n == 0, clears) a route of cells, copied into the buffer
@@ -59,7 +64,8 @@ class Residency {
     double cost;
     uint32_t cell;
   };
-  const graph::StreetGraph& g_;
+  std::unique_ptr<graph::MemoryGraph> owned_;
+  const graph::GraphSource& g_;
   uint32_t max_cells_;
   std::vector<uint32_t> wanted_;
   size_t wanted_n_ = 0;
@@ -72,5 +78,7 @@ class Residency {
 // Heading of a cell's polyline at its start / end, degrees clockwise from north.
 double cellStartHeading(const graph::StreetGraph& g, uint32_t cell);
 double cellEndHeading(const graph::StreetGraph& g, uint32_t cell);
+double cellStartHeading(const graph::GraphSource& g, uint32_t cell);
+double cellEndHeading(const graph::GraphSource& g, uint32_t cell);
 
 }  // namespace blvd::stream

@@ -53,12 +53,20 @@ MatcherDesc matcherDefaults(const MatcherDesc& in) {
 }
 
 MapMatcher::MapMatcher(const graph::StreetGraph& g, const MatcherDesc& desc)
-    : g_(g),
+    : MapMatcher(std::make_unique<graph::MemoryGraph>(g, matcherDefaults(desc).grid_cell_m), desc) {}
+
+MapMatcher::MapMatcher(const graph::GraphSource& g, const MatcherDesc& desc) : MapMatcher(nullptr, &g, desc) {}
+
+MapMatcher::MapMatcher(std::unique_ptr<graph::MemoryGraph> owned, const MatcherDesc& desc)
+    : MapMatcher(std::move(owned), nullptr, desc) {}
+
+MapMatcher::MapMatcher(std::unique_ptr<graph::MemoryGraph> owned, const graph::GraphSource* g, const MatcherDesc& desc)
+    : owned_(std::move(owned)),
+      g_(owned_ ? *owned_ : *g),
       d_(matcherDefaults(desc)),
       seen_(kSeenCells),
       reached_(kReachedPerExpansion * d_.max_expansions),
       targets_(d_.max_candidates) {
-  grid_.build(g_, d_.grid_cell_m);
   const size_t K = d_.max_candidates, W = d_.lag + 1;
   cols_.resize(W);
   cand_store_.resize(K * W);
@@ -77,7 +85,7 @@ MapMatcher::MapMatcher(const graph::StreetGraph& g, const MatcherDesc& desc)
 }
 
 size_t MapMatcher::bytes() const {
-  return grid_.bytes() + cols_.capacity() * sizeof(Column) + cand_store_.capacity() * sizeof(Candidate) +
+  return indexBytes() + cols_.capacity() * sizeof(Column) + cand_store_.capacity() * sizeof(Candidate) +
          (delta_store_.capacity() + alpha_store_.capacity() + dist_store_.capacity()) * sizeof(double) +
          back_store_.capacity() + seen_.bytes() + touched_.capacity() * 4 + reached_.bytes() + targets_.bytes() +
          heap_.capacity() * sizeof(HeapItem);
@@ -97,12 +105,12 @@ void MapMatcher::reset() {
 
 CellPoint MapMatcher::project(uint32_t h, double e, double n) const {
   CellPoint best;
-  if (h >= g_.halfedges.size()) return best;
-  const auto& he = g_.halfedges[h];
+  if (h >= g_.cellCount()) return best;
+  const graph::HalfEdge he = g_.halfedge(h);
   const glm::dvec2 p(e, n);
   double best_d2 = 1e300, along = 0;
   for (uint32_t i = 0; i + 1 < he.pts_count; ++i) {
-    const glm::dvec2 a = g_.points[he.pts_begin + i], b = g_.points[he.pts_begin + i + 1];
+    const glm::dvec2 a = g_.point(he.pts_begin + i), b = g_.point(he.pts_begin + i + 1);
     const glm::dvec2 d = b - a;
     const double len2 = d.x * d.x + d.y * d.y;
     const double len = std::sqrt(len2);
@@ -131,9 +139,8 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
   seen_.clear();
   size_t touched = 0;
   const double px = obs.e, py = obs.n;
-  const auto& pts = g_.points;
-  grid_.query(px, py, r, [&](const graph::SegmentGrid::Entry& en) {
-    const glm::dvec2 a = pts[en.point], b = pts[en.point + 1];
+  g_.forSegmentsNear(px, py, r, [&](const graph::SegmentGrid::Entry& en) {
+    const glm::dvec2 a = g_.point(en.point), b = g_.point(en.point + 1);
     const double dx = b.x - a.x, dy = b.y - a.y;
     const double len2 = dx * dx + dy * dy;
     const double t = len2 > 1e-18 ? std::clamp(((px - a.x) * dx + (py - a.y) * dy) / len2, 0.0, 1.0) : 0.0;
@@ -180,10 +187,10 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
   for (size_t k = 0; k < touched; ++k) {
     const uint32_t h = touched_[k];
     const Seen& s = *seen_.find(h);
-    const glm::dvec2 a = pts[s.point], b = pts[s.point + 1];
+    const glm::dvec2 a = g_.point(s.point), b = g_.point(s.point + 1);
     const double hd = bearing(b.x - a.x, b.y - a.y);
     const double dist = s.dist;
-    const auto& he = g_.halfedges[h];
+    const graph::HalfEdge he = g_.halfedge(h);
     // Past either end of the street, the distance has an along-street part
     // (the overshoot) that the lane offset does not explain: it is weighed with
     // the position's own sigma, so a position just past a junction belongs to
@@ -200,7 +207,7 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
     if (!(he.flags & graph::kReverseOfOneway))
       insert(h, base + (use_heading ? kappa * (std::cos(hd - obs.heading_rad) - 1) : 0), h, false, hd);
     const uint32_t tw = he.twin;
-    if (tw < g_.halfedges.size() && !(g_.halfedges[tw].flags & graph::kReverseOfOneway)) {
+    if (tw < g_.cellCount() && !(g_.halfedge(tw).flags & graph::kReverseOfOneway)) {
       const double ht = hd >= kPi ? hd - kPi : hd + kPi;
       insert(tw, base + (use_heading ? kappa * (std::cos(ht - obs.heading_rad) - 1) : 0), h, true, ht);
     }
@@ -210,17 +217,17 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
     Candidate& c = col.cand[j];
     const uint32_t listed = static_cast<uint32_t>(c.p.arc_m);
     const bool reversed = c.p.lateral_m < 0;
-    const auto& he = g_.halfedges[listed];
+    const graph::HalfEdge he = g_.halfedge(listed);
     double along = 0, total = 0;
     const Seen& s = *seen_.find(listed);
     const uint32_t seg = s.point;
     for (uint32_t i = he.pts_begin; i + 1 < he.pts_begin + he.pts_count; ++i) {
-      const double l = glm::length(pts[i + 1] - pts[i]);
+      const double l = glm::length(g_.point(i + 1) - g_.point(i));
       if (i < seg) along += l;
       else if (i == seg) along += l * s.t;
       total += l;
     }
-    const glm::dvec2 a = pts[seg], b = pts[seg + 1];
+    const glm::dvec2 a = g_.point(seg), b = g_.point(seg + 1);
     const glm::dvec2 q = a + (b - a) * static_cast<double>(s.t);
     const double len = glm::length(b - a);
     const double lat = len > 1e-9 ? ((px - q.x) * (b.y - a.y) - (py - q.y) * (b.x - a.x)) / len : 0.0;
@@ -278,9 +285,9 @@ void MapMatcher::routeDistances(const Candidate& from, const Column& to, double 
     heap_[hs++] = HeapItem{static_cast<float>(d), c};
     std::push_heap(heap_.begin(), heap_.begin() + hs, heapGreater);
   };
-  const double d0 = std::max(0.0, static_cast<double>(g_.halfedges[src].length) - from.p.arc_m);
+  const double d0 = std::max(0.0, static_cast<double>(g_.halfedge(src).length) - from.p.arc_m);
   if (d0 <= cap)
-    for (const uint32_t* s = g_.successors.begin(src); s != g_.successors.end(src); ++s) push(*s, d0);
+    for (uint32_t s : g_.successors(src)) push(s, d0);
   while (hs > 0 && remaining > 0) {
     std::pop_heap(heap_.begin(), heap_.begin() + hs, heapGreater);
     const HeapItem it = heap_[--hs];
@@ -295,9 +302,9 @@ void MapMatcher::routeDistances(const Candidate& from, const Column& to, double 
         --remaining;
       }
     }
-    const double nd = it.d + g_.halfedges[it.cell].length;
+    const double nd = it.d + g_.halfedge(it.cell).length;
     if (nd > cap) continue;
-    for (const uint32_t* s = g_.successors.begin(it.cell); s != g_.successors.end(it.cell); ++s) push(*s, nd);
+    for (uint32_t s : g_.successors(it.cell)) push(s, nd);
   }
 }
 
@@ -399,7 +406,7 @@ bool MapMatcher::step(const MatchObservation& obs) {
 
 CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double heading_rad,
                              double heading_sigma_rad) const {
-  if (from.cell >= g_.halfedges.size()) return from;
+  if (from.cell >= g_.cellCount()) return from;
   const double s2 = d_.road_sigma_m * d_.road_sigma_m;
   const double kappa = heading_sigma_rad > 0 ? 1.0 / (heading_sigma_rad * heading_sigma_rad +
                                                        (d_.heading_sigma_deg * kDeg) * (d_.heading_sigma_deg * kDeg))
@@ -415,13 +422,13 @@ CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double h
   // off the bisector: the heading turns gradually through the corner).
   const double near_end_m = std::max(3.0, 1.5 * d_.road_sigma_m);
   for (int hop = 0; hop < 2; ++hop) {
-    const double len = g_.halfedges[cur.cell].length;
+    const double len = g_.halfedge(cur.cell).length;
     const bool past_end = cur.arc_m >= len - 0.01;
     if (!past_end && cur.arc_m < len - near_end_m) break;  // within the cell
     CellPoint best;
     double best_cost = 1e300;
-    for (const uint32_t* s = g_.successors.begin(cur.cell); s != g_.successors.end(cur.cell); ++s) {
-      const CellPoint p = project(*s, e, n);
+    for (uint32_t s : g_.successors(cur.cell)) {
+      const CellPoint p = project(s, e, n);
       const double c = cost(p);
       if (p.cell != graph::kNone && c < best_cost) best = p, best_cost = c;
     }
@@ -452,11 +459,11 @@ CellPoint MapMatcher::follow(const CellPoint& from, double e, double n, double h
   if (heading_sigma_rad > 0 && heading_sigma_rad < kForkHeadingSigma && cur.arc_m < kForkWindowM && cur.arc_m > 0.01) {
     CellPoint best = cur;
     double best_cost = cost(cur);
-    const uint32_t twin = g_.halfedges[cur.cell].twin;
-    for (const uint32_t* p = g_.predecessors.begin(cur.cell); p != g_.predecessors.end(cur.cell); ++p) {
-      for (const uint32_t* s = g_.successors.begin(*p); s != g_.successors.end(*p); ++s) {
-        if (*s == cur.cell || *s == twin) continue;
-        const CellPoint q = project(*s, e, n);
+    const uint32_t twin = g_.halfedge(cur.cell).twin;
+    for (uint32_t p : g_.predecessors(cur.cell)) {
+      for (uint32_t s : g_.successors(p)) {
+        if (s == cur.cell || s == twin) continue;
+        const CellPoint q = project(s, e, n);
         const double c = cost(q);
         if (q.cell != graph::kNone && q.arc_m > 0.01 && c < best_cost) best = q, best_cost = c;
       }

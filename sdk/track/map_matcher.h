@@ -33,10 +33,11 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "graph/graph_source.h"
 #include "graph/street_graph.h"
-#include "graph/segment_grid.h"
 #include "track/cell_scratch.h"
 
 namespace blvd::track {
@@ -101,6 +102,9 @@ class MapMatcher {
  public:
   // Builds the spatial index and allocates every buffer. The graph must outlive the matcher.
   MapMatcher(const graph::StreetGraph& g, const MatcherDesc& desc = MatcherDesc{});
+  // Over any graph source (a package's paged graph), with its own spatial
+  // index (desc.grid_cell_m is then unused). The source must outlive the matcher.
+  MapMatcher(const graph::GraphSource& g, const MatcherDesc& desc = MatcherDesc{});
 
   // Forgets the chain (a new trip).
   void reset();
@@ -138,7 +142,10 @@ class MapMatcher {
 
   const MatcherDesc& desc() const { return d_; }
   const MatchStats& stats() const { return stats_; }
-  const graph::SegmentGrid& grid() const { return grid_; }
+  const graph::GraphSource& graph() const { return g_; }
+  // Bytes of the spatial index the matcher built for itself (0 over a source
+  // it was given: the source owns its index).
+  size_t indexBytes() const { return owned_ ? owned_->bytes() : 0; }
   size_t bytes() const;
 
  private:
@@ -165,9 +172,12 @@ class MapMatcher {
   void routeDistances(const Candidate& from, const Column& to, double cap, double* out);
   Column& column(uint64_t step) { return cols_[step % cols_.size()]; }
 
-  const graph::StreetGraph& g_;
+  MapMatcher(std::unique_ptr<graph::MemoryGraph> owned, const MatcherDesc& desc);
+  MapMatcher(std::unique_ptr<graph::MemoryGraph> owned, const graph::GraphSource* g, const MatcherDesc& desc);
+
+  std::unique_ptr<graph::MemoryGraph> owned_;  // when built over a StreetGraph
+  const graph::GraphSource& g_;
   MatcherDesc d_;
-  graph::SegmentGrid grid_;
   std::vector<Column> cols_;
   std::vector<Candidate> cand_store_;
   std::vector<double> delta_store_, alpha_store_, dist_store_;

@@ -35,8 +35,17 @@ TrackerDesc trackerDefaults(const TrackerDesc& in) {
 }
 
 Tracker::Tracker(const geo::LocalFrame& frame, const graph::StreetGraph* graph, const TrackerDesc& desc)
-    : d_(trackerDefaults(desc)), frame_(frame), graph_(graph), ekf_(d_.ekf) {
-  if (graph_ && !graph_->halfedges.empty()) matcher_ = std::make_unique<MapMatcher>(*graph_, d_.matcher);
+    : d_(trackerDefaults(desc)), frame_(frame), ekf_(d_.ekf) {
+  if (graph && !graph->halfedges.empty()) matcher_ = std::make_unique<MapMatcher>(*graph, d_.matcher);
+  if (matcher_) graph_ = &matcher_->graph();
+  ring_.resize(d_.ring_capacity);
+  batch_.resize(d_.ring_capacity);
+}
+
+Tracker::Tracker(const geo::LocalFrame& frame, const graph::GraphSource* graph, const TrackerDesc& desc)
+    : d_(trackerDefaults(desc)), frame_(frame), ekf_(d_.ekf) {
+  if (graph && graph->cellCount() > 0) matcher_ = std::make_unique<MapMatcher>(*graph, d_.matcher);
+  if (matcher_) graph_ = &matcher_->graph();
   ring_.resize(d_.ring_capacity);
   batch_.resize(d_.ring_capacity);
 }
@@ -162,9 +171,8 @@ void Tracker::matchStep(const double* fix_en, double fix_sigma, bool heading_at_
     // `follow` (and of the truth): a position before the head cell's start that
     // is nearer to the cell it came from stays on that cell.
     if (before.cell != graph::kNone && before.cell != cur_.cell && cur_.arc_m <= 0.01) {
-      const graph::StreetGraph& g = *graph_;
       bool pred = false;
-      for (const uint32_t* s = g.successors.begin(before.cell); s != g.successors.end(before.cell); ++s) pred |= *s == cur_.cell;
+      for (uint32_t s : graph_->successors(before.cell)) pred |= s == cur_.cell;
       if (pred) {
         const CellPoint q = matcher_->project(before.cell, obs.e, obs.n);
         if (q.cell != graph::kNone && q.dist_m < cur_.dist_m) cur_ = q;
@@ -234,18 +242,18 @@ bool Tracker::ambiguous() const {
   // A fixed reach of ambiguity_sigmas single-fix sigmas held the aid off beside
   // every street within 12.5 m at sigma 5 m however many fixes had
   // told them apart (a fifth of all HMM steps on the Monaco drives).
-  const graph::StreetGraph& g = *graph_;
+  const graph::GraphSource& g = *graph_;
   const uint32_t head = cur_.cell;
-  const uint32_t twin = g.halfedges[head].twin;
+  const graph::HalfEdge he = g.halfedge(head);
+  const uint32_t twin = he.twin, head_end = g.endVertex(head);
   const double reach = d_.ambiguity_sigmas * std::sqrt(std::max(0.0, lateral_mean_var_));
   for (uint32_t i = 0; i < matcher_->candidateCount(); ++i) {
     const CellPoint& c = matcher_->candidate(i);
     if (c.cell == head || c.cell == twin) continue;
     if (std::cos(c.heading_rad - cur_.heading_rad) < 0.8) continue;  // not parallel (> 37 deg)
     // Streets meeting the head's ends continue it rather than run beside it.
-    if (g.halfedges[c.cell].origin == g.halfedges[head].origin || g.endVertex(c.cell) == g.endVertex(head) ||
-        g.halfedges[c.cell].origin == g.endVertex(head) || g.endVertex(c.cell) == g.halfedges[head].origin)
-      continue;
+    const uint32_t origin = g.halfedge(c.cell).origin, end = g.endVertex(c.cell);
+    if (origin == he.origin || end == head_end || origin == head_end || end == he.origin) continue;
     // Offsets are measured to the right of each street's own direction; the two
     // run the same way (above), so they subtract.
     const double delta = (cur_.lateral_m - c.lateral_m) + expectedOffset(c.cell) - expectedOffset(head);
@@ -255,7 +263,7 @@ bool Tracker::ambiguous() const {
 }
 
 double Tracker::expectedOffset(uint32_t cell) const {
-  return laneOffset(graph_->halfedges[cell], d_.left_hand_traffic ? -d_.lane_offset_m : d_.lane_offset_m);
+  return laneOffset(graph_->halfedge(cell), d_.left_hand_traffic ? -d_.lane_offset_m : d_.lane_offset_m);
 }
 
 void Tracker::checkStreetAgreement(double e, double n, double sigma) {
@@ -422,7 +430,8 @@ const Pose& Tracker::update(double t) {
     // (an eye at the kerb faces the corner's wall mid-turn). Streets narrower
     // than twice that keep the eye on the centre line.
     constexpr double kEyeInset = 1.0;
-    const double width = graph_->halfedges[cur_.cell].width > 0 ? graph_->halfedges[cur_.cell].width : 4.0;
+    const float w = graph_->halfedge(cur_.cell).width;
+    const double width = w > 0 ? w : 4.0;
     const double half = std::max(0.0, 0.5 * width - kEyeInset);
     const double lat = std::clamp(cur_.lateral_m, -half, half);
     const double hr = cur_.heading_rad;

@@ -113,6 +113,10 @@ class Tracker {
   // `graph` may be null (fusion only, no map matching); it must outlive the
   // tracker. The frame is copied.
   Tracker(const geo::LocalFrame& frame, const graph::StreetGraph* graph, const TrackerDesc& desc = TrackerDesc{});
+  // Over any graph source (a package's paged graph, stream::City::streets()).
+  Tracker(const geo::LocalFrame& frame, const graph::GraphSource* graph, const TrackerDesc& desc = TrackerDesc{});
+  Tracker(const geo::LocalFrame& frame, std::nullptr_t, const TrackerDesc& desc = TrackerDesc{})
+      : Tracker(frame, static_cast<const graph::GraphSource*>(nullptr), desc) {}
   ~Tracker();
   Tracker(const Tracker&) = delete;
   Tracker& operator=(const Tracker&) = delete;
@@ -181,7 +185,7 @@ class Tracker {
 
   TrackerDesc d_;
   geo::LocalFrame frame_;
-  const graph::StreetGraph* graph_;
+  const graph::GraphSource* graph_ = nullptr;  // the matcher's: null without one
   std::unique_ptr<MapMatcher> matcher_;
   Ekf ekf_;
 

@@ -252,8 +252,8 @@ TEST(MapMatcher, StepsDoNotAllocate) {
 TEST(MapMatcher, ScratchDoesNotGrowWithTheCity) {
   const auto small = blvd_test::makeGrid(8, 60), large = blvd_test::makeGrid(32, 60);
   MapMatcher a(small), b(large);
-  EXPECT_EQ(a.bytes() - a.grid().bytes(), b.bytes() - b.grid().bytes());
-  EXPECT_LT(a.grid().bytes(), b.grid().bytes());
+  EXPECT_EQ(a.bytes() - a.indexBytes(), b.bytes() - b.indexBytes());
+  EXPECT_LT(a.indexBytes(), b.indexBytes());
   for (int i = 0; i < 60; ++i) {
     const double e = std::min(i * 7.0, 400.0), n = std::max(0.0, i * 7.0 - 400.0);
     const MatchObservation o = obsAt(i, e + 1.5, n, 5, i * 7.0 < 400 ? 90 : 0);

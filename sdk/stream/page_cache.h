@@ -1,0 +1,65 @@
+// A fixed cache of pages of a package's tables: fixed-size records read by
+// index, a page at a time, into slots carved when the cache is made. What a
+// city's tables cost a vehicle is then the cache's size, whatever the city's:
+// a page that is not cached is copied from the package (and the file's pages
+// it came from are dropped from the process), evicting the least recently used
+// page of its set.
+//
+// Four-way set-associative, keyed by (table, page). Thread-safe: one mutex
+// around lookup and copy, so the render thread, the loader threads and the
+// tracker may read the same tables; a record is copied out under the lock.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <mutex>
+#include <vector>
+
+#include "package/reader.h"
+
+namespace blvd::stream {
+
+struct PageCacheStats {
+  uint64_t hits = 0, misses = 0;
+};
+
+class PageCache {
+ public:
+  static constexpr uint32_t kWays = 4;
+
+  // `pages` (rounded up to a multiple of kWays, at least kWays) slots of
+  // `page_bytes` each. The reader must outlive the cache.
+  PageCache(const package::PackageReader& reader, uint32_t pages, uint32_t page_bytes);
+
+  // A table of `count` records of `record_bytes` each at `data` (inside the
+  // reader's mapping). Returns its id for read().
+  uint32_t addTable(const uint8_t* data, uint32_t count, uint32_t record_bytes);
+
+  // Copies record i of table t (i < its count: callers check) into out.
+  void read(uint32_t t, uint32_t i, void* out) const;
+
+  uint64_t bytes() const { return slots_.size() + tags_.size() * sizeof(Tag) + tables_.size() * sizeof(Table); }
+  uint32_t pageBytes() const { return page_bytes_; }
+  PageCacheStats stats() const;
+
+ private:
+  struct Table {
+    const uint8_t* data;
+    uint32_t count, record, per_page;
+  };
+  struct Tag {
+    uint64_t key = ~0ull;  // (table << 32) | page
+    uint64_t used = 0;     // tick of the last read
+  };
+  const uint8_t* load(uint32_t t, uint32_t page, size_t slot) const;
+
+  const package::PackageReader& reader_;
+  uint32_t page_bytes_, sets_;
+  std::vector<Table> tables_;
+  mutable std::mutex mu_;
+  mutable std::vector<uint8_t> slots_;
+  mutable std::vector<Tag> tags_;
+  mutable uint64_t tick_ = 0;
+  mutable PageCacheStats stats_;
+};
+
+}  // namespace blvd::stream

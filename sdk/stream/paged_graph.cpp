@@ -1,0 +1,256 @@
+#include "stream/paged_graph.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace blvd::stream {
+namespace {
+
+// Record sizes of the GRPH, CELL and SIDX tables (docs/package-format.md).
+constexpr uint32_t kVertexBytes = 24, kHalfEdgeBytes = 44, kFaceBytes = 16, kPointBytes = 16;
+constexpr uint32_t kGraphVersion = 1;
+
+uint32_t readU32(const uint8_t* p) {
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+
+// Walks a section's counted tables without reading them.
+struct Cursor {
+  const package::Span& s;
+  const char* section;
+  size_t at = 0;
+  std::string error;
+
+  bool count(uint32_t* n, uint64_t record, const char* what) {
+    if (at + 4 > s.size) return fail(std::string(what) + ": count truncated");
+    *n = readU32(s.data + at);
+    at += 4;
+    if (record * *n > s.size - at) return fail(std::string(what) + ": " + std::to_string(*n) + " records overrun the section");
+    return true;
+  }
+  const uint8_t* skip(uint64_t bytes) {
+    const uint8_t* p = s.data + at;
+    at += bytes;
+    return p;
+  }
+  bool fail(const std::string& why) {
+    if (error.empty()) error = std::string(section) + " at file offset " + std::to_string(s.offset + at) + ": " + why;
+    return false;
+  }
+};
+
+}  // namespace
+
+core::Status PagedGraph::locate(const package::PackageReader& reader, std::string& err) {
+  package::Span g, c;
+  for (auto [tag, span] : {std::pair{package::kSectionGraph, &g}, std::pair{package::kSectionCells, &c}}) {
+    const core::Status st = reader.checkedSection(tag, *span, err);
+    if (st == core::Status::NotFound) {
+      err = reader.name() + ": missing section " + package::tagToString(tag);
+      return core::Status::Corrupt;
+    }
+    if (st != core::Status::Ok) return st;
+  }
+  grph_ = g;
+  cell_ = c;
+  Cursor gc{g, "graph section GRPH", 0, {}};
+  uint32_t version = 0;
+  bool ok = gc.count(&version, 0, "version") && (version == kGraphVersion || gc.fail("unknown graph version")) &&
+            gc.count(&vertices_, kVertexBytes, "vertices") && gc.skip(uint64_t(vertices_) * kVertexBytes) &&
+            gc.count(&halfedges_, kHalfEdgeBytes, "half-edges") &&
+            (at_halfedges_ = gc.skip(uint64_t(halfedges_) * kHalfEdgeBytes)) && gc.count(&faces_, kFaceBytes, "faces") &&
+            gc.skip(uint64_t(faces_) * kFaceBytes) && gc.count(&points_, kPointBytes, "points") &&
+            (at_points_ = gc.skip(uint64_t(points_) * kPointBytes));
+  Cursor cc{c, "cell section CELL", 0, {}};
+  uint32_t cells = 0;
+  ok = ok && cc.count(&version, 0, "version") && (version == kGraphVersion || cc.fail("unknown cell version")) &&
+       cc.count(&cells, 0, "cells") && (cells == halfedges_ || cc.fail("cell count does not match the graph's half-edges"));
+  static const char* kNames[3] = {"successors", "predecessors", "local blocks"};
+  for (int l = 0; ok && l < 3; ++l) {
+    ok = cc.count(&lists_[l].count, 0, kNames[l]) && (uint64_t(cells) + 1) * 4 <= c.size - cc.at;
+    if (!ok) {
+      cc.fail(std::string(kNames[l]) + ": offsets truncated");
+      break;
+    }
+    at_lists_[l][0] = cc.skip((uint64_t(cells) + 1) * 4);
+    ok = uint64_t(lists_[l].count) * 4 <= c.size - cc.at || cc.fail(std::string(kNames[l]) + ": items truncated");
+    if (ok) at_lists_[l][1] = cc.skip(uint64_t(lists_[l].count) * 4);
+  }
+  if (!ok) {
+    err = reader.name() + ": " + (gc.error.empty() ? cc.error : gc.error);
+    return core::Status::Corrupt;
+  }
+  reader.dropPages(g);
+  reader.dropPages(c);
+  return core::Status::Ok;
+}
+
+core::Status PagedGraph::open(const package::PackageReader& reader, std::string& err, const PagedGraphDesc& desc) {
+  *this = PagedGraph{};
+  core::Status st = locate(reader, err);
+  if (st != core::Status::Ok) return st;
+  package::Span sidx;
+  const bool has_grid = reader.hasSection(package::kSectionSpatialIndex);
+  if (has_grid) {
+    if ((st = reader.checkedSection(package::kSectionSpatialIndex, sidx, err)) != core::Status::Ok) return st;
+    try {
+      stored_ = graph::parseGridShape(sidx.data, sidx.size, sidx.offset);
+    } catch (const core::Error& e) {
+      err = reader.name() + ": " + e.what();
+      return e.status();
+    }
+    reader.dropPages(sidx);
+  }
+  cache_ = std::make_unique<PageCache>(reader, desc.pages ? desc.pages : PagedGraphDesc::kDefaultPages,
+                                       desc.page_bytes ? desc.page_bytes : PagedGraphDesc::kDefaultPageBytes);
+  t_halfedges_ = cache_->addTable(at_halfedges_, halfedges_, kHalfEdgeBytes);
+  t_points_ = cache_->addTable(at_points_, points_, kPointBytes);
+  for (int l = 0; l < 3; ++l) {
+    lists_[l].offsets = cache_->addTable(at_lists_[l][0], halfedges_ + 1, 4);
+    lists_[l].items = cache_->addTable(at_lists_[l][1], lists_[l].count, 4);
+  }
+  if (has_grid) {
+    t_grid_offsets_ = cache_->addTable(sidx.data + stored_.offsets_at, uint32_t(stored_.shape.cellCount() + 1), 4);
+    t_grid_entries_ = cache_->addTable(sidx.data + stored_.entries_at, stored_.entries, 8);
+  }
+  if ((st = check(reader.name(), err)) != core::Status::Ok) return st;
+  if (has_grid && (st = checkGrid(reader.name(), err)) != core::Status::Ok) return st;
+  if (!has_grid) {
+    grid_ = std::make_unique<graph::SegmentGrid>();
+    grid_->build(*this);
+  }
+  return core::Status::Ok;
+}
+
+uint64_t PagedGraph::fileOffset(const uint8_t* p) const {
+  const package::Span& s = p >= grph_.data && p < grph_.data + grph_.size ? grph_ : cell_;
+  return s.offset + static_cast<uint64_t>(p - s.data);
+}
+
+// One pass over every record the runtime reads, with parseGraph's and
+// parseCells's checks; the cache bounds what the pass holds.
+core::Status PagedGraph::check(const std::string& file, std::string& err) const {
+  auto bad = [&](const uint8_t* table, uint64_t record, uint32_t i, const std::string& why) {
+    err = file + ": " + why + " (record " + std::to_string(i) + " at file offset " +
+          std::to_string(fileOffset(table) + record * i) + ")";
+    return core::Status::Corrupt;
+  };
+  for (uint32_t h = 0; h < halfedges_; ++h) {
+    const graph::HalfEdge e = halfedge(h);
+    if (e.origin >= vertices_ || e.twin >= halfedges_ || e.next >= halfedges_ || e.face >= faces_ || e.pts_count < 2 ||
+        e.pts_begin > points_ || e.pts_count > points_ - e.pts_begin)
+      return bad(at_halfedges_, kHalfEdgeBytes, h, "graph section GRPH: half-edge index out of range");
+    if (static_cast<uint8_t>(e.road_class) > static_cast<uint8_t>(graph::RoadClass::Other))
+      return bad(at_halfedges_, kHalfEdgeBytes, h, "graph section GRPH: bad road class");
+  }
+  for (uint32_t i = 0; i < points_; ++i) {
+    const glm::dvec2 p = point(i);
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) return bad(at_points_, kPointBytes, i, "graph section GRPH: non-finite point");
+  }
+  static const char* kNames[3] = {"successors", "predecessors", "local blocks"};
+  for (int l = 0; l < 3; ++l) {
+    const uint32_t limit = l == 2 ? faces_ : halfedges_;
+    uint32_t prev = 0;
+    for (uint32_t h = 0; h <= halfedges_; ++h) {
+      const uint32_t o = u32(lists_[l].offsets, h);
+      if ((h == 0 && o != 0) || o < prev || (h == halfedges_ && o != lists_[l].count))
+        return bad(at_lists_[l][0], 4, h, std::string("cell section CELL: ") + kNames[l] + ": offsets do not span the items");
+      prev = o;
+    }
+    for (uint32_t i = 0; i < lists_[l].count; ++i)
+      if (u32(lists_[l].items, i) >= limit)
+        return bad(at_lists_[l][1], 4, i, std::string("cell section CELL: ") + kNames[l] + ": item out of range");
+  }
+  return core::Status::Ok;
+}
+
+core::Status PagedGraph::checkGrid(const std::string& file, std::string& err) const {
+  if (stored_.shape.nx == 0 && stored_.entries == 0) return core::Status::Ok;
+  auto bad = [&](const std::string& why) {
+    err = file + ": spatial index SIDX: " + why;
+    return core::Status::Corrupt;
+  };
+  const uint32_t cells = static_cast<uint32_t>(stored_.shape.cellCount());
+  uint32_t prev = 0;
+  for (uint32_t c = 0; c <= cells; ++c) {
+    const uint32_t o = u32(t_grid_offsets_, c);
+    if ((c == 0 && o != 0) || o < prev || (c == cells && o != stored_.entries))
+      return bad("offsets do not span the entries at grid cell " + std::to_string(c));
+    prev = o;
+  }
+  for (uint32_t i = 0; i < stored_.entries; ++i) {
+    graph::SegmentGrid::Entry e;
+    cache_->read(t_grid_entries_, i, &e);
+    if (e.halfedge >= halfedges_ || e.point + 1 >= points_) return bad("entry " + std::to_string(i) + " out of range");
+  }
+  return core::Status::Ok;
+}
+
+uint32_t PagedGraph::u32(uint32_t table, uint32_t i) const {
+  uint32_t v;
+  cache_->read(table, i, &v);
+  return v;
+}
+
+graph::HalfEdge PagedGraph::halfedge(uint32_t h) const {
+  uint8_t b[kHalfEdgeBytes];
+  cache_->read(t_halfedges_, h, b);
+  graph::HalfEdge e;
+  std::memcpy(&e.origin, b + 0, 4);
+  std::memcpy(&e.twin, b + 4, 4);
+  std::memcpy(&e.next, b + 8, 4);
+  std::memcpy(&e.face, b + 12, 4);
+  std::memcpy(&e.pts_begin, b + 16, 4);
+  std::memcpy(&e.pts_count, b + 20, 4);
+  std::memcpy(&e.length, b + 24, 4);
+  std::memcpy(&e.width, b + 28, 4);
+  e.road_class = static_cast<graph::RoadClass>(b[32]);
+  e.flags = b[33];
+  e.layer = static_cast<int8_t>(b[34]);
+  std::memcpy(&e.osm_way, b + 36, 8);
+  return e;
+}
+
+glm::dvec2 PagedGraph::point(uint32_t i) const {
+  double p[2];
+  cache_->read(t_points_, i, p);
+  return {p[0], p[1]};
+}
+
+void PagedGraph::listBounds(graph::CellList list, uint32_t h, uint32_t* first, uint32_t* last) const {
+  *first = u32(lists(list).offsets, h);
+  *last = u32(lists(list).offsets, h + 1);
+}
+
+uint32_t PagedGraph::item(graph::CellList list, uint32_t i) const { return u32(lists(list).items, i); }
+
+uint32_t PagedGraph::gridEntryCount() const {
+  return grid_ ? static_cast<uint32_t>(grid_->entryCount()) : stored_.entries;
+}
+
+void PagedGraph::segmentsNear(double x, double y, double r, EntryFn fn, void* ctx) const {
+  if (grid_) {
+    grid_->query(x, y, r, [&](const graph::SegmentGrid::Entry& e) { fn(e, ctx); });
+    return;
+  }
+  int x0, x1, y0, y1;
+  if (!stored_.shape.cellsNear(x, y, r, &x0, &x1, &y0, &y1)) return;
+  for (int gy = y0; gy <= y1; ++gy)
+    for (int gx = x0; gx <= x1; ++gx) {
+      const uint32_t c = static_cast<uint32_t>(gy) * stored_.shape.nx + gx;
+      const uint32_t last = u32(t_grid_offsets_, c + 1);
+      for (uint32_t i = u32(t_grid_offsets_, c); i < last; ++i) {
+        graph::SegmentGrid::Entry e;
+        cache_->read(t_grid_entries_, i, &e);
+        fn(e, ctx);
+      }
+    }
+}
+
+uint64_t PagedGraph::bytes() const {
+  return sizeof(*this) + (cache_ ? cache_->bytes() : 0) + (grid_ ? grid_->bytes() : 0);
+}
+
+}  // namespace blvd::stream
