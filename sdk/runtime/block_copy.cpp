@@ -10,16 +10,15 @@ namespace blvd::runtime {
 uint32_t CellSlots::sharedBlocks(uint32_t cell, uint32_t victim, std::vector<BlockCopy>& copies, uint32_t* skip) const {
   copies.clear();
   if (!block_reuse_) return 0;
-  for (const uint32_t block : city_.streets().localBlocks(cell)) {
-    const uint32_t* b = &block;
+  for (const uint32_t b : city_.streets().localBlocks(cell)) {
     if (copies.size() >= copies.capacity()) break;  // reserved for min(max local blocks, kMaxSkippedBlocks): the rest decode
     for (uint32_t i = 0; i < slots_.size(); ++i) {
       if (i == victim || slots_[i].state != CellSlot::Resident) continue;
       bool has = false;
-      for (const SlotBlock& sb : slots_[i].blocks) has |= sb.block == *b;
+      for (const SlotBlock& sb : slots_[i].blocks) has |= sb.block == b;
       if (!has) continue;
-      skip[copies.size()] = *b;
-      copies.push_back(BlockCopy{*b, i});
+      skip[copies.size()] = b;
+      copies.push_back(BlockCopy{b, i});
       break;
     }
   }

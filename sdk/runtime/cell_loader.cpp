@@ -391,23 +391,22 @@ bool CellLoader::decode(Staging& s) {
   // One open per block: its blob's CRC and GLB JSON once for all its levels
   // (decision 0008 §13); the open's cost counts with level 0's.
   stream::City::BlockBlob blob;
-  for (const uint32_t block : city_.streets().localBlocks(s.cell)) {
-    const uint32_t* b = &block;
-    if (std::find(s.skip, s.skip + s.skip_count, *b) != s.skip + s.skip_count) continue;  // the runtime copies it
-    for (uint32_t k = 0; k < city_.blocks()[*b].lod_count; ++k) {
-      const graph::BlockRecord& rec = city_.blocks()[*b];
+  for (const uint32_t b : city_.streets().localBlocks(s.cell)) {
+    if (std::find(s.skip, s.skip + s.skip_count, b) != s.skip + s.skip_count) continue;  // the runtime copies it
+    for (uint32_t k = 0; k < city_.blocks()[b].lod_count; ++k) {
+      const graph::BlockRecord& rec = city_.blocks()[b];
       const double units = double(rec.triangles[k]) + double(rec.vertices[k]);
       waitForGap(s, false, units);
       if (abandoned()) return false;
       const int64_t cpu0 = threadCpuNs();
       if (k == 0) {
-        const core::Status st = city_.openBlock(*b, blob, err);
+        const core::Status st = city_.openBlock(b, blob, err);
         if (st != core::Status::Ok) return fail(err);
       }
       const core::Status st = city_.decodeBlockLevel(blob, k, s.scratch, err);
       if (k + 1 == rec.lod_count) blob.close();
       if (st != core::Status::Ok) return fail(err);
-      if (!stage(MeshKind::Block, *b, k)) return true;
+      if (!stage(MeshKind::Block, b, k)) return true;
       measured(s, false, units, threadCpuNs() - cpu0);
     }
   }
