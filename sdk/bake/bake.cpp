@@ -238,8 +238,10 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   writer.addSection(package::kSectionSpatialIndex, graph::serializeSegmentGrid(grid));
   writer.addSection(package::kSectionBlocks, graph::serializeBlocks(blocks));
   if (!tables.visibility.empty()) {
-    writer.addSection(package::kSectionVisibility, graph::serializeVisibility(tables));
-    writer.addSection(package::kSectionImpostors, graph::serializeImpostors(tables));
+    std::vector<uint64_t> visibility_at, impostors_at;
+    writer.addSection(package::kSectionVisibility, graph::serializeVisibility(tables, &visibility_at));
+    writer.addSection(package::kSectionImpostors, graph::serializeImpostors(tables, &impostors_at));
+    writer.addSection(package::kSectionCellTableIndex, graph::serializeCellTableIndex(visibility_at, impostors_at));
   }
   const std::string meta = packageMeta(osm_path, city, opt, tiles, route, sum);
   writer.addSection(package::kSectionMeta, std::vector<uint8_t>(meta.begin(), meta.end()));

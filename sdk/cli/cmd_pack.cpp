@@ -100,9 +100,12 @@ int verify(const std::string& path) {
   core::Status st = package::PackageReader::open(path, r, err);
   if (st == core::Status::Ok) st = r.verify(err);
   if (st == core::Status::Ok) {
-    // The sections must also parse (bounds and index checks), not only match their CRCs.
-    stream::City city;
+    // The sections must also parse (bounds and index checks), not only match their CRCs:
+    // whole, as the tools read them, and paged, as the runtime does (SIDX, CTIX).
+    stream::City city, paged;
     st = city.open(path, err);
+    if (st == core::Status::Ok)
+      st = paged.open(path, err, stream::City::Tables::All, stream::City::GraphTables::Paged);
   }
   if (st != core::Status::Ok) {
     std::fprintf(stderr, "blvd pack verify: %s\n", err.c_str());

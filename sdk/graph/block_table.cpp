@@ -77,8 +77,7 @@ std::vector<uint8_t> serializeBlocks(const std::vector<BlockRecord>& blocks) {
   return std::move(w.bytes());
 }
 
-void parseBlocks(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t blob_count,
-                 std::vector<BlockRecord>& out) {
+BlockTableShape parseBlockTableShape(const uint8_t* data, size_t size, uint64_t file_offset) {
   core::ByteReader r(data, size, "block section BLCK", file_offset);
   const uint32_t version = r.get<uint32_t>();
   if (version != kBlockTableVersion)
@@ -87,30 +86,43 @@ void parseBlocks(const uint8_t* data, size_t size, uint64_t file_offset, uint32_
            0);
   // Later minor versions may append fields to a record; a reader skips them.
   const size_t at_size = r.pos();
-  const uint32_t record_size = r.get<uint32_t>();
-  if (record_size < kRecordSize || record_size % 4)
-    r.fail("record size " + std::to_string(record_size) + " is not a multiple of 4 >= " + std::to_string(kRecordSize),
+  BlockTableShape t;
+  t.record_size = r.get<uint32_t>();
+  if (t.record_size < kRecordSize || t.record_size % 4)
+    r.fail("record size " + std::to_string(t.record_size) + " is not a multiple of 4 >= " + std::to_string(kRecordSize),
            at_size);
-  const uint32_t n = r.getCount(record_size);
-  if (uint64_t{n} * record_size != r.remaining())
-    r.fail(std::to_string(r.remaining() - uint64_t{n} * record_size) + " bytes after the last record");
-  out.resize(n);
-  for (BlockRecord& b : out) {
-    const size_t at = r.pos();
-    b.blob = r.get<uint32_t>();
-    b.building_count = r.get<uint32_t>();
-    b.flags = r.get<uint32_t>();
-    b.lod_count = r.get<uint32_t>();
-    for (float& v : b.bbox_min) v = r.get<float>();
-    for (float& v : b.bbox_max) v = r.get<float>();
-    for (uint32_t& v : b.triangles) v = r.get<uint32_t>();
-    for (uint32_t& v : b.vertices) v = r.get<uint32_t>();
-    for (float& v : b.error_m) v = r.get<float>();
-    r.getBytes(record_size - kRecordSize);
-    const std::string why = check(b, blob_count);
-    if (!why.empty()) r.fail("block " + std::to_string(&b - out.data()) + ": " + why, at);
-    b.triangle_count = b.triangles[0];
-    b.vertex_count = b.vertices[0];
+  t.count = r.getCount(t.record_size);
+  if (uint64_t{t.count} * t.record_size != r.remaining())
+    r.fail(std::to_string(r.remaining() - uint64_t{t.count} * t.record_size) + " bytes after the last record");
+  t.records_at = r.pos();
+  return t;
+}
+
+std::string parseBlockRecord(const uint8_t* rec, uint32_t blob_count, BlockRecord& b) {
+  core::ByteReader r(rec, kRecordSize, "block record");
+  b.blob = r.get<uint32_t>();
+  b.building_count = r.get<uint32_t>();
+  b.flags = r.get<uint32_t>();
+  b.lod_count = r.get<uint32_t>();
+  for (float& v : b.bbox_min) v = r.get<float>();
+  for (float& v : b.bbox_max) v = r.get<float>();
+  for (uint32_t& v : b.triangles) v = r.get<uint32_t>();
+  for (uint32_t& v : b.vertices) v = r.get<uint32_t>();
+  for (float& v : b.error_m) v = r.get<float>();
+  b.triangle_count = b.triangles[0];
+  b.vertex_count = b.vertices[0];
+  return check(b, blob_count);
+}
+
+void parseBlocks(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t blob_count,
+                 std::vector<BlockRecord>& out) {
+  const BlockTableShape t = parseBlockTableShape(data, size, file_offset);
+  out.resize(t.count);
+  for (uint32_t i = 0; i < t.count; ++i) {
+    const size_t at = t.records_at + size_t(i) * t.record_size;
+    const std::string why = parseBlockRecord(data + at, blob_count, out[i]);
+    if (!why.empty())
+      core::ByteReader(data, size, "block section BLCK", file_offset).fail("block " + std::to_string(i) + ": " + why, at);
   }
 }
 

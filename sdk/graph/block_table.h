@@ -7,6 +7,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace blvd::graph {
@@ -53,5 +54,16 @@ std::vector<uint8_t> serializeBlocks(const std::vector<BlockRecord>& blocks);
 // blob >= blob_count, bad bounds, or level counts/errors breaking the rules above.
 void parseBlocks(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t blob_count,
                  std::vector<BlockRecord>& out);
+
+// The same a record at a time, for a reader that pages the table: the
+// section's header (throws as parseBlocks does), then one record of
+// `record_size` bytes at data + records_at + i × record_size, checked as
+// parseBlocks checks it (returns why not, or empty).
+struct BlockTableShape {
+  uint32_t record_size = 0, count = 0;
+  size_t records_at = 0;
+};
+BlockTableShape parseBlockTableShape(const uint8_t* data, size_t size, uint64_t file_offset);
+std::string parseBlockRecord(const uint8_t* record, uint32_t blob_count, BlockRecord& out);
 
 }  // namespace blvd::graph

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/bytes.h"
+#include "core/status.h"
 
 namespace blvd::graph {
 namespace {
@@ -53,11 +54,12 @@ void getLayers(core::ByteReader& r, std::vector<ImpostorLayer>& layers, uint32_t
 }
 }  // namespace
 
-std::vector<uint8_t> serializeVisibility(const CellTables& t) {
+std::vector<uint8_t> serializeVisibility(const CellTables& t, std::vector<uint64_t>* offsets) {
   core::ByteWriter w;
   w.put<uint32_t>(1);
   w.put<uint32_t>(static_cast<uint32_t>(t.visibility.size()));
   for (const CellVisibility& v : t.visibility) {
+    if (offsets) offsets->push_back(w.bytes().size());
     w.put<uint32_t>(static_cast<uint32_t>(v.blocks.size()));
     for (size_t i = 0; i < v.blocks.size(); ++i) {
       w.put(v.blocks[i]);
@@ -67,7 +69,7 @@ std::vector<uint8_t> serializeVisibility(const CellTables& t) {
   return std::move(w.bytes());
 }
 
-std::vector<uint8_t> serializeImpostors(const CellTables& t) {
+std::vector<uint8_t> serializeImpostors(const CellTables& t, std::vector<uint64_t>* offsets) {
   core::ByteWriter w;
   w.put<uint32_t>(kImpostorTableVersion);
   w.put(t.threshold_px);
@@ -76,36 +78,41 @@ std::vector<uint8_t> serializeImpostors(const CellTables& t) {
   w.put(t.display_height);
   w.put<uint32_t>(static_cast<uint32_t>(t.impostors.size()));
   for (const CellImpostors& c : t.impostors) {
+    if (offsets) offsets->push_back(w.bytes().size());
     putLayers(w, c.layered);
     putLayers(w, c.single);
   }
   return std::move(w.bytes());
 }
 
-void parseVisibility(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
-                     CellTables& t) {
-  core::ByteReader r(data, size, "visibility section PVSA", file_offset);
+void parseVisibilityHeader(core::ByteReader& r, uint32_t cells) {
   if (r.get<uint32_t>() != 1) r.fail("unknown visibility version");
   const uint32_t n = r.get<uint32_t>();
   if (n != cells) r.fail("visibility lists " + std::to_string(n) + " cells, the graph has " + std::to_string(cells));
-  t.visibility.resize(n);
-  for (CellVisibility& v : t.visibility) {
-    const uint32_t k = r.getCount(8);
-    v.blocks.resize(k);
-    v.ach.resize(k);
-    for (uint32_t i = 0; i < k; ++i) {
-      v.blocks[i] = r.get<uint32_t>();
-      v.ach[i] = r.get<float>();
-      if (v.blocks[i] >= blocks) r.fail("visible block index out of range");
-      if (!(v.ach[i] >= 0.f && v.ach[i] <= 1.f)) r.fail("coverage hint outside [0, 1]");
-    }
+}
+
+void parseCellVisibility(core::ByteReader& r, uint32_t blocks, CellVisibility& v) {
+  const uint32_t k = r.getCount(8);
+  v.blocks.resize(k);
+  v.ach.resize(k);
+  for (uint32_t i = 0; i < k; ++i) {
+    v.blocks[i] = r.get<uint32_t>();
+    v.ach[i] = r.get<float>();
+    if (v.blocks[i] >= blocks) r.fail("visible block index out of range");
+    if (!(v.ach[i] >= 0.f && v.ach[i] <= 1.f)) r.fail("coverage hint outside [0, 1]");
+    if (i > 0 && v.blocks[i] <= v.blocks[i - 1]) r.fail("visible blocks not ascending");
   }
 }
 
-void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, const std::vector<float>& lengths,
-                    uint32_t blocks, uint32_t blobs, CellTables& t) {
-  const uint32_t cells = static_cast<uint32_t>(lengths.size());
-  core::ByteReader r(data, size, "impostor section IMPO", file_offset);
+void parseVisibility(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
+                     CellTables& t) {
+  core::ByteReader r(data, size, "visibility section PVSA", file_offset);
+  parseVisibilityHeader(r, cells);
+  t.visibility.resize(cells);
+  for (CellVisibility& v : t.visibility) parseCellVisibility(r, blocks, v);
+}
+
+void parseImpostorsHeader(core::ByteReader& r, uint32_t cells, CellTables& t) {
   if (const uint32_t v = r.get<uint32_t>(); v != kImpostorTableVersion)
     r.fail("impostor table version " + std::to_string(v) + ", this build reads " + std::to_string(kImpostorTableVersion),
            0);
@@ -115,11 +122,34 @@ void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, cons
   t.display_height = r.get<uint16_t>();
   const uint32_t n = r.get<uint32_t>();
   if (n != cells) r.fail("impostors list " + std::to_string(n) + " cells, the graph has " + std::to_string(cells));
-  t.impostors.resize(n);
-  for (size_t c = 0; c < t.impostors.size(); ++c) {
-    getLayers(r, t.impostors[c].layered, blocks, blobs, lengths[c]);
-    getLayers(r, t.impostors[c].single, blocks, blobs, lengths[c]);
+}
+
+void parseCellImpostors(core::ByteReader& r, uint32_t blocks, uint32_t blobs, float length, CellImpostors& c) {
+  getLayers(r, c.layered, blocks, blobs, length);
+  getLayers(r, c.single, blocks, blobs, length);
+}
+
+void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, const std::vector<float>& lengths,
+                    uint32_t blocks, uint32_t blobs, CellTables& t) {
+  const uint32_t cells = static_cast<uint32_t>(lengths.size());
+  core::ByteReader r(data, size, "impostor section IMPO", file_offset);
+  parseImpostorsHeader(r, cells, t);
+  t.impostors.resize(cells);
+  for (size_t c = 0; c < t.impostors.size(); ++c) parseCellImpostors(r, blocks, blobs, lengths[c], t.impostors[c]);
+}
+
+std::vector<uint8_t> serializeCellTableIndex(const std::vector<uint64_t>& visibility,
+                                             const std::vector<uint64_t>& impostors) {
+  if (visibility.size() != impostors.size())
+    throw core::Error(core::Status::InvalidArg, "cell table index: visibility and impostor offsets differ in count");
+  core::ByteWriter w;
+  w.put<uint32_t>(kCellTableIndexVersion);
+  w.put<uint32_t>(static_cast<uint32_t>(visibility.size()));
+  for (size_t c = 0; c < visibility.size(); ++c) {
+    w.put(visibility[c]);
+    w.put(impostors[c]);
   }
+  return std::move(w.bytes());
 }
 
 }  // namespace blvd::graph

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/bytes.h"
+
 namespace blvd::graph {
 
 struct CellVisibility {
@@ -39,8 +41,18 @@ struct CellTables {
   uint16_t display_width = 0, display_height = 0;
 };
 
-std::vector<uint8_t> serializeVisibility(const CellTables& t);
-std::vector<uint8_t> serializeImpostors(const CellTables& t);
+// `offsets` (optional) receives each cell's record offset in the section,
+// for the cell table index.
+std::vector<uint8_t> serializeVisibility(const CellTables& t, std::vector<uint64_t>* offsets = nullptr);
+std::vector<uint8_t> serializeImpostors(const CellTables& t, std::vector<uint64_t>* offsets = nullptr);
+
+// The CTIX section (package 3.1): per cell, where its PVSA and IMPO records
+// start, so that a runtime reads one cell's tables without holding them all
+// (docs/package-format.md has the layout).
+constexpr uint32_t kCellTableIndexVersion = 1;
+constexpr size_t kCellTableIndexHeader = 8, kCellTableIndexEntry = 16;
+std::vector<uint8_t> serializeCellTableIndex(const std::vector<uint64_t>& visibility,
+                                             const std::vector<uint64_t>& impostors);
 // Throw core::Error(Corrupt) naming the section and offset; every index is
 // checked against cells / blocks / blobs.
 void parseVisibility(const uint8_t* data, size_t size, uint64_t file_offset, uint32_t cells, uint32_t blocks,
@@ -49,5 +61,13 @@ void parseVisibility(const uint8_t* data, size_t size, uint64_t file_offset, uin
 // [0, length] and not decrease along the cell's list.
 void parseImpostors(const uint8_t* data, size_t size, uint64_t file_offset, const std::vector<float>& lengths,
                     uint32_t blocks, uint32_t blobs, CellTables& t);
+
+// The same a cell at a time, for a reader that checks a section without
+// keeping it: the section's header, then each cell's record in turn (with
+// the checks above); they throw core::Error(Corrupt) naming the offset.
+void parseVisibilityHeader(core::ByteReader& r, uint32_t cells);
+void parseCellVisibility(core::ByteReader& r, uint32_t blocks, CellVisibility& out);
+void parseImpostorsHeader(core::ByteReader& r, uint32_t cells, CellTables& t);  // fills the display fields
+void parseCellImpostors(core::ByteReader& r, uint32_t blocks, uint32_t blobs, float length, CellImpostors& out);
 
 }  // namespace blvd::graph

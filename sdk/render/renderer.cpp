@@ -598,6 +598,16 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
   return handle;
 }
 
+bool Renderer::reserveMeshes(uint32_t more) {
+  Impl& m = *impl_;
+  if (uint64_t(m.capacity) + more > kIndexMask) return fail("mesh_capacity above 2^20 - 1");
+  m.capacity += more;
+  m.slots.reserve(m.capacity);
+  m.order.reserve(size_t(m.capacity) * 2);
+  m.free_slots.reserve(m.capacity);
+  return true;
+}
+
 MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUpload* copied) {
   Impl& m = *impl_;
   Slab* slab = slab_id ? &m.slabs[slab_id - 1] : nullptr;

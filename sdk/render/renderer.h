@@ -156,6 +156,10 @@ class Renderer {
   // mesh is empty or malformed (index out of range, array sizes disagree) or
   // the pool is full.
   MeshHandle upload(const geo::MeshData& mesh);
+  // Raises the mesh pool's capacity by `more` (outside a frame: it may
+  // allocate), for meshes a mode needs only when chosen (the runtime's
+  // reference modes hold every block). False past 2^20 - 1 meshes.
+  bool reserveMeshes(uint32_t more);
   // Frees the GL buffers; stale and null handles are ignored. A slab mesh
   // gives its handle back; its bytes stay with the slab until resetSlab.
   void release(MeshHandle h);

@@ -90,6 +90,7 @@ CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_
     s.arena = {static_cast<uint8_t*>(arena), static_cast<size_t>(arena_bytes), 0};
     s.meshes = new (table) StagedMesh[meshes];
     s.mesh_capacity = meshes;
+    s.layers.resize(city_.maxCellLayers());
     carved_ += arena_bytes + sizeof(StagedMesh) * meshes;
   }
   if (!executor_.submit) {
@@ -393,8 +394,8 @@ bool CellLoader::decode(Staging& s) {
   stream::City::BlockBlob blob;
   for (const uint32_t b : city_.streets().localBlocks(s.cell)) {
     if (std::find(s.skip, s.skip + s.skip_count, b) != s.skip + s.skip_count) continue;  // the runtime copies it
-    for (uint32_t k = 0; k < city_.blocks()[b].lod_count; ++k) {
-      const graph::BlockRecord& rec = city_.blocks()[b];
+    const graph::BlockRecord rec = city_.block(b);
+    for (uint32_t k = 0; k < rec.lod_count; ++k) {
       const double units = double(rec.triangles[k]) + double(rec.vertices[k]);
       waitForGap(s, false, units);
       if (abandoned()) return false;
@@ -410,22 +411,19 @@ bool CellLoader::decode(Staging& s) {
       measured(s, false, units, threadCpuNs() - cpu0);
     }
   }
-  if (s.cell < city_.cellTables().impostors.size()) {
-    const graph::CellImpostors& ci = city_.cellTables().impostors[s.cell];
-    for (int single = 0; single < 2; ++single) {
-      const auto& list = single ? ci.single : ci.layered;
-      for (uint32_t i = 0; i < list.size(); ++i) {
-        const double units = double(list[i].texture_width) * list[i].texture_height + list[i].triangles +
-                             list[i].vertices;
-        waitForGap(s, true, units);
-        if (abandoned()) return false;
-        const int64_t cpu0 = threadCpuNs();
-        const core::Status st = city_.decodeImpostor(list[i], s.scratch, err);
-        if (st != core::Status::Ok) return fail(err);
-        if (!stage(single ? MeshKind::Single : MeshKind::Layered, i, 0)) return true;
-        measured(s, true, units, threadCpuNs() - cpu0);
-      }
-    }
+  uint32_t layered = 0, single = 0;
+  city_.cellLayers(s.cell, s.layers.data(), static_cast<uint32_t>(s.layers.size()), &layered, &single);
+  for (uint32_t j = 0; j < layered + single; ++j) {
+    const stream::LayerInfo& l = s.layers[j];
+    const bool in_single = j >= layered;
+    const double units = double(l.texture_width) * l.texture_height + l.triangles + l.vertices;
+    waitForGap(s, true, units);
+    if (abandoned()) return false;
+    const int64_t cpu0 = threadCpuNs();
+    const core::Status st = city_.decodeImpostorBlob(l.blob, s.scratch, err);
+    if (st != core::Status::Ok) return fail(err);
+    if (!stage(in_single ? MeshKind::Single : MeshKind::Layered, in_single ? j - layered : j, 0)) return true;
+    measured(s, true, units, threadCpuNs() - cpu0);
   }
   std::lock_guard<std::mutex> lock(mu_);
   // promote() may have started the urgent copy after the last mesh's check:

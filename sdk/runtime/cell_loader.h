@@ -66,6 +66,7 @@ struct Staging {
   std::atomic<bool> abandon{false};
   char error[256] = {0};
   geo::MeshData scratch;  // the decoder's reusable buffers (one per slot: jobs may run at once)
+  std::vector<stream::LayerInfo> layers;  // the cell's impostor layers, sized at create
 };
 
 class CellLoader {

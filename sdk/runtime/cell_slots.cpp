@@ -19,6 +19,7 @@ CellSlots::CellSlots(const stream::City& city, render::Renderer& renderer, CellL
     slot.copies.reserve(copies);
     slot.layered.reserve(plan.slab.textures);
     slot.single.reserve(plan.slab.textures);
+    slot.layers.resize(plan.max_cell_layers);
   }
   failed_cells_.assign(8, graph::kNone);
   copy_sources_ = std::make_unique<bool[]>(plan.resident_cells);

@@ -38,6 +38,7 @@ struct SlotBlock {
   uint32_t block = 0;
   uint32_t levels = 0;
   render::MeshHandle lod[graph::kMaxBlockLods];
+  float ach = 0.f;  // the cell's coverage hint for it (Marvie's budget share), set when the slot is resident
 };
 
 // A local block another resident slot holds, to be copied from it.
@@ -52,6 +53,8 @@ struct CellSlot {
   render::SlabHandle slab;
   std::vector<SlotBlock> blocks;                   // reserved once
   std::vector<render::MeshHandle> layered, single;  // impostor layers, in the package's order
+  std::vector<stream::LayerInfo> layers;  // the cell's layers, layered then single (reserved once)
+  uint32_t layered_count = 0, single_count = 0;
   uint64_t bytes = 0;  // slab bytes in use
   // Loading: the staged (decoded) meshes are all in, and the blocks shared
   // with other slots are copied after them, in order, a level at a time.

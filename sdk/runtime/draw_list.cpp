@@ -8,7 +8,7 @@ namespace blvd::runtime {
 
 DrawList::DrawList(const stream::City& city, const MemoryPlan& plan, float lod_error_px)
     : city_(city), lod_error_px_(lod_error_px) {
-  draw_.reserve(city.blocks().size() + plan.slab.meshes + 1);
+  draw_.reserve(plan.slab.meshes + 1);  // the reference modes reserve for every block when first chosen
   draw_items_.reserve(draw_.capacity());
   const size_t nb = plan.max_local_blocks;
   ach_.resize(nb);
@@ -23,8 +23,15 @@ void DrawList::ensureReferenceBlocks(render::Renderer& renderer) {
   if (!reference_blocks_.empty()) return;
   geo::MeshData mesh;
   std::string err;
-  reference_blocks_.resize(city_.blocks().size());
-  for (uint32_t b = 0; b < city_.blocks().size(); ++b) {
+  const uint32_t n = city_.blockCount();
+  if (!renderer.reserveMeshes(n)) throw core::Error(core::Status::Internal, renderer.lastError());
+  draw_.reserve(draw_.capacity() + n);
+  draw_items_.reserve(draw_.capacity());
+  reference_blocks_.resize(n);
+  reference_boxes_.resize(n);
+  for (uint32_t b = 0; b < n; ++b) {
+    const graph::BlockRecord r = city_.block(b);
+    reference_boxes_[b] = Box{{r.bbox_min[0], r.bbox_min[2]}, {r.bbox_max[0], r.bbox_max[2]}};
     const core::Status st = city_.decodeBlock(b, mesh, err);
     if (st != core::Status::Ok) throw core::Error(st, err);
     if (mesh.empty()) continue;
@@ -37,12 +44,13 @@ void DrawList::ensureReferenceBlocks(render::Renderer& renderer) {
 void DrawList::releaseReferenceBlocks(render::Renderer& renderer) {
   for (render::MeshHandle h : reference_blocks_) renderer.release(h);
   reference_blocks_.clear();
+  reference_boxes_.clear();
 }
 
-float DrawList::activeRun(const std::vector<graph::ImpostorLayer>& layers, double arc_m) {
-  float run = layers.empty() ? 0.f : layers.front().run_from_m;
-  for (const graph::ImpostorLayer& l : layers)
-    if (double(l.run_from_m) <= arc_m) run = l.run_from_m;
+float DrawList::activeRun(const stream::LayerInfo* layers, size_t count, double arc_m) {
+  float run = count == 0 ? 0.f : layers[0].run_from_m;
+  for (size_t i = 0; i < count; ++i)
+    if (double(layers[i].run_from_m) <= arc_m) run = layers[i].run_from_m;
   return run;
 }
 
@@ -55,12 +63,11 @@ void DrawList::addBlock(uint32_t b) {
 
 // Visibility radius (the VOP baseline): blocks whose box comes within R.
 void DrawList::addRadius(float radius_m, const render::Camera& cam) {
-  const auto& blocks = city_.blocks();
   const double ex = cam.eye_enu.x, ez = -cam.eye_enu.y;
-  for (uint32_t b = 0; b < blocks.size(); ++b) {
-    const auto& r = blocks[b];
-    const double dx = std::max({double(r.bbox_min[0]) - ex, 0.0, ex - double(r.bbox_max[0])});
-    const double dz = std::max({double(r.bbox_min[2]) - ez, 0.0, ez - double(r.bbox_max[2])});
+  for (uint32_t b = 0; b < reference_boxes_.size(); ++b) {
+    const Box& r = reference_boxes_[b];
+    const double dx = std::max({double(r.lo[0]) - ex, 0.0, ex - double(r.hi[0])});
+    const double dz = std::max({double(r.lo[1]) - ez, 0.0, ez - double(r.hi[1])});
     if (dx * dx + dz * dz <= double(radius_m) * radius_m) addBlock(b);
   }
 }
@@ -77,10 +84,10 @@ void DrawList::addCell(blvd_render_mode mode, const CellSlot& slot, uint32_t cel
   if (mode == BLVD_MODE_LOCAL) return;
   const bool single = mode == BLVD_MODE_SINGLE;
   const auto& handles = single ? slot.single : slot.layered;
-  const auto& ci = city_.cellTables().impostors[slot.cell];
-  const auto& layers = single ? ci.single : ci.layered;
-  const float run = activeRun(layers, slot.cell == cell ? arc_m : 0.0);
-  for (size_t i = 0; i < handles.size() && i < layers.size(); ++i) {
+  const stream::LayerInfo* layers = slot.layers.data() + (single ? slot.layered_count : 0);
+  const size_t count = single ? slot.single_count : slot.layered_count;
+  const float run = activeRun(layers, count, slot.cell == cell ? arc_m : 0.0);
+  for (size_t i = 0; i < handles.size() && i < count; ++i) {
     if (layers[i].run_from_m != run) continue;
     draw_.push_back(handles[i]);
     draw_items_.push_back(BLVD_ITEM_IMPOSTOR | uint32_t(i + 1));

@@ -49,7 +49,7 @@ class DrawList {
 
   // The start of the run that holds arc length `arc_m` (the last run starting
   // at or before it; the first when the list is empty or arc_m is before all).
-  static float activeRun(const std::vector<graph::ImpostorLayer>& layers, double arc_m);
+  static float activeRun(const stream::LayerInfo* layers, size_t count, double arc_m);
 
  private:
   void addBlock(uint32_t b);
@@ -58,11 +58,14 @@ class DrawList {
   // lod_choice.cpp: a level per block of `slot` into level_.
   void chooseLevels(const CellSlot& slot, const render::Camera& cam, const stream::FrameBudget* budget);
   void levelsByError(const CellSlot& slot, const render::Camera& cam);
-  float coverage(uint32_t cell, uint32_t block) const;
 
   const stream::City& city_;
   float lod_error_px_;
   std::vector<render::MeshHandle> reference_blocks_;
+  struct Box {
+    float lo[2], hi[2];  // glTF x and z of a block's box
+  };
+  std::vector<Box> reference_boxes_;  // with reference_blocks_
   std::vector<render::MeshHandle> draw_;
   std::vector<uint32_t> draw_items_;
   uint32_t impostors_ = 0;

@@ -12,23 +12,13 @@
 
 namespace blvd::runtime {
 
-float DrawList::coverage(uint32_t cell, uint32_t block) const {
-  const auto& vis = city_.cellTables().visibility;
-  if (cell >= vis.size()) return 0.f;
-  const auto& v = vis[cell];
-  const auto it = std::lower_bound(v.blocks.begin(), v.blocks.end(), block);
-  if (it == v.blocks.end() || *it != block) return 0.f;
-  const size_t i = size_t(it - v.blocks.begin());
-  return i < v.ach.size() ? v.ach[i] : 0.f;
-}
-
 // No frame budget: the coarsest level whose simplification error stays
 // within lod_error_px on screen at the block box's nearest point.
 void DrawList::levelsByError(const CellSlot& slot, const render::Camera& cam) {
   const glm::dvec3 eye = render::enuToGltf(cam.eye_enu);
   const double focal_px = cam.height * 0.5 / std::tan(cam.fov_y_deg * 0.5 * core::kDegToRad);
   for (size_t i = 0; i < slot.blocks.size(); ++i) {
-    const graph::BlockRecord& r = city_.blocks()[slot.blocks[i].block];
+    const graph::BlockRecord r = city_.block(slot.blocks[i].block);
     const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
     const double dist = std::max(glm::length(glm::max(glm::max(lo - eye, eye - hi), glm::dvec3(0.0))), 1e-3);
     uint8_t level = 0;
@@ -52,12 +42,12 @@ void DrawList::chooseLevels(const CellSlot& slot, const render::Camera& cam, con
   const render::Frustum frustum = render::Frustum::fromClip(render::viewProjectionRelative(cam));
   size_t nv = 0;
   for (size_t i = 0; i < slot.blocks.size(); ++i) {
-    const graph::BlockRecord& r = city_.blocks()[slot.blocks[i].block];
+    const graph::BlockRecord r = city_.block(slot.blocks[i].block);
     const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
     level_[i] = static_cast<uint8_t>(slot.blocks[i].levels ? slot.blocks[i].levels - 1 : 0);  // culled anyway
     if (!frustum.intersectsBox((lo + hi) * 0.5 - eye, (hi - lo) * 0.5)) continue;
     visible_[nv] = static_cast<uint32_t>(i);
-    ach_[nv] = coverage(slot.cell, slot.blocks[i].block);
+    ach_[nv] = slot.blocks[i].ach;
     chains_[nv] = stream::LodChain{r.triangles, slot.blocks[i].levels};
     ++nv;
     if (slot.blocks[i].levels) floor_tris_ += r.triangles[slot.blocks[i].levels - 1];

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <vector>
 
 #include "runtime/cell_loader.h"
 #include "core/status.h"
@@ -24,18 +25,20 @@ void addMesh(CellNeed& n, uint64_t v, uint64_t t, int tw, int th) {
 
 }  // namespace
 
-CellNeed cellNeed(const stream::City& city, uint32_t cell) {
+CellNeed cellNeed(const stream::City& city, uint32_t cell, stream::LayerInfo* layers) {
   CellNeed n;
   for (const uint32_t b : city.streets().localBlocks(cell)) {
-    const graph::BlockRecord& r = city.blocks()[b];
+    const graph::BlockRecord r = city.block(b);
     for (uint32_t k = 0; k < r.lod_count; ++k)
       if (r.triangles[k]) addMesh(n, r.vertices[k], r.triangles[k], 0, 0);
   }
-  if (cell < city.cellTables().impostors.size()) {
-    const graph::CellImpostors& ci = city.cellTables().impostors[cell];
-    for (const auto* list : {&ci.layered, &ci.single})
-      for (const graph::ImpostorLayer& l : *list)
-        addMesh(n, l.vertices, l.triangles, l.texture_width, l.texture_height);
+  uint32_t layered = 0, single = 0;
+  city.cellLayers(cell, layers, city.maxCellLayers(), &layered, &single);
+  for (uint32_t i = 0; i < layered + single; ++i) {
+    const stream::LayerInfo& l = layers[i];
+    addMesh(n, l.vertices, l.triangles, l.texture_width, l.texture_height);
+    n.texture_width = std::max(n.texture_width, l.texture_width);
+    n.texture_height = std::max(n.texture_height, l.texture_height);
   }
   return n;
 }
@@ -53,14 +56,12 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   auto corrupt = [&](const std::string& what) {
     throw core::Error(core::Status::Corrupt, city.package().name() + ": header pool sizing is below the tables: " + what);
   };
-  for (const auto& ci : city.cellTables().impostors)
-    for (const auto* list : {&ci.layered, &ci.single})
-      for (const graph::ImpostorLayer& l : *list)
-        if (l.texture_width > tw || l.texture_height > th) corrupt("an impostor texture is larger than the header says");
+  std::vector<stream::LayerInfo> layers(city.maxCellLayers());
   for (uint32_t c = 0; c < city.streets().cellCount(); ++c) {
     if (city.streets().localBlocks(c).size() > p.max_local_blocks)
       corrupt("cell " + std::to_string(c) + " has more local blocks than the header says");
-    const CellNeed n = cellNeed(city, c);
+    const CellNeed n = cellNeed(city, c, layers.data());
+    if (n.texture_width > tw || n.texture_height > th) corrupt("an impostor texture is larger than the header says");
     p.slab.vertex_bytes = std::max(p.slab.vertex_bytes, n.vertex_bytes);
     p.slab.index_bytes = std::max(p.slab.index_bytes, n.index_bytes);
     p.slab.meshes = std::max(p.slab.meshes, n.meshes);
@@ -81,6 +82,7 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   track::TrackerDesc td;
   td.ring_capacity = desc.ring_capacity;
   const track::Tracker probe(city.frame(), &city.streets(), td);
+  p.max_cell_layers = city.maxCellLayers();
   p.tracking_bytes = probe.bytes();
   p.cpu_bytes = p.staging_bytes + p.table_bytes + p.tracking_bytes;
   p.gpu_bytes = uint64_t(p.resident_cells) * render::slabGpuBytes(p.slab);

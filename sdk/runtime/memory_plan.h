@@ -28,14 +28,17 @@ struct CellNeed {
   uint64_t vertex_bytes = 0, index_bytes = 0;
   uint64_t staging_bytes = 0;  // render::preparedBytes summed over the meshes
   uint32_t meshes = 0, textures = 0;
+  uint16_t texture_width = 0, texture_height = 0;  // the largest impostor texture's
 };
-CellNeed cellNeed(const stream::City& city, uint32_t cell);
+// `layers`: scratch of at least city.maxCellLayers() entries.
+CellNeed cellNeed(const stream::City& city, uint32_t cell, stream::LayerInfo* layers);
 
 struct MemoryPlan {
   uint32_t resident_cells = 0;
   render::SlabDesc slab;           // one per resident cell
   uint64_t staging_arena_bytes = 0;  // per staging slot
   uint32_t staging_meshes = 0;       // per staging slot
+  uint32_t max_cell_layers = 0;      // impostor layers of the cell with the most
   uint64_t staging_bytes = 0;        // all staging slots with their mesh tables
   uint64_t table_bytes = 0;          // the package tables held in memory
   uint64_t tracking_bytes = 0;       // tracker rings, filter, matcher

@@ -42,8 +42,8 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   render::RendererDesc rd;
   rd.width = static_cast<int>(desc.width);
   rd.height = static_cast<int>(desc.height);
-  // The cell slabs' meshes, plus every block for the reference modes.
-  rd.mesh_capacity = plan_.resident_cells * plan_.slab.meshes + static_cast<uint32_t>(city_.blocks().size()) + 1;
+  // The cell slabs' meshes; the reference modes add every block when first chosen.
+  rd.mesh_capacity = plan_.resident_cells * plan_.slab.meshes + 1;
   rd.scaled_target = desc.target_frame_ms > 0 && desc.min_render_scale < 1.f;
   renderer_ = render::Renderer::create(*ctx_, rd, err);
   if (!renderer_) throw Error(Status::Backend, err);
@@ -79,12 +79,22 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
                 ctx_->name(), renderer_->glRenderer());
 }
 
+// What the table caches did over the runtime's life (docs/decisions/0013).
+void Runtime::logPageCaches() const {
+  auto line = [](const char* what, const stream::PageCacheStats& st) {
+    const uint64_t reads = st.hits + st.misses;
+    BLVD_LOG_INFO("runtime: %s page cache: %llu reads, %llu misses (%.2f %%)", what, (unsigned long long)reads,
+                  (unsigned long long)st.misses, reads ? 100.0 * st.misses / reads : 0.0);
+  };
+  if (!city_.paged()) return;
+  line("graph", city_.graphPageStats());
+  line("cell table", city_.cellTablePageStats());
+  line("block", city_.blockPageStats());
+}
+
 Runtime::~Runtime() {
   loader_.reset();  // joins the loader thread before the city goes
-  const stream::PageCacheStats pages = city_.graphPageStats();
-  BLVD_LOG_INFO("runtime: graph page cache %.0f KiB, %llu reads, %llu misses (%.2f %%)",
-                city_.graphCacheBytes() / 1024.0, (unsigned long long)(pages.hits + pages.misses),
-                (unsigned long long)pages.misses, pages.hits + pages.misses ? 100.0 * pages.misses / (pages.hits + pages.misses) : 0.0);
+  logPageCaches();
   FrameClocks::release(clock_);
   if (renderer_ && ctx_ && ctx_->makeCurrent()) {
     if (draw_) draw_->releaseReferenceBlocks(*renderer_);

@@ -70,6 +70,7 @@ class Runtime {
   std::string last_error;
 
  private:
+  void logPageCaches() const;
   // The camera from the tracker when it drives, then the current cell.
   uint32_t currentCell(double& arc_m, double& speed_mps);
   void noteFeed(double t);

@@ -104,6 +104,11 @@ void CellSlots::finishSlot(CellSlot& slot) {
     std::sort(slot.blocks.begin(), slot.blocks.end(),
               [&](const SlotBlock& a, const SlotBlock& b) { return order(a.block) < order(b.block); });
   }
+  // What drawing the cell reads of its tables: the impostor layers' runs and
+  // the blocks' coverage hints, read once here rather than every frame.
+  city_.cellLayers(slot.cell, slot.layers.data(), static_cast<uint32_t>(slot.layers.size()), &slot.layered_count,
+                   &slot.single_count);
+  for (SlotBlock& b : slot.blocks) b.ach = city_.coverage(slot.cell, b.block);
   const render::SlabUsage u = renderer_.slabUsage(slot.slab);
   const uint64_t tex = render::mipChainBytes(plan_.slab.texture_width, plan_.slab.texture_height);
   slot.bytes = u.vertex_bytes + u.index_bytes + u.textures * tex;

@@ -10,6 +10,11 @@
 
 namespace blvd::stream {
 namespace {
+// The cell tables' cache: a cell's records are a few hundred bytes to a few KiB.
+constexpr uint32_t kCellTablePages = 64, kCellTablePageBytes = 2048;
+// The block table's: 88-byte records, a cell's local blocks a few pages.
+constexpr uint32_t kBlockPages = 32, kBlockPageBytes = 2048;
+
 std::vector<float> cellLengths(const graph::GraphSource& g) {
   std::vector<float> v(g.cellCount());
   for (uint32_t h = 0; h < g.cellCount(); ++h) v[h] = g.halfedge(h).length;
@@ -25,6 +30,9 @@ core::Status City::open(const std::string& path, std::string& err, Tables tables
   tables_ = graph::CellTables{};
   whole_.reset();
   paged_.reset();
+  cell_pages_.reset();
+  block_pages_.reset();
+  max_cell_layers_ = 0;
   streets_ = nullptr;
   core::Status st = package::PackageReader::open(path, reader_, err);
   if (st != core::Status::Ok) return st;
@@ -78,16 +86,29 @@ core::Status City::openRenderTables(std::string& err) {
   const uint32_t faces = paged_ ? paged_->faceCount() : static_cast<uint32_t>(graph_.faces.size());
   try {
     package::Span s;
-    core::Status st = requiredSection(package::kSectionBlocks, s, err);
+    core::Status st = core::Status::Ok;
+    if (paged_) {
+      block_pages_ = std::make_unique<BlockPages>();
+      st = block_pages_->open(reader_, kBlockPages, kBlockPageBytes, err);
+      if (st == core::Status::NotFound) err = reader_.name() + ": missing section BLCK", st = core::Status::Corrupt;
+    } else if ((st = requiredSection(package::kSectionBlocks, s, err)) == core::Status::Ok) {
+      graph::parseBlocks(s.data, s.size, s.offset, reader_.blobCount(), blocks_);
+      reader_.dropPages(s);
+    }
     if (st != core::Status::Ok) return st;
-    graph::parseBlocks(s.data, s.size, s.offset, reader_.blobCount(), blocks_);
-    reader_.dropPages(s);
-    if (blocks_.size() != faces) {
-      err = reader_.name() + ": block table has " + std::to_string(blocks_.size()) + " blocks but the graph " +
+    const uint32_t nblocks = blockCount();
+    if (nblocks != faces) {
+      err = reader_.name() + ": block table has " + std::to_string(nblocks) + " blocks but the graph " +
             std::to_string(faces) + " faces";
       return core::Status::Corrupt;
     }
-    const uint32_t nblocks = static_cast<uint32_t>(blocks_.size());
+    if (paged_ && reader_.hasSection(package::kSectionCellTableIndex)) {
+      cell_pages_ = std::make_unique<CellTablePages>();
+      st = cell_pages_->open(reader_, *streets_, nblocks, kCellTablePages, kCellTablePageBytes, err);
+      if (st != core::Status::Ok) return st;
+      max_cell_layers_ = cell_pages_->maxLayers();
+      return core::Status::Ok;
+    }
     for (uint32_t tag : {package::kSectionVisibility, package::kSectionImpostors}) {
       if (!reader_.hasSection(tag)) continue;
       if ((st = reader_.checkedSection(tag, s, err)) != core::Status::Ok) return st;
@@ -95,11 +116,37 @@ core::Status City::openRenderTables(std::string& err) {
       else graph::parseImpostors(s.data, s.size, s.offset, cellLengths(*streets_), nblocks, reader_.blobCount(), tables_);
       reader_.dropPages(s);
     }
+    for (const graph::CellImpostors& ci : tables_.impostors)
+      max_cell_layers_ = std::max<uint32_t>(max_cell_layers_, static_cast<uint32_t>(ci.layered.size() + ci.single.size()));
   } catch (const core::Error& e) {
     err = reader_.name() + ": " + e.what();
     return e.status();
   }
   return core::Status::Ok;
+}
+
+void City::cellLayers(uint32_t cell, LayerInfo* out, uint32_t cap, uint32_t* layered, uint32_t* single) const {
+  *layered = *single = 0;
+  if (cell_pages_) return cell_pages_->layers(cell, out, cap, layered, single);
+  if (cell >= tables_.impostors.size()) return;
+  uint32_t written = 0;
+  const graph::CellImpostors& ci = tables_.impostors[cell];
+  for (auto [list, count] : {std::pair{&ci.layered, layered}, std::pair{&ci.single, single}})
+    for (const graph::ImpostorLayer& l : *list) {
+      if (written == cap) break;
+      out[written++] = LayerInfo{l.blob, l.triangles, l.vertices, l.texture_width, l.texture_height, l.run_from_m};
+      ++*count;
+    }
+}
+
+float City::coverage(uint32_t cell, uint32_t block) const {
+  if (cell_pages_) return cell_pages_->coverage(cell, block);
+  if (cell >= tables_.visibility.size()) return 0.f;
+  const graph::CellVisibility& v = tables_.visibility[cell];
+  const auto it = std::lower_bound(v.blocks.begin(), v.blocks.end(), block);
+  if (it == v.blocks.end() || *it != block) return 0.f;
+  const size_t i = size_t(it - v.blocks.begin());
+  return i < v.ach.size() ? v.ach[i] : 0.f;
 }
 
 namespace {
@@ -114,7 +161,9 @@ uint64_t City::tableBytes() const {
   uint64_t n = bytesOf(graph_.vertices) + bytesOf(graph_.halfedges) + bytesOf(graph_.faces) +
                bytesOf(graph_.points) + bytesOf(graph_.successors) + bytesOf(graph_.predecessors) +
                bytesOf(graph_.local_blocks) + bytesOf(blocks_) + bytesOf(tables_.visibility) +
-               bytesOf(tables_.impostors) + (whole_ ? whole_->bytes() : 0) + (paged_ ? paged_->bytes() : 0);
+               bytesOf(tables_.impostors) + (whole_ ? whole_->bytes() : 0) + (paged_ ? paged_->bytes() : 0) +
+               (cell_pages_ ? cell_pages_->bytes() : 0) +
+               (block_pages_ ? block_pages_->bytes() : 0);
   for (const auto& v : tables_.visibility) n += bytesOf(v.blocks) + bytesOf(v.ach);
   for (const auto& c : tables_.impostors) {
     n += bytesOf(c.layered) + bytesOf(c.single);
@@ -126,12 +175,12 @@ uint64_t City::tableBytes() const {
 
 core::Status City::decodeBlock(uint32_t b, geo::MeshData& out, std::string& err) const {
   out.clear();
-  if (b < blocks_.size() && blocks_[b].blob == 0xffffffffu) return core::Status::Ok;  // empty block, no levels
+  if (b < blockCount() && block(b).blob == 0xffffffffu) return core::Status::Ok;  // empty block, no levels
   return decodeBlock(b, 0, out, err);
 }
 
 core::Status City::levelMissing(uint32_t b, uint32_t lod, std::string& err) const {
-  err = "block " + std::to_string(b) + " has " + std::to_string(blocks_[b].lod_count) + " levels, level " +
+  err = "block " + std::to_string(b) + " has " + std::to_string(block(b).lod_count) + " levels, level " +
         std::to_string(lod) + " requested";
   return core::Status::NotFound;
 }
@@ -139,7 +188,7 @@ core::Status City::levelMissing(uint32_t b, uint32_t lod, std::string& err) cons
 core::Status City::decodeBlock(uint32_t b, uint32_t lod, geo::MeshData& out, std::string& err) const {
   out.clear();
   // Checked before the open, so a missing level costs no parse.
-  if (b < blocks_.size() && lod >= blocks_[b].lod_count) return levelMissing(b, lod, err);
+  if (b < blockCount() && lod >= block(b).lod_count) return levelMissing(b, lod, err);
   BlockBlob blob;
   const core::Status st = openBlock(b, blob, err);
   if (st != core::Status::Ok) return st;
@@ -156,11 +205,11 @@ void City::BlockBlob::close() {
 
 core::Status City::openBlock(uint32_t b, BlockBlob& blob, std::string& err) const {
   blob.close();
-  if (b >= blocks_.size()) {
+  if (b >= blockCount()) {
     err = "block " + std::to_string(b) + " does not exist";
     return core::Status::NotFound;
   }
-  const graph::BlockRecord& rec = blocks_[b];
+  const graph::BlockRecord rec = block(b);
   if (rec.lod_count == 0 || rec.blob == 0xffffffffu) {
     err = "block " + std::to_string(b) + " is empty (no levels)";
     return core::Status::NotFound;
@@ -183,11 +232,11 @@ core::Status City::openBlock(uint32_t b, BlockBlob& blob, std::string& err) cons
 core::Status City::decodeBlockLevel(const BlockBlob& blob, uint32_t lod, geo::MeshData& out, std::string& err) const {
   out.clear();
   const uint32_t b = blob.block_;
-  if (b >= blocks_.size() || !blob.glb_.isOpen()) {
+  if (b >= blockCount() || !blob.glb_.isOpen()) {
     err = "block blob not open";
     return core::Status::Misuse;
   }
-  const graph::BlockRecord& rec = blocks_[b];
+  const graph::BlockRecord rec = block(b);
   if (lod >= rec.lod_count) return levelMissing(b, lod, err);
   core::Status st = blob.glb_.decodeLevel(lod, out, err);
   if (st == core::Status::NotFound) st = core::Status::Corrupt;  // BLCK promised the level
@@ -210,14 +259,14 @@ core::Status City::decodeBlockLevel(const BlockBlob& blob, uint32_t lod, geo::Me
   return core::Status::Ok;
 }
 
-core::Status City::decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshData& out, std::string& err) const {
+core::Status City::decodeImpostorBlob(uint32_t blob, geo::MeshData& out, std::string& err) const {
   package::Span s;
-  core::Status st = reader_.blob(layer.blob, s, err);
+  core::Status st = reader_.blob(blob, s, err);
   if (st != core::Status::Ok) return st;
   st = package::decodeGlb(s.data, s.size, out, err);
   reader_.dropPages(s);
   if (st != core::Status::Ok)
-    err = reader_.name() + ": impostor blob " + std::to_string(layer.blob) + " at offset " + std::to_string(s.offset) +
+    err = reader_.name() + ": impostor blob " + std::to_string(blob) + " at offset " + std::to_string(s.offset) +
           ": " + err;
   return st;
 }

@@ -16,6 +16,8 @@
 #include "graph/segment_grid.h"
 #include "graph/street_graph.h"
 #include "package/glb.h"
+#include "stream/block_pages.h"
+#include "stream/cell_table_pages.h"
 #include "stream/paged_graph.h"
 #include "package/reader.h"
 
@@ -49,13 +51,31 @@ class City {
   // The page cache's counts (zero when the graph is whole).
   PageCacheStats graphPageStats() const { return paged_ ? paged_->stats() : PageCacheStats{}; }
   uint64_t graphCacheBytes() const { return paged_ ? paged_->bytes() : 0; }
+  PageCacheStats cellTablePageStats() const { return cell_pages_ ? cell_pages_->stats() : PageCacheStats{}; }
+  PageCacheStats blockPageStats() const { return block_pages_ ? block_pages_->stats() : PageCacheStats{}; }
+  // Whole tables only (empty when paged: the runtime reads block(), which serves both).
   const std::vector<graph::BlockRecord>& blocks() const { return blocks_; }
+  uint32_t blockCount() const { return block_pages_ ? block_pages_->count() : static_cast<uint32_t>(blocks_.size()); }
+  graph::BlockRecord block(uint32_t b) const { return block_pages_ ? block_pages_->record(b) : blocks_[b]; }
   // Visibility and impostors per cell; empty tables for a package baked with
   // --impostor none.
+  // Whole tables only: empty when paged (the runtime reads cellLayers() and
+  // coverage(), which serve both).
   const graph::CellTables& cellTables() const { return tables_; }
-  bool hasImpostors() const { return !tables_.impostors.empty(); }
+  bool hasImpostors() const { return cell_pages_ || !tables_.impostors.empty(); }
+  // Layers of the cell with the most impostor layers (layered and single).
+  uint32_t maxCellLayers() const { return max_cell_layers_; }
+  // A cell's layered impostor layers into out[0 .. *layered), then its single
+  // ones (at most `cap` in all: maxCellLayers() suffices). No allocation.
+  void cellLayers(uint32_t cell, LayerInfo* out, uint32_t cap, uint32_t* layered, uint32_t* single) const;
+  // The coverage hint (ACH) of `block` seen from `cell`; 0 when not in its PVS
+  // or when the package has no visibility. No allocation.
+  float coverage(uint32_t cell, uint32_t block) const;
   // Decodes one impostor layer's GLB (textured depth mesh with its image).
-  core::Status decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshData& out, std::string& err) const;
+  core::Status decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshData& out, std::string& err) const {
+    return decodeImpostorBlob(layer.blob, out, err);
+  }
+  core::Status decodeImpostorBlob(uint32_t blob, geo::MeshData& out, std::string& err) const;
   const geo::LocalFrame& frame() const { return frame_; }
   // Heap bytes of the tables above (graph, cells, blocks, visibility,
   // impostor lists): what holding the city costs besides the mapped file.
@@ -121,6 +141,9 @@ class City {
   graph::CellTables tables_;
   std::unique_ptr<graph::MemoryGraph> whole_;  // over graph_, with its segment grid
   std::unique_ptr<PagedGraph> paged_;
+  std::unique_ptr<CellTablePages> cell_pages_;
+  std::unique_ptr<BlockPages> block_pages_;  // paged  // paged, for a package with a cell table index
+  uint32_t max_cell_layers_ = 0;
   const graph::GraphSource* streets_ = nullptr;  // whole_ or paged_
   geo::LocalFrame frame_{0, 0, 0};
 };

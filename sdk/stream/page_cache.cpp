@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <string>
+
+#include "core/status.h"
 
 namespace blvd::stream {
 
@@ -12,16 +15,19 @@ PageCache::PageCache(const package::PackageReader& reader, uint32_t pages, uint3
   tags_.resize(size_t(sets_) * kWays);
 }
 
-uint32_t PageCache::addTable(const uint8_t* data, uint32_t count, uint32_t record_bytes) {
-  const uint32_t per_page = std::max<uint32_t>(1, page_bytes_ / record_bytes);
+uint32_t PageCache::addTable(const uint8_t* data, uint64_t count, uint32_t record_bytes) {
+  if (record_bytes == 0 || record_bytes > page_bytes_)
+    throw core::Error(core::Status::Internal, "page cache: a record of " + std::to_string(record_bytes) +
+                                                  " bytes does not fit a page of " + std::to_string(page_bytes_));
+  const uint32_t per_page = page_bytes_ / record_bytes;
   tables_.push_back(Table{data, count, record_bytes, per_page});
   return static_cast<uint32_t>(tables_.size() - 1);
 }
 
 const uint8_t* PageCache::load(uint32_t t, uint32_t page, size_t slot) const {
   const Table& tb = tables_[t];
-  const uint32_t first = page * tb.per_page;
-  const uint32_t n = std::min(tb.per_page, tb.count - first);
+  const uint64_t first = uint64_t(page) * tb.per_page;
+  const uint64_t n = std::min<uint64_t>(tb.per_page, tb.count - first);
   uint8_t* dst = &slots_[slot * page_bytes_];
   package::Span src{tb.data + size_t(first) * tb.record, size_t(n) * tb.record, 0};
   std::memcpy(dst, src.data, src.size);
@@ -29,30 +35,44 @@ const uint8_t* PageCache::load(uint32_t t, uint32_t page, size_t slot) const {
   return dst;
 }
 
-void PageCache::read(uint32_t t, uint32_t i, void* out) const {
-  const Table& tb = tables_[t];
-  const uint32_t page = i / tb.per_page;
+const uint8_t* PageCache::cached(uint32_t t, uint32_t page) const {
   const uint64_t key = (uint64_t(t) << 32) | page;
   const size_t set = size_t((key * 0x9E3779B97F4A7C15ull) >> 40) % sets_;
-  std::lock_guard<std::mutex> lock(mu_);
   ++tick_;
   size_t victim = set * kWays;
-  const uint8_t* base = nullptr;
   for (size_t w = set * kWays; w < (set + 1) * kWays; ++w) {
     if (tags_[w].key == key) {
-      base = &slots_[w * page_bytes_];
       tags_[w].used = tick_;
       ++stats_.hits;
-      break;
+      return &slots_[w * page_bytes_];
     }
     if (tags_[w].used < tags_[victim].used) victim = w;
   }
-  if (!base) {
-    ++stats_.misses;
-    base = load(t, page, victim);
-    tags_[victim] = Tag{key, tick_};
+  ++stats_.misses;
+  const uint8_t* base = load(t, page, victim);
+  tags_[victim] = Tag{key, tick_};
+  return base;
+}
+
+void PageCache::read(uint32_t t, uint32_t i, void* out) const {
+  const Table& tb = tables_[t];
+  const uint32_t p = i / tb.per_page;
+  std::lock_guard<std::mutex> lock(mu_);
+  std::memcpy(out, cached(t, p) + size_t(i - uint64_t(p) * tb.per_page) * tb.record, tb.record);
+}
+
+void PageCache::readRange(uint32_t t, uint64_t first, uint32_t n, void* out) const {
+  const Table& tb = tables_[t];
+  uint8_t* dst = static_cast<uint8_t*>(out);
+  std::lock_guard<std::mutex> lock(mu_);
+  while (n > 0) {
+    const uint64_t p = first / tb.per_page, in = first - p * tb.per_page;
+    const uint32_t take = static_cast<uint32_t>(std::min<uint64_t>(n, tb.per_page - in));
+    std::memcpy(dst, cached(t, static_cast<uint32_t>(p)) + in * tb.record, size_t(take) * tb.record);
+    dst += size_t(take) * tb.record;
+    first += take;
+    n -= take;
   }
-  std::memcpy(out, base + size_t(i - page * tb.per_page) * tb.record, tb.record);
 }
 
 PageCacheStats PageCache::stats() const {

@@ -30,12 +30,15 @@ class PageCache {
   // `page_bytes` each. The reader must outlive the cache.
   PageCache(const package::PackageReader& reader, uint32_t pages, uint32_t page_bytes);
 
-  // A table of `count` records of `record_bytes` each at `data` (inside the
-  // reader's mapping). Returns its id for read().
-  uint32_t addTable(const uint8_t* data, uint32_t count, uint32_t record_bytes);
+  // A table of `count` records of `record_bytes` each (at most a page) at
+  // `data` (inside the reader's mapping). Returns its id for read().
+  uint32_t addTable(const uint8_t* data, uint64_t count, uint32_t record_bytes);
 
   // Copies record i of table t (i < its count: callers check) into out.
   void read(uint32_t t, uint32_t i, void* out) const;
+  // Copies records [first, first + n) of table t (within its count) into out,
+  // across pages: for a table of bytes, a variable-length record.
+  void readRange(uint32_t t, uint64_t first, uint32_t n, void* out) const;
 
   uint64_t bytes() const { return slots_.size() + tags_.size() * sizeof(Tag) + tables_.size() * sizeof(Table); }
   uint32_t pageBytes() const { return page_bytes_; }
@@ -44,13 +47,15 @@ class PageCache {
  private:
   struct Table {
     const uint8_t* data;
-    uint32_t count, record, per_page;
+    uint64_t count;
+    uint32_t record, per_page;
   };
   struct Tag {
     uint64_t key = ~0ull;  // (table << 32) | page
     uint64_t used = 0;     // tick of the last read
   };
   const uint8_t* load(uint32_t t, uint32_t page, size_t slot) const;
+  const uint8_t* cached(uint32_t t, uint32_t page) const;  // cached or loaded; under mu_
 
   const package::PackageReader& reader_;
   uint32_t page_bytes_, sets_;

@@ -2,7 +2,8 @@
 // same package parsed whole: every half-edge, point and cell list, every grid
 // query, the nearest cell, with a cache far smaller than the graph so that
 // pages are evicted and read again; a record out of range under a valid CRC
-// refused with its offset; a package without the stored grid (format 3.0).
+// refused with its offset; a package without the stored grid (format 3.0);
+// the per-cell visibility and impostor tables read a cell at a time.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include "package/format.h"
 #include "package/format_detail.h"
 #include "package_test_util.h"
+#include "graph/cell_tables.h"
 #include "stream/paged_graph.h"
 
 namespace blvd {
@@ -150,6 +152,62 @@ TEST(PagedGraph, BuildsTheGridForAPackageWithoutOne) {
     const glm::dvec2 p(gs.ox + (k * 71 % 113) / 112.0 * gs.nx * gs.cell, gs.oy + (k * 29 % 127) / 126.0 * gs.ny * gs.cell);
     ASSERT_EQ(city.nearestCell(p, k * 13 % 360), whole().nearestCell(p, k * 13 % 360)) << "point " << k;
   }
+}
+
+// The per-cell tables a cell at a time through the cell table index, against
+// the whole parse: every cell's layers and every coverage hint, and a block
+// outside a cell's PVS.
+TEST(PagedCellTables, ReadWhatTheWholeTablesHold) {
+  stream::City city;
+  std::string err;
+  ASSERT_EQ(city.open(BLVD_TEST_PACKAGE, err, stream::City::Tables::All, stream::City::GraphTables::Paged, kSmallCache),
+            core::Status::Ok)
+      << err;
+  ASSERT_TRUE(city.hasImpostors());
+  EXPECT_TRUE(city.cellTables().impostors.empty() && city.cellTables().visibility.empty());  // nothing held whole
+  EXPECT_EQ(city.maxCellLayers(), whole().maxCellLayers());
+  const graph::CellTables& t = whole().cellTables();
+  std::vector<stream::LayerInfo> a(city.maxCellLayers()), b(city.maxCellLayers());
+  uint32_t with_layers = 0;
+  for (uint32_t c = 0; c < t.impostors.size(); ++c) {
+    uint32_t la = 0, sa = 0, lb = 0, sb = 0;
+    city.cellLayers(c, a.data(), static_cast<uint32_t>(a.size()), &la, &sa);
+    whole().cellLayers(c, b.data(), static_cast<uint32_t>(b.size()), &lb, &sb);
+    ASSERT_EQ(la, t.impostors[c].layered.size()) << "cell " << c;
+    ASSERT_EQ(sa, t.impostors[c].single.size()) << "cell " << c;
+    ASSERT_TRUE(la == lb && sa == sb);
+    with_layers += la + sa > 0;
+    for (uint32_t i = 0; i < la + sa; ++i) {
+      const graph::ImpostorLayer& w = i < la ? t.impostors[c].layered[i] : t.impostors[c].single[i - la];
+      EXPECT_TRUE(a[i].blob == w.blob && a[i].triangles == w.triangles && a[i].vertices == w.vertices &&
+                  a[i].texture_width == w.texture_width && a[i].texture_height == w.texture_height &&
+                  a[i].run_from_m == w.run_from_m)
+          << "cell " << c << " layer " << i;
+    }
+    const graph::CellVisibility& v = t.visibility[c];
+    for (size_t i = 0; i < v.blocks.size(); ++i) ASSERT_EQ(city.coverage(c, v.blocks[i]), v.ach[i]) << "cell " << c;
+    uint32_t outside = 0;  // the lowest block id not in the list
+    while (std::binary_search(v.blocks.begin(), v.blocks.end(), outside)) ++outside;
+    EXPECT_EQ(city.coverage(c, outside), 0.f);
+  }
+  EXPECT_GT(with_layers, 0u);
+}
+
+TEST(PagedCellTables, RefuseAnIndexEntryThatPointsElsewhere) {
+  std::vector<uint8_t> b = readFile(BLVD_TEST_PACKAGE);
+  const size_t entry = package::testutil::dirEntryOffset(b, package::kSectionCellTableIndex);
+  const size_t at = package::detail::get<uint64_t>(b.data() + entry + package::detail::dir::kOffset);
+  const size_t cell3 = at + graph::kCellTableIndexHeader + 3 * graph::kCellTableIndexEntry;
+  package::detail::put<uint64_t>(b.data() + cell3 + 8, package::detail::get<uint64_t>(b.data() + cell3 + 8) + 4);
+  resealSection(b, entry);
+  const std::string path = ::testing::TempDir() + "/paged_bad_ctix.blvd";
+  writeFile(path, b);
+  stream::City city;
+  std::string err;
+  EXPECT_EQ(city.open(path, err, stream::City::Tables::All, stream::City::GraphTables::Paged, kSmallCache),
+            core::Status::Corrupt);
+  EXPECT_NE(err.find("CTIX at offset " + std::to_string(cell3)), std::string::npos) << err;
+  EXPECT_NE(err.find("cell 3 "), std::string::npos) << err;
 }
 
 }  // namespace

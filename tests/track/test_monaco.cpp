@@ -63,6 +63,48 @@ TEST_F(TrackMonaco, SimulatedDrivesStayOnTheirCells) {
   EXPECT_EQ(allocs, 0);
 }
 
+// The tracker over the package's graph read through a page cache far smaller
+// than the graph (every update reads across page edges, and pages are evicted
+// and read again) gives bit for bit the poses it gives over the whole graph,
+// and still allocates nothing per update.
+TEST_F(TrackMonaco, PagedGraphTracksAsTheWholeGraph) {
+  stream::City paged;
+  std::string err;
+  ASSERT_EQ(paged.open(BLVD_TEST_PACKAGE, err, stream::City::Tables::Graph, stream::City::GraphTables::Paged,
+                       stream::PagedGraphDesc{16, 1024}),
+            core::Status::Ok)
+      << err;
+  size_t epochs = 0;
+  long allocs = 0;
+  for (uint64_t seed = 1; seed <= 2; ++seed) {
+    SimDesc sd;
+    sd.seed = seed;
+    sd.route_cells = 40;
+    sd.gnss_sigma_m = 5;
+    const SimTrace trace = simulateDrive(city_->graph(), city_->frame(), sd);
+    Tracker whole(city_->frame(), &city_->graph()), tiled(paged.frame(), &paged.streets());
+    std::unique_ptr<blvd_test::AllocCounter> count;
+    size_t fi = 0, oi = 0;
+    for (size_t e = 0; e < trace.epochs.size(); ++e) {
+      if (e == 5) count = std::make_unique<blvd_test::AllocCounter>();
+      const double t = trace.epochs[e].t;
+      for (; fi < trace.fixes.size() && trace.fixes[fi].t <= t; ++fi) whole.feedGnss(trace.fixes[fi]), tiled.feedGnss(trace.fixes[fi]);
+      for (; oi < trace.odometry.size() && trace.odometry[oi].t <= t; ++oi)
+        whole.feedOdometry(trace.odometry[oi]), tiled.feedOdometry(trace.odometry[oi]);
+      const Pose a = whole.update(t), b = tiled.update(t);
+      ASSERT_EQ(a.cell, b.cell) << "seed " << seed << " epoch " << e;
+      ASSERT_EQ(a.arc_m, b.arc_m) << "seed " << seed << " epoch " << e;
+      ASSERT_EQ(a.e, b.e);
+      ASSERT_EQ(a.n, b.n);
+      ++epochs;
+    }
+    allocs += count ? count->count() : 0;
+  }
+  EXPECT_GT(epochs, 100u);
+  EXPECT_EQ(allocs, 0);
+  EXPECT_GT(paged.graphPageStats().misses, 100u);
+}
+
 // The simulated car keeps to the lane of lane.h, the lane the map aid expects:
 // right of the centre line on two-way streets, the centre of one-way streets.
 // Without lane wander, on straight stretches away from junctions (pure pursuit
