@@ -266,7 +266,7 @@ void routeOf(const BudgetOpts& o, Bench& b) {
   if (!city.hasImpostors())
     throw core::Error(core::Status::Unsupported, o.package + " has no impostors: bake it with --impostor both");
   b.route = graph::seededRoute(city.graph(), {n, o.seed});
-  b.poses = samplePoses(city.graph(), b.route, b.step);
+  b.poses = samplePoses(city.streets(), b.route, b.step);
 }
 
 // The target: given, or "auto" between the floor and the unbudgeted p50 of the warm-up lap.

@@ -11,7 +11,11 @@
 #include <malloc.h>
 #include <unistd.h>
 
+#include <cctype>
+#include <climits>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -70,6 +74,26 @@ nlohmann::json timeFrames(blvd_runtime* rt, const std::vector<Pose>& poses, blvd
           {"poses", poses.size()}};
 }
 
+// Resident KiB of the mappings of `path` (/proc/self/smaps): the package's
+// pages the process holds.
+long mappingRssKiB(const std::string& path) {
+  char real[4096];
+  if (!::realpath(path.c_str(), real)) return -1;
+  std::ifstream f("/proc/self/smaps");
+  std::string line;
+  bool in = false;
+  long kib = 0;
+  while (std::getline(f, line)) {
+    if (!line.empty() && std::isxdigit(static_cast<unsigned char>(line[0])) && line.find('-') != std::string::npos &&
+        line.find(' ') < line.size()) {
+      in = line.size() >= std::strlen(real) && line.compare(line.size() - std::strlen(real), std::string::npos, real) == 0;
+      continue;
+    }
+    if (in && line.rfind("Rss:", 0) == 0) kib += std::atol(line.c_str() + 4);
+  }
+  return kib;
+}
+
 // The child: one package, one route, `laps` laps; lap 1 is the warm-up.
 int runDrive(const MemoryOpts& o) {
   // glibc raises its mmap threshold each time a large mmapped block is freed
@@ -83,13 +107,15 @@ int runDrive(const MemoryOpts& o) {
   std::vector<Pose> poses;
   bool impostors = false;
   {
+    // Paged, as the runtime opens it: the poses need only the route's cells,
+    // and the peak RSS measured below must not hold a whole graph the runtime does not.
     stream::City city;
     std::string err;
-    const core::Status st = city.open(o.pkg_1x, err);
+    const core::Status st = city.open(o.pkg_1x, err, stream::City::Tables::All, stream::City::GraphTables::Paged);
     if (st != core::Status::Ok) throw core::Error(st, err);
     for (uint32_t c : route)
-      if (c >= city.graph().cellCount()) throw core::Error(core::Status::InvalidArg, "route cell out of range");
-    poses = samplePoses(city.graph(), route, o.step);
+      if (c >= city.streets().cellCount()) throw core::Error(core::Status::InvalidArg, "route cell out of range");
+    poses = samplePoses(city.streets(), route, o.step);
     impostors = city.hasImpostors();
   }
   blvd_runtime_desc desc{};
@@ -133,6 +159,7 @@ int runDrive(const MemoryOpts& o) {
   }
   j["rss_anon_end"] = statusKiB("RssAnon:") * 1024;  // heap and GL buffers
   j["rss_file_end"] = statusKiB("RssFile:") * 1024;  // mapped libraries and package pages
+  j["rss_package_end"] = mappingRssKiB(o.pkg_1x) * 1024;  // of which the package's
   j["allocs_per_frame_max"] = blvd_max;
   j["driver_allocs_per_frame_max"] = driver_max;
   j["frames"] = frames;

@@ -69,9 +69,9 @@ std::string fmt(double v, int d) {
 }
 
 std::vector<Pose> routePoses(const stream::City& city, const std::vector<uint32_t>& route, double step) {
-  if (step > 0) return samplePoses(city.graph(), route, step);
+  if (step > 0) return samplePoses(city.streets(), route, step);
   // One pose per cell, halfway along it.
-  const auto all = samplePoses(city.graph(), route, 1.0);
+  const auto all = samplePoses(city.streets(), route, 1.0);
   std::vector<Pose> poses;
   for (uint32_t c : route) {
     std::vector<const Pose*> on;

@@ -133,7 +133,7 @@ int run(const ViewOpts& o) {
   const core::Status st = city.open(o.package, err);
   if (st != core::Status::Ok) throw core::Error(st, err);
   const auto route = graph::seededRoute(city.graph(), {n, o.seed});
-  const auto poses = samplePoses(city.graph(), route, o.step);
+  const auto poses = samplePoses(city.streets(), route, o.step);
   ::mkdir(o.out.c_str(), 0755);
   std::vector<double> ms;
   std::ofstream html(o.out + "/index.html");

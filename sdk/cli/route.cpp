@@ -9,16 +9,16 @@
 
 namespace blvd::cli {
 
-std::vector<Pose> samplePoses(const graph::StreetGraph& g, const std::vector<uint32_t>& route, double step_m,
+std::vector<Pose> samplePoses(const graph::GraphSource& g, const std::vector<uint32_t>& route, double step_m,
                               double look_ahead_m, double lateral_m) {
   // Flatten the route into one polyline with the cell of each point.
   std::vector<glm::dvec2> pts;
   std::vector<uint32_t> cell_of;
   std::vector<double> arc;
   for (uint32_t h : route) {
-    const auto& e = g.halfedges[h];
+    const graph::HalfEdge e = g.halfedge(h);
     for (uint32_t i = pts.empty() ? 0 : 1; i < e.pts_count; ++i) {
-      const glm::dvec2 p = g.points[e.pts_begin + i];
+      const glm::dvec2 p = g.point(e.pts_begin + i);
       arc.push_back(pts.empty() ? 0 : arc.back() + glm::length(p - pts.back()));
       pts.push_back(p);
       cell_of.push_back(h);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "graph/graph_source.h"
 #include "graph/route.h"
 #include "graph/street_graph.h"
 
@@ -18,7 +19,7 @@ struct Pose {
 
 // Poses every `step_m` metres along the route, heading toward a point
 // `look_ahead_m` further on (so turns are smooth), offset `lateral_m` to the right.
-std::vector<Pose> samplePoses(const graph::StreetGraph& g, const std::vector<uint32_t>& route, double step_m,
+std::vector<Pose> samplePoses(const graph::GraphSource& g, const std::vector<uint32_t>& route, double step_m,
                               double look_ahead_m = 10.0, double lateral_m = 1.8);
 
 }  // namespace blvd::cli

@@ -151,6 +151,7 @@ core::Status PackageReader::validate(std::string& err) {
     s = parseBlobIndex(data_ + index->offset, static_cast<size_t>(index->size), *index, *blob_data,
                        name_, blobs_, err);
     if (s != core::Status::Ok) return s;
+    dropPages(Span{data_ + index->offset, static_cast<size_t>(index->size), index->offset});  // parsed
   }
   return core::Status::Ok;
 }
@@ -189,18 +190,16 @@ core::Status PackageReader::checkedSection(uint32_t tag, Span& out, std::string&
 
 void PackageReader::dropPages(const Span& s) const {
   if (!mapped_ || !s.data || s.size == 0) return;
+  // A fault maps the file's cached pages around the one it needs too (the
+  // kernel's fault-around, 64 KiB aligned by default): those go with it, or a
+  // drive would keep a growing share of a big package's tables resident.
+  constexpr uintptr_t kFaultAround = 64 * 1024;
   const uintptr_t page = static_cast<uintptr_t>(::sysconf(_SC_PAGESIZE));
-  const uintptr_t begin = (reinterpret_cast<uintptr_t>(s.data) + page - 1) & ~(page - 1);
-  const uintptr_t end = (reinterpret_cast<uintptr_t>(s.data) + s.size) & ~(page - 1);
+  const uintptr_t lo = reinterpret_cast<uintptr_t>(data_);
+  const uintptr_t hi = (lo + size_ + page - 1) & ~(page - 1);
+  const uintptr_t begin = std::max(lo, reinterpret_cast<uintptr_t>(s.data) & ~(kFaultAround - 1));
+  const uintptr_t end = std::min(hi, (reinterpret_cast<uintptr_t>(s.data) + s.size + kFaultAround - 1) & ~(kFaultAround - 1));
   if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_DONTNEED);
-}
-
-void PackageReader::dropEnclosingPages(const Span& s) const {
-  if (!mapped_ || !s.data || s.size == 0) return;
-  const uintptr_t page = static_cast<uintptr_t>(::sysconf(_SC_PAGESIZE));
-  const uintptr_t begin = reinterpret_cast<uintptr_t>(s.data) & ~(page - 1);
-  const uintptr_t end = (reinterpret_cast<uintptr_t>(s.data) + s.size + page - 1) & ~(page - 1);
-  ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_DONTNEED);
 }
 
 core::Status PackageReader::blob(uint32_t i, Span& out, std::string& err) const {

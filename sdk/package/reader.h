@@ -89,16 +89,16 @@ class PackageReader {
   // offset. Reads the whole file.
   core::Status verify(std::string& err) const;
 
-  // Tells the kernel the mapped pages wholly inside `s` are not needed now
-  // (madvise MADV_DONTNEED): they leave the process's resident set and are
-  // read again from the file if touched. The runtime calls it once a section
-  // is parsed or a blob decoded, so resident memory follows the cells in use,
-  // not the file's size. A no-op for a package read into memory.
+  // Tells the kernel the mapped pages `s` touches are not needed now
+  // (madvise MADV_DONTNEED), with the 64 KiB-aligned window around them that
+  // a fault maps (fault-around): they
+  // leave the process's resident set and are read again from the file if
+  // touched, so dropping a neighbour's page costs it a refault, never its
+  // data (the mapping is read-only). The runtime calls it once a section is
+  // checked, a blob decoded or a table page copied, so resident memory
+  // follows the cells in use, not the file's size. A no-op for a package
+  // read into memory.
   void dropPages(const Span& s) const;
-  // The same for every page the span touches, partly covered ones too (a page
-  // cache's copies, which leave no page wholly read): safe on a read-only
-  // mapping, where a later read of a neighbour refaults from the file.
-  void dropEnclosingPages(const Span& s) const;
 
  private:
   core::Status validate(std::string& err);

@@ -31,7 +31,7 @@ const uint8_t* PageCache::load(uint32_t t, uint32_t page, size_t slot) const {
   uint8_t* dst = &slots_[slot * page_bytes_];
   package::Span src{tb.data + size_t(first) * tb.record, size_t(n) * tb.record, 0};
   std::memcpy(dst, src.data, src.size);
-  reader_.dropEnclosingPages(src);  // the copy holds it now
+  reader_.dropPages(src);  // the copy holds it now
   return dst;
 }
 

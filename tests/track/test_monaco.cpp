@@ -31,6 +31,14 @@ class TrackMonaco : public ::testing::Test {
     delete city_;
     city_ = nullptr;
   }
+  // A simulated 40-cell drive with 5 m GNSS noise.
+  static SimTrace drive(uint64_t seed) {
+    SimDesc sd;
+    sd.seed = seed;
+    sd.route_cells = 40;
+    sd.gnss_sigma_m = 5;
+    return simulateDrive(city_->graph(), city_->frame(), sd);
+  }
   static stream::City* city_;
 };
 stream::City* TrackMonaco::city_ = nullptr;
@@ -39,11 +47,7 @@ TEST_F(TrackMonaco, SimulatedDrivesStayOnTheirCells) {
   size_t epochs = 0, on = 0;
   long allocs = 0;
   for (uint64_t seed = 1; seed <= 4; ++seed) {
-    SimDesc sd;
-    sd.seed = seed;
-    sd.route_cells = 40;
-    sd.gnss_sigma_m = 5;
-    const SimTrace trace = simulateDrive(city_->graph(), city_->frame(), sd);
+    const SimTrace trace = drive(seed);
     ASSERT_FALSE(trace.epochs.empty());
     Tracker tr(city_->frame(), &city_->graph());
     std::unique_ptr<blvd_test::AllocCounter> count;
@@ -77,11 +81,7 @@ TEST_F(TrackMonaco, PagedGraphTracksAsTheWholeGraph) {
   size_t epochs = 0;
   long allocs = 0;
   for (uint64_t seed = 1; seed <= 2; ++seed) {
-    SimDesc sd;
-    sd.seed = seed;
-    sd.route_cells = 40;
-    sd.gnss_sigma_m = 5;
-    const SimTrace trace = simulateDrive(city_->graph(), city_->frame(), sd);
+    const SimTrace trace = drive(seed);
     Tracker whole(city_->frame(), &city_->graph()), tiled(paged.frame(), &paged.streets());
     std::unique_ptr<blvd_test::AllocCounter> count;
     size_t fi = 0, oi = 0;
