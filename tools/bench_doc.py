@@ -126,10 +126,13 @@ def bake(out_dir, name):
     m = re.search(r"per impostor cell ([\d.]+) s \(item buffers ([\d.]+) ms a sample\), ([\d.]+) ms an impostor mesh",
                   summary)
     per_cell = f"{m.group(1)} s ({m.group(2)} ms a sample, {m.group(3)} ms a mesh)" if m else "–"
-    return table(["package", "bake", "bytes", "blocks", "cells", "buildings", "triangles (level 0)",
-                  "a cell with impostors"],
-                 [[os.path.basename(info["file"]), secs, f"{info['bytes']:,}", c["blocks"], c["cells"],
-                   f"{c['buildings']:,}", f"{c['triangles']:,}", per_cell]])
+    k = re.search(r"package per km of street (\d+) bytes \(([\d.]+) km\), per cell (\d+) bytes", summary)
+    per_km = f"{int(k.group(1)):,} ({k.group(2)} km)" if k else "–"
+    cell_bytes = f"{int(k.group(3)):,}" if k else "–"
+    return table(["package", "bake", "bytes", "bytes per km of street", "bytes per cell", "blocks", "cells",
+                  "buildings", "triangles (level 0)", "a cell with impostors"],
+                 [[os.path.basename(info["file"]), secs, f"{info['bytes']:,}", per_km, cell_bytes, c["blocks"],
+                   c["cells"], f"{c['buildings']:,}", f"{c['triangles']:,}", per_cell]])
 
 
 def command_text(cmd):

@@ -252,6 +252,8 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   sum.junctions = g.junctionCount();
   sum.vertices = g.vertices.size();
   sum.cells = g.cellCount();
+  for (uint32_t h = 0; h < g.halfedges.size(); ++h)
+    if (g.halfedges[h].twin > h || g.halfedges[h].twin == graph::kNone) sum.street_km += g.halfedges[h].length / 1000.0;
   sum.blocks = g.faces.size();
   sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sum;

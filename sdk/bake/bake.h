@@ -44,6 +44,7 @@ struct BakeSummary {
   uint64_t impostor_triangles = 0, impostor_bytes = 0;
   double pvs_seconds = 0, impostor_seconds = 0;
   uint64_t source_bytes = 0, package_bytes = 0;
+  double street_km = 0;  // street length in the graph, each two-way street once
   double seconds = 0;
 };
 

@@ -50,6 +50,9 @@ void printSummary(const bake::BakeSummary& s, const std::string& in, const std::
       s.item_samples, s.pvs_seconds, s.impostor_seconds, static_cast<unsigned long long>(s.package_bytes),
       static_cast<unsigned long long>(s.source_bytes),
       s.source_bytes ? double(s.package_bytes) / double(s.source_bytes) : 0.0);
+  if (s.street_km > 0 && s.cells > 0)
+    std::printf("  package per km of street %.0f bytes (%.1f km), per cell %.0f bytes\n",
+                double(s.package_bytes) / s.street_km, s.street_km, double(s.package_bytes) / double(s.cells));
   if (s.impostor_cells > 0 && s.impostors > 0 && s.item_samples > 0)
     std::printf("  per impostor cell %.2f s (item buffers %.1f ms a sample), %.1f ms an impostor mesh\n",
                 (s.pvs_seconds + s.impostor_seconds) / double(s.impostor_cells),
