@@ -221,7 +221,9 @@ BLVD_API blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* d
 /* The exact bytes blvd_runtime_create would carve for `desc` and the package
  * at `package_path` (NULL: desc->package_path): *cpu_bytes is what counts
  * against memory_budget_bytes, *gpu_bytes (may be NULL) against
- * gpu_budget_bytes. Opens the package's tables, creates no GL context.
+ * gpu_budget_bytes. Opens the package's tables, creates no GL context. For a
+ * package of format 3.1 or later the figure depends on the package's largest
+ * cell, not on its size: its tables are read through fixed page caches.
  * Errors: BLVD_ERR_IO, BLVD_ERR_CORRUPT, BLVD_ERR_INVALID_ARG. Any thread. */
 BLVD_API blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const char* package_path,
                                           uint64_t* cpu_bytes, uint64_t* gpu_bytes);
@@ -316,7 +318,7 @@ typedef struct blvd_stats {
                                   * reports it (buffer sizes, each texture level) where it can */
   blvd_pool_stats staging;       /* the loader's staging arenas */
   blvd_pool_stats decode;        /* the loader's decode scratch (high water only; capacity 0) */
-  uint64_t table_bytes;          /* package tables held in memory */
+  uint64_t table_bytes;          /* package tables held in memory (their page caches) */
   uint64_t tracking_bytes;       /* tracker rings, filter and matcher */
   uint64_t loads;                /* cells decoded by the loader */
   uint64_t evictions;            /* resident cells released for others */

@@ -75,6 +75,9 @@ CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_
     }
     pinned_ = true;
   }
+  // The heap's part first: a failure here (std::bad_alloc) leaves no host
+  // allocation behind.
+  for (Staging& s : slots_) s.layers.resize(city_.maxCellLayers());
   for (Staging& s : slots_) {
     void* arena = alloc_.allocate(arena_bytes);
     void* table = arena ? alloc_.allocate(sizeof(StagedMesh) * meshes) : nullptr;
@@ -90,7 +93,6 @@ CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_
     s.arena = {static_cast<uint8_t*>(arena), static_cast<size_t>(arena_bytes), 0};
     s.meshes = new (table) StagedMesh[meshes];
     s.mesh_capacity = meshes;
-    s.layers.resize(city_.maxCellLayers());
     carved_ += arena_bytes + sizeof(StagedMesh) * meshes;
   }
   if (!executor_.submit) {

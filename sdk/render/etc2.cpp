@@ -1,0 +1,316 @@
+// ETC2 RGB8 after the Khronos Data Format Specification 1.3, §21.1 (the same
+// text as the OpenGL ES 3.0.6 specification, annex C.1). Bit n of a block is
+// bit n of the 64-bit big-endian value of its 8 bytes.
+#include "render/etc2.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace blvd::render {
+namespace {
+
+// §21.1, table 68: the intensity modifiers {a, b}; pixel index 0 adds a, 1 adds
+// b, 2 subtracts a, 3 subtracts b.
+constexpr int kModifiers[8][2] = {{2, 8}, {5, 17}, {9, 29}, {13, 42}, {18, 60}, {24, 80}, {33, 106}, {47, 183}};
+// §21.1, table 71: the T and H modes' distances.
+constexpr int kDistances[8] = {3, 6, 11, 16, 23, 32, 41, 64};
+
+int clamp255(int v) { return v < 0 ? 0 : v > 255 ? 255 : v; }
+uint32_t bits(uint64_t b, int hi, int lo) { return uint32_t((b >> lo) & ((uint64_t(1) << (hi - lo + 1)) - 1)); }
+int extend4(uint32_t v) { return int(v << 4 | v); }
+int extend5(uint32_t v) { return int(v << 3 | v >> 2); }
+int extend6(uint32_t v) { return int(v << 2 | v >> 4); }
+int extend7(uint32_t v) { return int(v << 1 | v >> 6); }
+int signed3(uint32_t v) { return v & 4 ? int(v) - 8 : int(v); }
+int modifier(int table, uint32_t index) {
+  const int m = kModifiers[table][index & 1];
+  return index & 2 ? -m : m;
+}
+// Pixel (x, y)'s two index bits: msb at bit 16 + i, lsb at bit i, i = 4x + y.
+uint32_t pixelIndex(uint64_t b, int x, int y) {
+  const int i = x * 4 + y;
+  return uint32_t((b >> (16 + i) & 1) << 1 | (b >> i & 1));
+}
+
+void put(uint8_t* out, int x, int y, const int c[3]) {
+  uint8_t* p = out + (y * 4 + x) * 4;
+  p[0] = uint8_t(clamp255(c[0]));
+  p[1] = uint8_t(clamp255(c[1]));
+  p[2] = uint8_t(clamp255(c[2]));
+  p[3] = 255;
+}
+
+// Individual and differential modes (ETC1): a base colour per half and a
+// modifier table per half.
+void decodeEtc1(uint64_t b, const int base[2][3], uint8_t* out) {
+  const int table[2] = {int(bits(b, 39, 37)), int(bits(b, 36, 34))};
+  const bool flip = b >> 32 & 1;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      const int half = flip ? (y >= 2) : (x >= 2);
+      const int m = modifier(table[half], pixelIndex(b, x, y));
+      const int c[3] = {base[half][0] + m, base[half][1] + m, base[half][2] + m};
+      put(out, x, y, c);
+    }
+}
+
+void decodePaint(uint64_t b, const int paint[4][3], uint8_t* out) {
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) put(out, x, y, paint[pixelIndex(b, x, y)]);
+}
+
+void decodeT(uint64_t b, uint8_t* out) {
+  const int c1[3] = {extend4(bits(b, 60, 59) << 2 | bits(b, 57, 56)), extend4(bits(b, 55, 52)), extend4(bits(b, 51, 48))};
+  const int c2[3] = {extend4(bits(b, 47, 44)), extend4(bits(b, 43, 40)), extend4(bits(b, 39, 36))};
+  const int d = kDistances[bits(b, 35, 34) << 1 | bits(b, 32, 32)];
+  const int paint[4][3] = {{c1[0], c1[1], c1[2]},
+                           {c2[0] + d, c2[1] + d, c2[2] + d},
+                           {c2[0], c2[1], c2[2]},
+                           {c2[0] - d, c2[1] - d, c2[2] - d}};
+  decodePaint(b, paint, out);
+}
+
+void decodeH(uint64_t b, uint8_t* out) {
+  const uint32_t r1 = bits(b, 62, 59), g1 = bits(b, 58, 56) << 1 | bits(b, 52, 52),
+                 b1 = bits(b, 51, 51) << 3 | bits(b, 49, 47);
+  const uint32_t r2 = bits(b, 46, 43), g2 = bits(b, 42, 39), b2 = bits(b, 38, 35);
+  const uint32_t order = (r1 << 8 | g1 << 4 | b1) >= (r2 << 8 | g2 << 4 | b2);
+  const int d = kDistances[bits(b, 34, 34) << 2 | bits(b, 32, 32) << 1 | order];
+  const int c1[3] = {extend4(r1), extend4(g1), extend4(b1)}, c2[3] = {extend4(r2), extend4(g2), extend4(b2)};
+  const int paint[4][3] = {{c1[0] + d, c1[1] + d, c1[2] + d},
+                           {c1[0] - d, c1[1] - d, c1[2] - d},
+                           {c2[0] + d, c2[1] + d, c2[2] + d},
+                           {c2[0] - d, c2[1] - d, c2[2] - d}};
+  decodePaint(b, paint, out);
+}
+
+void decodePlanar(uint64_t b, uint8_t* out) {
+  const int o[3] = {extend6(bits(b, 62, 57)), extend7(bits(b, 56, 56) << 6 | bits(b, 54, 49)),
+                    extend6(bits(b, 48, 48) << 5 | bits(b, 44, 43) << 3 | bits(b, 41, 39))};
+  const int h[3] = {extend6(bits(b, 38, 34) << 1 | bits(b, 32, 32)), extend7(bits(b, 31, 25)), extend6(bits(b, 24, 19))};
+  const int v[3] = {extend6(bits(b, 18, 13)), extend7(bits(b, 12, 6)), extend6(bits(b, 5, 0))};
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      int c[3];
+      for (int k = 0; k < 3; ++k) c[k] = (x * (h[k] - o[k]) + y * (v[k] - o[k]) + 4 * o[k] + 2) >> 2;
+      put(out, x, y, c);
+    }
+}
+
+uint64_t load64(const uint8_t* p) {
+  uint64_t b = 0;
+  for (int i = 0; i < 8; ++i) b = b << 8 | p[i];
+  return b;
+}
+
+void store64(uint64_t b, uint8_t* p) {
+  for (int i = 7; i >= 0; --i, b >>= 8) p[i] = uint8_t(b);
+}
+
+// ---- encoder ----
+
+struct Block {
+  int px[16][3];  // pixel (x, y) at y * 4 + x
+};
+
+int64_t sse(const Block& src, const uint8_t* decoded) {
+  int64_t e = 0;
+  for (int i = 0; i < 16; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const int d = src.px[i][k] - decoded[i * 4 + k];
+      e += d * d;
+    }
+  return e;
+}
+
+bool inHalf(bool flip, int half, int x, int y) { return (flip ? (y >= 2) : (x >= 2)) == (half == 1); }
+
+// The half's best table and each pixel's index for an 8-bit base colour:
+// index bits into `b`, the table into *table; returns the squared error. A
+// pixel takes the modifier nearest its mean offset from the base (the one that
+// minimises the error before clamping), whose error is then counted exactly.
+int64_t fitHalf(const Block& src, bool flip, int half, const int base[3], uint64_t& b, int* table) {
+  int64_t best = INT64_MAX;
+  uint64_t best_bits = 0;
+  const int base_sum = base[0] + base[1] + base[2];
+  for (int t = 0; t < 8; ++t) {
+    const int a = kModifiers[t][0], bb = kModifiers[t][1];
+    int64_t err = 0;
+    uint64_t idx = 0;
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x) {
+        if (!inHalf(flip, half, x, y)) continue;
+        const int* p = src.px[y * 4 + x];
+        const int d3 = p[0] + p[1] + p[2] - base_sum;  // 3 × the mean offset
+        // Nearest of +a, +b, −a, −b to d3 / 3: thresholds halfway between them.
+        uint32_t pi;
+        if (d3 >= 0) pi = 2 * d3 >= 3 * (a + bb) ? 1 : 0;
+        else pi = -2 * d3 >= 3 * (a + bb) ? 3 : 2;
+        const int m = modifier(t, pi);
+        for (int k = 0; k < 3; ++k) {
+          const int e = clamp255(base[k] + m) - p[k];
+          err += e * e;
+        }
+        const int n = x * 4 + y;
+        idx |= uint64_t(pi >> 1) << (16 + n) | uint64_t(pi & 1) << n;
+      }
+    if (err < best) best = err, best_bits = idx, *table = t;
+  }
+  b |= best_bits;
+  return best;
+}
+
+void halfMean(const Block& src, bool flip, int half, double mean[3]) {
+  mean[0] = mean[1] = mean[2] = 0;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x)
+      if (inHalf(flip, half, x, y))
+        for (int k = 0; k < 3; ++k) mean[k] += src.px[y * 4 + x][k] / 8.0;
+}
+
+int quantize(double v, int levels) { return std::clamp(int(v * (levels - 1) / 255.0 + 0.5), 0, levels - 1); }
+
+// Individual (4-bit bases) or differential (5-bit bases 4 apart at most) with
+// flip `flip`, and its squared error; false when the halves' bases are too far
+// apart for differential.
+bool encodeEtc1(const Block& src, bool flip, bool differential, uint64_t* out, int64_t* err) {
+  double mean[2][3];
+  halfMean(src, flip, 0, mean[0]);
+  halfMean(src, flip, 1, mean[1]);
+  const int levels = differential ? 32 : 16;
+  int q[2][3], base[2][3];
+  for (int h = 0; h < 2; ++h)
+    for (int k = 0; k < 3; ++k) {
+      q[h][k] = quantize(mean[h][k], levels);
+      base[h][k] = differential ? extend5(uint32_t(q[h][k])) : extend4(uint32_t(q[h][k]));
+    }
+  uint64_t b = 0;
+  if (differential) {
+    for (int k = 0; k < 3; ++k) {
+      const int d = q[1][k] - q[0][k];
+      if (d < -4 || d > 3) return false;
+      b |= uint64_t(q[0][k]) << (59 - 8 * k) | uint64_t(d & 7) << (56 - 8 * k);
+    }
+    b |= uint64_t(1) << 33;
+  } else {
+    for (int k = 0; k < 3; ++k) b |= uint64_t(q[0][k]) << (60 - 8 * k) | uint64_t(q[1][k]) << (56 - 8 * k);
+  }
+  int t0 = 0, t1 = 0;
+  *err = fitHalf(src, flip, 0, base[0], b, &t0) + fitHalf(src, flip, 1, base[1], b, &t1);
+  b |= uint64_t(t0) << 37 | uint64_t(t1) << 34 | uint64_t(flip) << 32;
+  *out = b;
+  return true;
+}
+
+// A least-squares plane c = O + x (H - O) / 4 + y (V - O) / 4 per channel,
+// quantized to 6/7/6 bits, with the free bits set so that the block reads as
+// planar (R and G in range, B out of range in the differential reading).
+uint64_t encodePlanar(const Block& src) {
+  int o[3], h[3], v[3];
+  for (int k = 0; k < 3; ++k) {
+    double mean = 0, cx = 0, cy = 0;
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x) {
+        const double p = src.px[y * 4 + x][k];
+        mean += p / 16.0;
+        cx += (x - 1.5) * p;
+        cy += (y - 1.5) * p;
+      }
+    const double bx = cx / 20.0, by = cy / 20.0;  // Σ (x - 1.5)² over the block = 20
+    const double a = mean - 1.5 * bx - 1.5 * by;
+    const int levels = k == 1 ? 128 : 64;
+    o[k] = quantize(a, levels);
+    h[k] = quantize(a + 4 * bx, levels);
+    v[k] = quantize(a + 4 * by, levels);
+  }
+  uint64_t b = 0;
+  b |= uint64_t(o[0]) << 57;
+  b |= uint64_t(o[1] >> 6) << 56 | uint64_t(o[1] & 63) << 49;
+  b |= uint64_t(o[2] >> 5) << 48 | uint64_t(o[2] >> 3 & 3) << 43 | uint64_t(o[2] & 7) << 39;
+  b |= uint64_t(h[0] >> 1) << 34 | uint64_t(h[0] & 1) << 32;
+  b |= uint64_t(h[1]) << 25 | uint64_t(h[2]) << 19;
+  b |= uint64_t(v[0]) << 13 | uint64_t(v[1]) << 6 | uint64_t(v[2]);
+  b |= uint64_t(1) << 33;  // the differential bit
+  // R = bits 63..59 plus dR = bits 58..56 must stay in 0..31: bit 63 picks.
+  if (int(bits(b, 62, 59)) + signed3(bits(b, 58, 56)) < 0) b |= uint64_t(1) << 63;
+  if (int(bits(b, 54, 51)) + signed3(bits(b, 50, 48)) < 0) b |= uint64_t(1) << 55;
+  // B = bits 47..43 plus dB = bits 42..40 must leave 0..31: bits 47..45 and 42.
+  if (bits(b, 44, 43) + bits(b, 41, 40) < 4) b |= uint64_t(1) << 42;  // B in 0..3, dB in -4..-1
+  else b |= uint64_t(7) << 45;                                         // B in 28..31, dB in 0..3
+  return b;
+}
+
+uint64_t encodeBlock(const Block& src) {
+  uint64_t best = 0;
+  int64_t best_err = INT64_MAX;
+  for (int flip = 0; flip < 2; ++flip)
+    for (int differential = 0; differential < 2; ++differential) {
+      uint64_t b = 0;
+      int64_t e = 0;
+      if (encodeEtc1(src, flip, differential, &b, &e) && e < best_err) best_err = e, best = b;
+    }
+  // The planar block's error as the decoder makes it.
+  uint8_t decoded[64], bytes[8];
+  const uint64_t planar = encodePlanar(src);
+  store64(planar, bytes);
+  decodeEtc2Block(bytes, decoded);
+  return sse(src, decoded) < best_err ? planar : best;
+}
+
+}  // namespace
+
+size_t etc2Bytes(int w, int h) { return size_t((w + 3) / 4) * size_t((h + 3) / 4) * kEtc2BlockBytes; }
+
+void decodeEtc2Block(const uint8_t* block, uint8_t out[64]) {
+  const uint64_t b = load64(block);
+  int base[2][3];
+  if (!(b >> 33 & 1)) {  // individual
+    for (int k = 0; k < 3; ++k) {
+      base[0][k] = extend4(bits(b, 63 - 8 * k, 60 - 8 * k));
+      base[1][k] = extend4(bits(b, 59 - 8 * k, 56 - 8 * k));
+    }
+    return decodeEtc1(b, base, out);
+  }
+  int q[3], q2[3];
+  for (int k = 0; k < 3; ++k) {
+    q[k] = int(bits(b, 63 - 8 * k, 59 - 8 * k));
+    q2[k] = q[k] + signed3(bits(b, 58 - 8 * k, 56 - 8 * k));
+  }
+  if (q2[0] < 0 || q2[0] > 31) return decodeT(b, out);
+  if (q2[1] < 0 || q2[1] > 31) return decodeH(b, out);
+  if (q2[2] < 0 || q2[2] > 31) return decodePlanar(b, out);
+  for (int k = 0; k < 3; ++k) {
+    base[0][k] = extend5(uint32_t(q[k]));
+    base[1][k] = extend5(uint32_t(q2[k]));
+  }
+  decodeEtc1(b, base, out);
+}
+
+void decodeEtc2(const uint8_t* data, int w, int h, uint8_t* rgba) {
+  uint8_t px[64];
+  const int bw = (w + 3) / 4, bh = (h + 3) / 4;
+  for (int by = 0; by < bh; ++by)
+    for (int bx = 0; bx < bw; ++bx) {
+      decodeEtc2Block(data + (size_t(by) * bw + bx) * kEtc2BlockBytes, px);
+      for (int y = 0; y < 4 && by * 4 + y < h; ++y)
+        for (int x = 0; x < 4 && bx * 4 + x < w; ++x)
+          std::memcpy(rgba + (size_t(by * 4 + y) * w + bx * 4 + x) * 4, px + (y * 4 + x) * 4, 4);
+    }
+}
+
+void encodeEtc2(const uint8_t* rgba, int w, int h, size_t stride, uint8_t* out) {
+  const int bw = (w + 3) / 4, bh = (h + 3) / 4;
+  Block src;
+  for (int by = 0; by < bh; ++by)
+    for (int bx = 0; bx < bw; ++bx) {
+      for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) {
+          const int sx = std::min(bx * 4 + x, w - 1), sy = std::min(by * 4 + y, h - 1);
+          const uint8_t* p = rgba + size_t(sy) * stride + size_t(sx) * 4;
+          for (int k = 0; k < 3; ++k) src.px[y * 4 + x][k] = p[k];
+        }
+      store64(encodeBlock(src), out + (size_t(by) * bw + bx) * kEtc2BlockBytes);
+    }
+}
+
+}  // namespace blvd::render
