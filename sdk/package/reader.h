@@ -90,8 +90,8 @@ class PackageReader {
   core::Status verify(std::string& err) const;
 
   // Tells the kernel the mapped pages `s` touches are not needed now
-  // (madvise MADV_DONTNEED), with the 64 KiB-aligned window around them that
-  // a fault maps (fault-around): they
+  // (madvise MADV_DONTNEED), with the 2 MiB-aligned window around them that
+  // a fault may map (fault-around, large folios): they
   // leave the process's resident set and are read again from the file if
   // touched, so dropping a neighbour's page costs it a refault, never its
   // data (the mapping is read-only). The runtime calls it once a section is
