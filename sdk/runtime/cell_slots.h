@@ -38,7 +38,11 @@ struct SlotBlock {
   uint32_t block = 0;
   uint32_t levels = 0;
   render::MeshHandle lod[graph::kMaxBlockLods];
-  float ach = 0.f;  // the cell's coverage hint for it (Marvie's budget share), set when the slot is resident
+  // Set when the slot is resident, so a frame reads no table: the cell's
+  // coverage hint for the block (Marvie's budget share) and its record
+  // (bounds, level counts and errors).
+  float ach = 0.f;
+  graph::BlockRecord record{};
 };
 
 // A local block another resident slot holds, to be copied from it.

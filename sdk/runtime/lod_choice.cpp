@@ -18,7 +18,7 @@ void DrawList::levelsByError(const CellSlot& slot, const render::Camera& cam) {
   const glm::dvec3 eye = render::enuToGltf(cam.eye_enu);
   const double focal_px = cam.height * 0.5 / std::tan(cam.fov_y_deg * 0.5 * core::kDegToRad);
   for (size_t i = 0; i < slot.blocks.size(); ++i) {
-    const graph::BlockRecord r = city_.block(slot.blocks[i].block);
+    const graph::BlockRecord& r = slot.blocks[i].record;
     const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
     const double dist = std::max(glm::length(glm::max(glm::max(lo - eye, eye - hi), glm::dvec3(0.0))), 1e-3);
     uint8_t level = 0;
@@ -42,7 +42,7 @@ void DrawList::chooseLevels(const CellSlot& slot, const render::Camera& cam, con
   const render::Frustum frustum = render::Frustum::fromClip(render::viewProjectionRelative(cam));
   size_t nv = 0;
   for (size_t i = 0; i < slot.blocks.size(); ++i) {
-    const graph::BlockRecord r = city_.block(slot.blocks[i].block);
+    const graph::BlockRecord& r = slot.blocks[i].record;
     const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
     level_[i] = static_cast<uint8_t>(slot.blocks[i].levels ? slot.blocks[i].levels - 1 : 0);  // culled anyway
     if (!frustum.intersectsBox((lo + hi) * 0.5 - eye, (hi - lo) * 0.5)) continue;

@@ -108,7 +108,7 @@ void CellSlots::finishSlot(CellSlot& slot) {
   // the blocks' coverage hints, read once here rather than every frame.
   city_.cellLayers(slot.cell, slot.layers.data(), static_cast<uint32_t>(slot.layers.size()), &slot.layered_count,
                    &slot.single_count);
-  for (SlotBlock& b : slot.blocks) b.ach = city_.coverage(slot.cell, b.block);
+  for (SlotBlock& b : slot.blocks) b.ach = city_.coverage(slot.cell, b.block), b.record = city_.block(b.block);
   const render::SlabUsage u = renderer_.slabUsage(slot.slab);
   const uint64_t tex = render::mipChainBytes(plan_.slab.texture_width, plan_.slab.texture_height);
   slot.bytes = u.vertex_bytes + u.index_bytes + u.textures * tex;

@@ -31,6 +31,10 @@ const stream::City& whole() { return test::monacoCity(); }
 
 constexpr stream::PagedGraphDesc kSmallCache{16, 1024};  // 16 KiB: a fraction of Monaco's graph
 
+core::Status openPaged(stream::City& city, const std::string& path, stream::City::Tables tables, std::string& err) {
+  return city.open(path, err, tables, stream::City::GraphTables::Paged, kSmallCache);
+}
+
 std::set<std::pair<uint32_t, uint32_t>> near(const graph::GraphSource& g, double x, double y, double r) {
   std::set<std::pair<uint32_t, uint32_t>> out;
   g.forSegmentsNear(x, y, r, [&](const graph::SegmentGrid::Entry& e) { out.insert({e.halfedge, e.point}); });
@@ -81,9 +85,7 @@ TEST(PagedGraph, ReadsWhatTheWholeGraphHolds) {
 TEST(PagedGraph, NearestCellAsTheWholeGraph) {
   stream::City city;
   std::string err;
-  ASSERT_EQ(city.open(BLVD_TEST_PACKAGE, err, stream::City::Tables::Graph, stream::City::GraphTables::Paged, kSmallCache),
-            core::Status::Ok)
-      << err;
+  ASSERT_EQ(openPaged(city, BLVD_TEST_PACKAGE, stream::City::Tables::Graph, err), core::Status::Ok) << err;
   ASSERT_TRUE(city.paged());
   EXPECT_TRUE(city.graph().halfedges.empty());  // nothing of the graph held whole
   const graph::GridShape gs = city.streets().gridShape();
@@ -127,8 +129,7 @@ TEST(PagedGraph, RefusesAHalfEdgeOutOfRangeNamingItsOffset) {
   writeFile(path, b);
   stream::City city;
   std::string err;
-  EXPECT_EQ(city.open(path, err, stream::City::Tables::Graph, stream::City::GraphTables::Paged, kSmallCache),
-            core::Status::Corrupt);
+  EXPECT_EQ(openPaged(city, path, stream::City::Tables::Graph, err), core::Status::Corrupt);
   EXPECT_NE(err.find("GRPH"), std::string::npos) << err;
   EXPECT_NE(err.find("record 5 at file offset " + std::to_string(rec)), std::string::npos) << err;
 }
@@ -143,9 +144,7 @@ TEST(PagedGraph, BuildsTheGridForAPackageWithoutOne) {
   writeFile(path, b);
   stream::City city;
   std::string err;
-  ASSERT_EQ(city.open(path, err, stream::City::Tables::Graph, stream::City::GraphTables::Paged, kSmallCache),
-            core::Status::Ok)
-      << err;
+  ASSERT_EQ(openPaged(city, path, stream::City::Tables::Graph, err), core::Status::Ok) << err;
   EXPECT_EQ(city.streets().gridEntryCount(), whole().streets().gridEntryCount());
   const graph::GridShape gs = whole().streets().gridShape();
   for (int k = 0; k < 100; ++k) {
@@ -160,9 +159,7 @@ TEST(PagedGraph, BuildsTheGridForAPackageWithoutOne) {
 TEST(PagedCellTables, ReadWhatTheWholeTablesHold) {
   stream::City city;
   std::string err;
-  ASSERT_EQ(city.open(BLVD_TEST_PACKAGE, err, stream::City::Tables::All, stream::City::GraphTables::Paged, kSmallCache),
-            core::Status::Ok)
-      << err;
+  ASSERT_EQ(openPaged(city, BLVD_TEST_PACKAGE, stream::City::Tables::All, err), core::Status::Ok) << err;
   ASSERT_TRUE(city.hasImpostors());
   EXPECT_TRUE(city.cellTables().impostors.empty() && city.cellTables().visibility.empty());  // nothing held whole
   EXPECT_EQ(city.maxCellLayers(), whole().maxCellLayers());
@@ -204,8 +201,7 @@ TEST(PagedCellTables, RefuseAnIndexEntryThatPointsElsewhere) {
   writeFile(path, b);
   stream::City city;
   std::string err;
-  EXPECT_EQ(city.open(path, err, stream::City::Tables::All, stream::City::GraphTables::Paged, kSmallCache),
-            core::Status::Corrupt);
+  EXPECT_EQ(openPaged(city, path, stream::City::Tables::All, err), core::Status::Corrupt);
   EXPECT_NE(err.find("CTIX at offset " + std::to_string(cell3)), std::string::npos) << err;
   EXPECT_NE(err.find("cell 3 "), std::string::npos) << err;
 }
