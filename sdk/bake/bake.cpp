@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bake/block_mesh.h"
+#include "bake/local_model.h"
 #include "bake/progress.h"
 #include "bake/pool_sizing.h"
 #include "bake/street_map.h"
@@ -154,6 +155,7 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
       {"draco", opt.block_codec == package::GlbCodec::Draco},
       {"block_codec", package::glbCodecName(opt.block_codec)},
       {"draco_level", opt.draco_level},
+      {"local_radius_m", opt.local_radius_m},
       {"tile",
        {{"nx", opt.tile.nx}, {"ny", opt.tile.ny}, {"gap_m", opt.tile.gap_m},
         {"step_m", {tiles.step.x, tiles.step.y}}, {"cells_per_tile", tiles.cells},
@@ -173,6 +175,7 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
         {"threshold_px", opt.impostor.threshold_px},
         {"texture_max", opt.impostor.texture_max},
         {"grid_px", opt.impostor.grid_px},
+        {"skirt_px", opt.impostor.skirt_px},
         {"texture_codec", opt.impostor.texture_codec == TextureCodec::Webp ? "webp" : "jpeg"},
         {"texture_quality", opt.impostor.texture_quality},
         {"display", {opt.impostor.display_width, opt.impostor.display_height, opt.impostor.display_fov_y_deg}}}},
@@ -212,6 +215,7 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   graph::StreetGraph& g = map.graph();
   progress.stage("placing buildings");
   const std::vector<std::vector<uint32_t>> face_buildings = placeBuildings(city, map, sum, progress);
+  widenLocalModels(g, city.buildings, face_buildings, opt.local_radius_m);
   progress.stage("block geometry + LOD chain + GLB");
   package::PackageWriter writer;
   std::vector<graph::BlockRecord> blocks;

@@ -25,6 +25,10 @@ struct BakeOptions {
   // decode is most of a prediction's CPU time).
   int draco_level = 3;
   LodOptions lod;
+  // A block with a building within this many metres of a street is in its
+  // cells' local model too (local_model.h; docs/decisions/0015); 0: only the
+  // blocks touching the street and its end junctions.
+  double local_radius_m = 20.0;
   TileOptions tile;  // --tile NxM: N x M disconnected copies of the city (benchmarks)
   ImpostorOptions impostor;
   // Called with the graph, the impostor results and the LOD totals before the

@@ -1016,4 +1016,27 @@ bool buildDepthMesh(const CaptureImage& img, const PinholeCamera& cam, const Dep
   return ok;
 }
 
+size_t hangSkirt(CaptureImage& img, int rows) {
+  const int w = img.width, h = img.height;
+  const size_t n = size_t(w) * size_t(h);
+  if (w <= 0 || h <= 0 || img.depth.size() != n || img.mask.size() != n || img.rgba.size() != 4 * n) return 0;
+  auto at = [w](int x, int y) { return size_t(y) * size_t(w) + size_t(x); };
+  size_t count = 0;
+  for (int x = 0; x < w; ++x) {
+    for (int y = h - 2; y >= 0; --y) {  // bottom up: a skirt never hangs from a skirt
+      const size_t p = at(x, y);
+      if (!img.mask[p]) continue;
+      for (int k = 1; k <= rows && y + k < h; ++k) {
+        const size_t q = at(x, y + k);
+        if (img.mask[q] || img.rgba[4 * q + 3] != 0) break;
+        img.depth[q] = img.depth[p];
+        img.mask[q] = 1;
+        std::copy_n(&img.rgba[4 * p], 4, &img.rgba[4 * q]);
+        ++count;
+      }
+    }
+  }
+  return count;
+}
+
 }  // namespace blvd::bake

@@ -128,4 +128,17 @@ bool buildDepthMesh(const CaptureImage& img, const PinholeCamera& cam, const Dep
                     geo::MeshData& out, DepthMeshStats* stats, std::string& why,
                     DepthMeshDebug* debug = nullptr);
 
+// A skirt under the captured geometry, as terrain LOD hangs one under a
+// tile's edges to hide cracks: every covered pixel with background (alpha 0,
+// not an underside) below it is continued `rows` pixels straight down at its
+// own depth (a vertical curtain), its colour copied. Why: far ground seen
+// edge-on is a row or two of pixels at the horizon, and from a viewer ahead
+// of the vantage point its near edge drops below where the capture put it;
+// without the skirt that row shows the background and the block goes
+// missing. The curtain stands at the edge's depth, so the local model in
+// front of it (the near ground and streets) still hides it.
+// Returns the pixels added. Needs rgba, depth and mask of equal sizes.
+size_t hangSkirt(CaptureImage& img, int rows);
+
+
 }  // namespace blvd::bake

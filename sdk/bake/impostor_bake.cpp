@@ -246,6 +246,7 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
     rig.capture(shots[k].cam, blocks, img, pin);
     DepthMeshOptions dopt;
     dopt.grid_spacing_px = opt.grid_px;
+    hangSkirt(img, opt.skirt_px);
     geo::MeshData part;
     std::string why;
     if (!buildDepthMesh(img, pin, dopt, part, nullptr, why)) {

@@ -31,6 +31,7 @@ struct ImpostorOptions {
   int display_width = 800, display_height = 480;
   double display_fov_y_deg = 45.0;
   int grid_px = 24;               // S97 grid spacing inside the contour, texture pixels
+  int skirt_px = 1;               // rows hung under far geometry's lower edge (depth_mesh.h hangSkirt)
   int positions_per_cell = 8;     // item-buffer positions along a street, ends included (Marvie: 8 × 6 directions)
   int item_resolution = 128;      // item buffer size per direction (square, 90°)
   double pullback_m = 6.0;        // capture eye behind the cell start

@@ -100,6 +100,10 @@ void addBake(CLI::App& app, Runner& run) {
       ->capture_default_str();
   cmd->add_option("--tile-gap", o->bake.tile.gap_m, "metres between the copies of --tile")
       ->capture_default_str()->check(CLI::Range(0.0, 100000.0));
+  cmd->add_option("--local-radius", o->bake.local_radius_m,
+                  "a block with a building this close to a street is in its cell's local model, metres; 0: the "
+                  "blocks touching the street and its junctions only (docs/decisions/0015)")
+      ->capture_default_str()->check(CLI::Range(0.0, 200.0));
   cmd->add_option("--impostor", o->impostor,
                   "impostors per cell: layered (Decoret 99 MMI), single (Sillion 97), both, or none")
       ->capture_default_str()->check(CLI::IsMember({"layered", "single", "both", "none"}));
@@ -120,6 +124,9 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->add_option("--max-span", o->bake.impostor.max_span_deg,
                   "widest azimuth one impostor capture holds, degrees (docs/decisions/0010)")
       ->capture_default_str()->check(CLI::Range(10.0, 120.0));
+  cmd->add_option("--skirt", o->bake.impostor.skirt_px,
+                  "pixels of skirt hung under far geometry's lower edge in each capture (0: none)")
+      ->capture_default_str()->check(CLI::Range(0, 8));
   cmd->add_option("--threshold-px", o->bake.impostor.threshold_px,
                   "layer threshold T in pixels at the display (Decoret 99 section 4.2)")
       ->capture_default_str()->check(CLI::Range(0.5, 500.0));

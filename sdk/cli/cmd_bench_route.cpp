@@ -68,20 +68,6 @@ std::string fmt(double v, int d) {
   return b;
 }
 
-std::vector<Pose> routePoses(const stream::City& city, const std::vector<uint32_t>& route, double step) {
-  if (step > 0) return samplePoses(city.streets(), route, step);
-  // One pose per cell, halfway along it.
-  const auto all = samplePoses(city.streets(), route, 1.0);
-  std::vector<Pose> poses;
-  for (uint32_t c : route) {
-    std::vector<const Pose*> on;
-    for (const Pose& p : all)
-      if (p.cell == c) on.push_back(&p);
-    if (!on.empty()) poses.push_back(*on[on.size() / 2]);
-  }
-  return poses;
-}
-
 // The far-metric inputs of `mode` at a pose whose runtime cell is `cell`.
 FarInputs farInputs(const stream::City& city, uint32_t cell, blvd_render_mode mode) {
   FarInputs in;
@@ -209,7 +195,7 @@ void RouteBench::open() {
   if (!city_.hasImpostors())
     throw core::Error(core::Status::Unsupported, o_.package + " has no impostors: bake it with --impostor both");
   route_ = graph::seededRoute(city_.graph(), {n, o_.seed});
-  poses_ = routePoses(city_, route_, o_.step);
+  poses_ = o_.step > 0 ? samplePoses(city_.streets(), route_, o_.step) : visitPoses(city_.streets(), route_);
   blvd_runtime_desc desc{};
   desc.struct_size = sizeof desc;
   desc.package_path = o_.package.c_str();

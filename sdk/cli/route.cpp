@@ -50,4 +50,16 @@ std::vector<Pose> samplePoses(const graph::GraphSource& g, const std::vector<uin
   return poses;
 }
 
+std::vector<Pose> visitPoses(const graph::GraphSource& g, const std::vector<uint32_t>& route) {
+  const std::vector<Pose> all = samplePoses(g, route, 1.0);
+  std::vector<Pose> poses;
+  for (size_t a = 0; a < all.size();) {
+    size_t b = a;
+    while (b < all.size() && all[b].cell == all[a].cell) ++b;
+    poses.push_back(all[a + (b - a) / 2]);
+    a = b;
+  }
+  return poses;
+}
+
 }  // namespace blvd::cli

@@ -22,4 +22,9 @@ struct Pose {
 std::vector<Pose> samplePoses(const graph::GraphSource& g, const std::vector<uint32_t>& route, double step_m,
                               double look_ahead_m = 10.0, double lateral_m = 1.8);
 
+// One pose per visit of a cell, halfway along the visit, in route order (as
+// samplePoses places them, every metre): a route that loops passes a cell
+// more than once and gets a pose each time.
+std::vector<Pose> visitPoses(const graph::GraphSource& g, const std::vector<uint32_t>& route);
+
 }  // namespace blvd::cli

@@ -943,5 +943,41 @@ TEST(DepthMesh, RandomGarbageNeverCrashes) {
   }
 }
 
+// Far ground seen edge-on: the ground of a far block (300-450 m out, 1.5 m
+// below the eye) is one row of the capture, with a wall behind it. From a
+// viewer ahead of the vantage point that row lies lower in the image: without
+// a skirt the mesh's lower edge stops short of it (the block goes missing at
+// the horizon); with one row of skirt it stays covered. At the vantage point
+// the skirt covers at most one row of background under each column.
+TEST(DepthMesh, ASkirtKeepsFarGroundSeenEdgeOnCoveredFromAhead) {
+  Scene s;
+  s.boxes.push_back({{-300, -1.6, -450}, {300, -1.5, -300}, 1});
+  s.boxes.push_back({{-300, -1.5, -470}, {300, 20.0, -460}, 2});
+  const PinholeCamera cam = camera(512, 160, 60.0);
+  Render r = render(s, cam);
+  r.img.mask.assign(r.ids.size(), 0);
+  for (size_t i = 0; i < r.ids.size(); ++i) {
+    r.img.mask[i] = r.ids[i] >= 0;
+    r.img.rgba[4 * i + 3] = r.ids[i] >= 0 ? 255 : 0;
+  }
+  CaptureImage skirted = r.img;
+  EXPECT_EQ(hangSkirt(skirted, 1), size_t(cam.width));
+  const Built bare = build(r.img, cam), skirt = build(skirted, cam);
+  ASSERT_TRUE(bare.ok && skirt.ok) << bare.why << skirt.why;
+  const Coverage at = coverage(skirt, cam, r.ids);
+  EXPECT_LE(at.background_in, 1.0 / (cam.height - 30));  // one row of the background below the horizon
+  for (double ahead : {20.0, 50.0, 100.0}) {
+    SCOPED_TRACE(ahead);
+    const PinholeCamera c2 = camera(512, 160, 60.0, {0, 0, -ahead});
+    std::vector<int> ground = render(s, c2).ids;
+    for (int& id : ground) id = id == 1 ? 1 : -1;
+    ASSERT_GT(std::count(ground.begin(), ground.end(), 1), 0);
+    EXPECT_GE(coverage(skirt, c2, ground).covered_in, 0.99);
+    if (ahead == 20.0) {
+      EXPECT_LT(coverage(bare, c2, ground).covered_in, 0.5);  // why the skirt is there
+    }
+  }
+}
+
 }  // namespace
 }  // namespace blvd::bake

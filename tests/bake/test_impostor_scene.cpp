@@ -247,7 +247,13 @@ TEST(ImpostorScene, ATallBlockBehindALowOneHasNoRubberSheet) {
   const cli::FarMetrics start = f.measure(s, poses.front(), at);
   ASSERT_EQ(at, cell);
   EXPECT_GT(start.far_px, 1000u);  // both buildings are in view
-  EXPECT_EQ(start.spurious, 0.0);
+  // No rubber sheet, no needle. The skirt (one row hung under far geometry,
+  // depth_mesh.h) may show far ground that the full model's rasteriser leaves
+  // sub-pixel at the horizon: the row just below it, and nowhere else.
+  size_t off_horizon = 0;
+  for (size_t i = 0; i < start.classes.size(); ++i) off_horizon += start.classes[i] == 3 && i / kW != kH / 2;
+  EXPECT_EQ(off_horizon, 0u);
+  EXPECT_LE(start.spurious * kW * kH, double(kW));
   EXPECT_EQ(start.missing_objects, 0u);
   // At the end. The depth mesh's contour lies within its tolerance (1 texel)
   // of the silhouette seen from the vantage point; a texel spans 1/density

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "bake/local_model.h"
 #include "bake/street_map.h"
 #include "graph_test_util.h"
 
@@ -133,6 +134,47 @@ TEST(StreetMap, TwoComponentsEuler) {
   bake::StreetMap map(s);
   const graph::StreetGraph& g = map.graph();
   EXPECT_EQ(g.componentCount(), 3u);
+  const auto bad = graph::checkInvariants(g);
+  EXPECT_TRUE(bad.empty()) << bad.front();
+}
+
+// A service road beside the main road leaves a thin face (a strip 8 m wide)
+// between the two; the block beyond it touches neither the main road's cell
+// nor its junctions, yet its building stands 12 m from that street.
+// Topologically it is not local; within the local radius it is.
+TEST(StreetMap, ABuildingNearTheStreetBeyondAThinFaceIsLocal) {
+  std::vector<bake::OsmStreet> s;
+  // Main road y = 0 with junctions at x = 0, 50, 100, 150, 250, 300.
+  s.push_back(street(1, {1, 2, 3, 4, 5, 6}, {{0, 0}, {50, 0}, {100, 0}, {150, 0}, {250, 0}, {300, 0}}));
+  // The service road: up at x = 50, along y = 8, down at x = 250.
+  s.push_back(street(2, {2, 10, 11, 5}, {{50, 0}, {50, 8}, {250, 8}, {250, 0}}));
+  // Streets south from x = 100 and 150, and a ring closing the block north.
+  s.push_back(street(3, {3, 20}, {{100, 0}, {100, -60}}));
+  s.push_back(street(4, {4, 21}, {{150, 0}, {150, -60}}));
+  s.push_back(street(5, {1, 30, 31, 6}, {{0, 0}, {0, 60}, {300, 60}, {300, 0}}));
+  bake::StreetMap map(s);
+  graph::StreetGraph& g = map.graph();
+  const uint32_t h = findCell(g, {100, 0}, {150, 0});
+  ASSERT_NE(h, graph::kNone);
+  bake::OsmBuilding b;
+  b.polygons.push_back({{{{110, 12}, {140, 12}, {140, 30}, {110, 30}}}, {}});
+  b.height = 20;
+  const std::vector<bake::OsmBuilding> buildings = {b};
+  const uint32_t beyond = map.locateFace({125, 20});
+  std::vector<std::vector<uint32_t>> face_buildings(g.faces.size());
+  face_buildings[beyond].push_back(0);
+  auto local = [&](uint32_t cell) { return std::vector<uint32_t>(g.local_blocks.begin(cell), g.local_blocks.end(cell)); };
+  auto has = [](const std::vector<uint32_t>& v, uint32_t f) { return std::find(v.begin(), v.end(), f) != v.end(); };
+  const std::vector<uint32_t> before = local(h);
+  EXPECT_FALSE(has(before, beyond));
+  bake::widenLocalModels(g, buildings, face_buildings, 10.0);  // 12 m away: not yet
+  EXPECT_EQ(local(h), before);
+  bake::widenLocalModels(g, buildings, face_buildings, 20.0);
+  const std::vector<uint32_t> after = local(h);
+  EXPECT_TRUE(has(after, beyond));
+  EXPECT_EQ(after.size(), before.size() + 1);
+  EXPECT_TRUE(std::equal(before.begin(), before.end(), after.begin()));  // the topological ones first
+  EXPECT_TRUE(has(local(g.halfedges[h].twin), beyond));                   // both directions
   const auto bad = graph::checkInvariants(g);
   EXPECT_TRUE(bad.empty()) << bad.front();
 }
