@@ -48,6 +48,7 @@ Residency::Residency(const graph::GraphSource& g, uint32_t max_cells, uint32_t r
 
 bool Residency::setRoute(const uint32_t* cells, size_t n) {
   route_n_ = 0;
+  route_at_ = 0;
   if (n > route_.size()) return false;
   for (size_t i = 0; i < n; ++i)
     if (cells[i] >= g_.cellCount()) return false;
@@ -76,12 +77,8 @@ void Residency::update(const Motion& m) {
 
   // The route, from the current cell on.
   if (route_n_) {
-    size_t at = route_n_;
-    for (size_t i = 0; i < route_n_; ++i)
-      if (route_[i] == m.cell) {
-        at = i;
-        break;
-      }
+    const size_t at = routeIndex(m.cell);
+    if (at < route_n_) route_at_ = at;
     for (size_t i = at + 1; i < route_n_ && wanted_n_ < max_cells_; ++i) want(route_[i]);
     if (at < route_n_) return;  // on the route: its cells are what comes next
   }
@@ -113,10 +110,17 @@ void Residency::update(const Motion& m) {
   }
 }
 
+size_t Residency::routeIndex(uint32_t cell) const {
+  for (size_t i = route_at_; i < route_n_; ++i)
+    if (route_[i] == cell) return i;
+  for (size_t i = 0; i < std::min(route_at_, route_n_); ++i)
+    if (route_[i] == cell) return i;
+  return route_n_;
+}
+
 uint32_t Residency::nextOnRoute(uint32_t cell) const {
-  for (size_t i = 0; i + 1 < route_n_; ++i)
-    if (route_[i] == cell) return route_[i + 1];
-  return graph::kNone;
+  const size_t at = routeIndex(cell);
+  return at + 1 < route_n_ ? route_[at + 1] : graph::kNone;
 }
 
 uint32_t Residency::rank(uint32_t cell) const {

@@ -43,7 +43,9 @@ class Residency {
   // heap allocation.
   void update(const Motion& m);
   const uint32_t* wanted() const { return wanted_.data(); }
-  // The cell after `cell` on the route (its first visit), or kNone.
+  // The cell after `cell` on the route, or kNone. A route may pass a cell
+  // more than once (a loop round a block): the visit is the first at or after
+  // the route position update() last found, else the first of all.
   uint32_t nextOnRoute(uint32_t cell) const;
   size_t wantedCount() const { return wanted_n_; }
   // Rank of `cell` in wanted() or kNone.
@@ -64,6 +66,9 @@ class Residency {
     double cost;
     uint32_t cell;
   };
+  // The visit of `cell` at or after route_at_, else the first; route_n_ if none.
+  size_t routeIndex(uint32_t cell) const;
+
   std::unique_ptr<graph::MemoryGraph> owned_;
   const graph::GraphSource& g_;
   uint32_t max_cells_;
@@ -72,6 +77,7 @@ class Residency {
   std::vector<Open> open_;  // best-first frontier, bounded
   std::vector<uint32_t> route_;
   size_t route_n_ = 0;
+  size_t route_at_ = 0;  // index of the current cell's visit on the route
   uint32_t current_ = graph::kNone;
 };
 

@@ -87,6 +87,27 @@ TEST(Residency, RouteReplacesTheGuess) {
   EXPECT_EQ(wanted(r), (std::vector<uint32_t>{0, 1, 2, 3}));
 }
 
+TEST(Residency, ALoopingRouteIsFollowedVisitByVisit) {
+  const graph::StreetGraph g = junction();
+  Residency r(g, 3, 8);
+  // 0 is passed twice: first on to 2, then on to 1 (the cells need not
+  // connect for the route's order to hold).
+  const uint32_t route[] = {0, 2, 5, 0, 1, 4};
+  ASSERT_TRUE(r.setRoute(route, 6));
+  r.update({0, 0.0, 0.0});
+  EXPECT_EQ(wanted(r), (std::vector<uint32_t>{0, 2, 5}));
+  EXPECT_EQ(r.nextOnRoute(0), 2u);
+  r.update({2, 0.0, 0.0});
+  r.update({5, 0.0, 0.0});
+  r.update({0, 0.0, 0.0});  // the second visit
+  EXPECT_EQ(wanted(r), (std::vector<uint32_t>{0, 1, 4}));
+  EXPECT_EQ(r.nextOnRoute(0), 1u);
+  // Back to the route's start (a host that drives it again): its first visit.
+  r.update({2, 0.0, 0.0});
+  EXPECT_EQ(wanted(r), (std::vector<uint32_t>{2, 5, 0}));
+  EXPECT_EQ(r.nextOnRoute(5), 0u);
+}
+
 TEST(Residency, EvictsEmptyThenFurthestUnwantedThenLeastWanted) {
   const graph::StreetGraph g = junction();
   Residency r(g, 4, 16);
