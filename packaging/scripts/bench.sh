@@ -34,6 +34,10 @@ monaco() {
   "$blvd" pack info --json "$out/osrm.blvd" > "$out/bake-route.json"
   run route "$blvd" bench route "$out/osrm.blvd" --route auto:200 --seed 1 --json "$out/route.json"
   run budget "$blvd" bench budget "$out/osrm.blvd" --route auto:120 --seed 1 --json "$out/budget.json"
+  run bake.demo /usr/bin/time -f "%e s" -o "$out/bake-demo.time" \
+    "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/demo.blvd" > "$out/bake-demo.txt"
+  "$blvd" pack info --json "$out/demo.blvd" > "$out/bake-demo.json"
+  run route.demo "$blvd" bench route "$out/demo.blvd" --route auto:12 --seed 7 --step 12 --json "$out/route.demo.json"
   "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-webp.blvd" --impostor both \
     --impostor-route auto:200 --seed 1 --texture-codec webp
   run decode "$blvd" bench decode "$out/osrm.blvd" "$out/osrm-webp.blvd" "$out/osrm-none.blvd" --rounds 3 \

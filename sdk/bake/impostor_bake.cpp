@@ -456,9 +456,9 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
                                  const ImpostorOptions& opt, package::PackageWriter& writer, const Progress& progress) {
   ImpostorBakeResult res;
   const size_t H = g.halfedges.size();
-  // Largest capture the cell frustum rule can ask for.
-  CaptureRig rig(block_meshes, std::max(opt.texture_max, opt.item_resolution),
-                 std::max(opt.texture_max, opt.item_resolution));
+  // The largest view the rig draws: a capture, an item buffer or a scout view.
+  const int side = std::max({opt.texture_max, opt.item_resolution, CapturePlanOptions{}.scout_height});
+  CaptureRig rig(block_meshes, side, side);
   BLVD_LOG_INFO("impostors: capturing on %s", rig.backendName());
   const std::vector<BlockInfo> info = blockInfo(block_meshes);
   std::vector<bool> want(H, opt.only_cells.empty());
