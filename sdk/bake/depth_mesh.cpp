@@ -20,6 +20,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "bake/plane_geometry.h"
+
 namespace blvd::bake {
 
 glm::dvec3 PinholeCamera::ray(double x, double y) const {
@@ -76,15 +78,6 @@ struct Image {
 // Polyline simplification (Douglas-Peucker), iterative so long contours cannot
 // exhaust the stack.
 
-double distToSegment(glm::dvec2 p, glm::dvec2 a, glm::dvec2 b, double* tOut = nullptr) {
-  const glm::dvec2 ab = b - a;
-  const double len2 = glm::dot(ab, ab);
-  double t = len2 > 0.0 ? glm::dot(p - a, ab) / len2 : 0.0;
-  t = std::clamp(t, 0.0, 1.0);
-  if (tOut) *tOut = t;
-  return glm::length(p - (a + ab * t));
-}
-
 Polyline simplifyOpen(const Polyline& pts, double tol) {
   if (pts.size() <= 2) return pts;
   std::vector<uint8_t> keep(pts.size(), 0);
@@ -96,7 +89,7 @@ Polyline simplifyOpen(const Polyline& pts, double tol) {
     double best = -1.0;
     size_t bi = i;
     for (size_t k = i + 1; k < j; ++k) {
-      const double d = distToSegment(pts[k], pts[i], pts[j]);
+      const double d = pointSegmentDistance(pts[k], pts[i], pts[j]);
       if (d > best) {
         best = d;
         bi = k;
@@ -520,7 +513,7 @@ void snapEnds(std::vector<Polyline>& lines, const std::vector<Polyline>& loops, 
             ((end == 0 && it.k == 0) || (end == 1 && it.k + 2 == static_cast<int>(sizes[li]))))
           return;
         double t = 0.0;
-        const double d = distToSegment(e, it.seg.a, it.seg.b, &t);
+        const double d = pointSegmentDistance(e, it.seg.a, it.seg.b, &t);
         if (d < best && d > 1e-9) {
           best = d;
           target = it.seg.a + (it.seg.b - it.seg.a) * t;
@@ -781,7 +774,7 @@ void gridOf(const Image& im, const std::vector<Segment2>& constraints, const Con
       if (!im.covered(static_cast<int>(g.x), static_cast<int>(g.y)) || !parity.inside(g)) continue;
       bool clear = true;
       segIndex.visit(g, clearance, [&](const SegmentGrid::Item& it) {
-        clear = clear && distToSegment(g, it.seg.a, it.seg.b) >= clearance;
+        clear = clear && pointSegmentDistance(g, it.seg.a, it.seg.b) >= clearance;
       });
       gridOk[static_cast<size_t>(j) * static_cast<size_t>(gw) + static_cast<size_t>(i)] = clear ? 1 : 0;
     }

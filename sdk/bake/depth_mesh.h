@@ -140,5 +140,4 @@ bool buildDepthMesh(const CaptureImage& img, const PinholeCamera& cam, const Dep
 // Returns the pixels added. Needs rgba, depth and mask of equal sizes.
 size_t hangSkirt(CaptureImage& img, int rows);
 
-
 }  // namespace blvd::bake

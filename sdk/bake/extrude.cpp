@@ -16,6 +16,8 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "bake/plane_geometry.h"
+
 namespace blvd::bake {
 namespace {
 
@@ -28,14 +30,6 @@ constexpr double kWallMergeTolerance = 1e-3;  // metres
 
 // Shorter outline edges get no wall: a normal from such an edge is noise.
 constexpr double kMinWallLength = 1e-6;  // metres
-
-double distanceToSegment(glm::dvec2 p, glm::dvec2 a, glm::dvec2 b) {
-  const glm::dvec2 d = b - a;
-  const double len2 = glm::dot(d, d);
-  double t = len2 > 0.0 ? glm::dot(p - a, d) / len2 : 0.0;
-  t = std::clamp(t, 0.0, 1.0);
-  return glm::length(p - (a + t * d));
-}
 
 struct Builder {
   geo::MeshData mesh;
@@ -94,7 +88,7 @@ struct Builder {
       while (j + 1 < c.size()) {
         bool straight = true;
         for (size_t m = i + 1; m <= j && straight; ++m) {
-          straight = distanceToSegment(v[c[m]], v[c[i]], v[c[j + 1]]) < kWallMergeTolerance;
+          straight = pointSegmentDistance(v[c[m]], v[c[i]], v[c[j + 1]]) < kWallMergeTolerance;
         }
         if (!straight) break;
         ++j;
@@ -124,7 +118,7 @@ struct Builder {
       if (in[k] != 1 || out[k] != 1) continue;
       const glm::dvec2 a = v[t.boundary[2 * prev[k]]];
       const glm::dvec2 b = v[t.boundary[2 * next[k] + 1]];
-      corner[k] = !(distanceToSegment(v[k], a, b) < kWallMergeTolerance);
+      corner[k] = !(pointSegmentDistance(v[k], a, b) < kWallMergeTolerance);
     }
     std::vector<bool> used(edges, false);
     std::vector<uint32_t> c;

@@ -456,8 +456,12 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
                                  const ImpostorOptions& opt, package::PackageWriter& writer, const Progress& progress) {
   ImpostorBakeResult res;
   const size_t H = g.halfedges.size();
+  CapturePlanOptions popt;
+  popt.texture_max = opt.texture_max;
+  popt.max_span_deg = opt.max_span_deg;
+  popt.display_ppr = 0.5 * opt.display_height / std::tan(glm::radians(opt.display_fov_y_deg) * 0.5);
   // The largest view the rig draws: a capture, an item buffer or a scout view.
-  const int side = std::max({opt.texture_max, opt.item_resolution, CapturePlanOptions{}.scout_height});
+  const int side = std::max({opt.texture_max, opt.item_resolution, popt.scout_height});
   CaptureRig rig(block_meshes, side, side);
   BLVD_LOG_INFO("impostors: capturing on %s", rig.backendName());
   const std::vector<BlockInfo> info = blockInfo(block_meshes);
@@ -477,11 +481,8 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
   res.tables.display_width = static_cast<uint16_t>(opt.display_width);
   res.tables.display_height = static_cast<uint16_t>(opt.display_height);
   if (opt.mode == ImpostorMode::None) return res;
-  CellBake cb{g, block_meshes, info, rig, opt, {}, 0};
+  CellBake cb{g, block_meshes, info, rig, opt, popt, 0};
   cb.T = pixelsToRadians(opt.threshold_px, opt.display_width, displayFovX(opt));
-  cb.popt.texture_max = opt.texture_max;
-  cb.popt.max_span_deg = opt.max_span_deg;
-  cb.popt.display_ppr = 0.5 * opt.display_height / std::tan(glm::radians(opt.display_fov_y_deg) * 0.5);
   size_t done = 0, todo = 0;
   for (uint32_t h = 0; h < H; ++h) todo += want[h];
   for (uint32_t h = 0; h < H; ++h) {
