@@ -73,15 +73,23 @@ void CaptureRig::itemBuffer(const render::Camera& cam, std::vector<uint32_t>& co
   }
 }
 
-void CaptureRig::coverage(const render::Camera& cam, const std::vector<uint32_t>& blocks, std::vector<uint8_t>& mask) {
+void CaptureRig::coverage(const render::Camera& cam, const std::vector<uint32_t>& blocks, std::vector<uint8_t>& mask,
+                          std::vector<uint32_t>* counts) {
   list_.clear();
   ids_.clear();
-  for (uint32_t b : blocks)
-    if (b < handles_.size() && handles_[b].id != 0) list_.push_back(handles_[b]), ids_.push_back(1);
+  for (size_t i = 0; i < blocks.size(); ++i)
+    if (blocks[i] < handles_.size() && handles_[blocks[i]].id != 0)
+      list_.push_back(handles_[blocks[i]]), ids_.push_back(static_cast<uint32_t>(i + 1));
   drawIds(cam, "bake coverage");
   const size_t n = size_t(cam.width) * cam.height;
   mask.resize(n);
-  for (size_t i = 0; i < n; ++i) mask[i] = pixels_[i * 4 + 3] != 0;
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* p = &pixels_[i * 4];
+    mask[i] = p[3] != 0;
+    if (!mask[i] || !counts) continue;
+    const uint32_t id = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16;
+    if (id >= 1 && id <= counts->size()) ++(*counts)[id - 1];
+  }
 }
 
 bool CaptureRig::insideGeometry(const glm::dvec3& eye_enu) {

@@ -29,8 +29,10 @@ class CaptureRig {
   void itemBuffer(const render::Camera& cam, std::vector<uint32_t>& counts);
 
   // Which pixels of `cam` show any of `blocks` (mask: width * height, top
-  // row first, 1 = covered). An item-buffer pass with one id.
-  void coverage(const render::Camera& cam, const std::vector<uint32_t>& blocks, std::vector<uint8_t>& mask);
+  // row first, 1 = covered). An item-buffer pass; with `counts` (sized to
+  // blocks), each block's pixels are added to counts[its index in blocks].
+  void coverage(const render::Camera& cam, const std::vector<uint32_t>& blocks, std::vector<uint8_t>& mask,
+                std::vector<uint32_t>* counts = nullptr);
 
   // Colour (lit, unfogged) and view depth of `blocks` only, as seen by `cam`.
   // Also fills `pinhole` with the matching camera for depth-mesh building.

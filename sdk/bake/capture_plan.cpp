@@ -25,13 +25,20 @@ glm::dvec3 rightOf(double heading_deg) {
 
 int ceil4(double v) { return (static_cast<int>(std::ceil(v)) + 3) / 4 * 4; }
 
-// The scout: covered pixels of `blocks` over the azimuth range, as rays.
+// The azimuth of unit direction `d` (glTF axes) from the reference heading.
+double azimuthOf(const glm::dvec3& d, double heading_deg) {
+  return glm::degrees(std::atan2(glm::dot(d, rightOf(heading_deg)), glm::dot(d, forwardOf(heading_deg))));
+}
+
+// The scout: covered pixels of `blocks` over the azimuth range, as rays;
+// `seen` gets each block's pixel count (by its index in blocks).
 std::vector<CoveredRay> scout(CaptureRig& rig, const glm::dvec3& eye_enu, double heading_deg, double az_lo,
-                              double az_hi, const std::vector<uint32_t>& blocks, const CapturePlanOptions& opt) {
+                              double az_hi, const std::vector<uint32_t>& blocks, const CapturePlanOptions& opt,
+                              std::vector<uint32_t>& seen) {
   std::vector<CoveredRay> rays;
+  seen.assign(blocks.size(), 0);
   const int k = std::max(1, static_cast<int>(std::ceil((az_hi - az_lo) / kMaxScoutSpanDeg - 1e-9)));
   const double span = (az_hi - az_lo) / k;
-  const glm::dvec3 f0 = forwardOf(heading_deg), r0 = rightOf(heading_deg);
   std::vector<uint8_t> mask;
   for (int j = 0; j < k; ++j) {
     render::Camera cam;
@@ -44,17 +51,37 @@ std::vector<CoveredRay> scout(CaptureRig& rig, const glm::dvec3& eye_enu, double
     cam.width = std::max(16, static_cast<int>(std::lround(opt.scout_height * tx / ty)));
     cam.near_m = opt.near_m;
     cam.far_m = opt.far_m;
-    rig.coverage(cam, blocks, mask);
+    rig.coverage(cam, blocks, mask, &seen);
     const PinholeCamera pin = pinholeOf(cam);
     for (int y = 0; y < cam.height; ++y)
       for (int x = 0; x < cam.width; ++x) {
         if (!mask[size_t(y) * cam.width + x]) continue;
         const glm::dvec3 d = glm::normalize(pin.ray(x + 0.5, y + 0.5));
-        const double az = glm::degrees(std::atan2(glm::dot(d, r0), glm::dot(d, f0)));
-        rays.push_back({az, d});
+        rays.push_back({azimuthOf(d, heading_deg), d});
       }
   }
   return rays;
+}
+
+// Rays to the outline points of the blocks the scout saw on fewer than
+// scout_min_px pixels, inside the azimuth and elevation range.
+void addOutlines(std::vector<CoveredRay>& rays, const glm::dvec3& eye_enu, double heading_deg, double az_lo,
+                 double az_hi, const std::vector<uint32_t>& blocks, const std::vector<uint32_t>& seen,
+                 const BlockOutlines& outlines, const CapturePlanOptions& opt) {
+  const glm::dvec3 eye = render::enuToGltf(eye_enu);
+  const double sin_lo = std::sin(glm::radians(opt.min_elevation_deg));
+  const double sin_hi = std::sin(glm::radians(opt.max_elevation_deg));
+  for (size_t i = 0; i < blocks.size(); ++i) {
+    if (seen[i] >= uint32_t(opt.scout_min_px) || blocks[i] >= outlines.size()) continue;
+    for (const glm::dvec3& p : outlines[blocks[i]]) {
+      const glm::dvec3 v = render::enuToGltf(p) - eye;
+      const double len = glm::length(v);
+      if (len < opt.near_m || len > opt.far_m) continue;
+      const glm::dvec3 d = v / len;
+      const double az = azimuthOf(d, heading_deg);
+      if (az >= az_lo && az <= az_hi && d.y >= sin_lo && d.y <= sin_hi) rays.push_back({az, d});
+    }
+  }
 }
 
 // Covered azimuth intervals (degrees), split where no ray falls for more than
@@ -158,8 +185,10 @@ std::vector<CaptureShot> fitCaptures(const std::vector<CoveredRay>& rays, const 
 
 std::vector<CaptureShot> planCaptures(CaptureRig& rig, const glm::dvec3& eye_enu, double heading_deg,
                                       double az_lo_deg, double az_hi_deg, const std::vector<uint32_t>& blocks,
-                                      const CapturePlanOptions& opt) {
-  const std::vector<CoveredRay> rays = scout(rig, eye_enu, heading_deg, az_lo_deg, az_hi_deg, blocks, opt);
+                                      const CapturePlanOptions& opt, const BlockOutlines* outlines) {
+  std::vector<uint32_t> seen;
+  std::vector<CoveredRay> rays = scout(rig, eye_enu, heading_deg, az_lo_deg, az_hi_deg, blocks, opt, seen);
+  if (outlines) addOutlines(rays, eye_enu, heading_deg, az_lo_deg, az_hi_deg, blocks, seen, *outlines, opt);
   return fitCaptures(rays, eye_enu, heading_deg, az_lo_deg, az_hi_deg, opt);
 }
 

@@ -327,6 +327,25 @@ std::vector<BlockInfo> blockInfo(const std::vector<geo::MeshData>& block_meshes)
   return info;
 }
 
+// Points every kOutlineStepM along each block's footprint hull at its
+// ground, for the capture plan where the scout misses a block.
+constexpr double kOutlineStepM = 2.0;
+BlockOutlines blockOutlines(const std::vector<BlockInfo>& info) {
+  BlockOutlines out(info.size());
+  for (size_t b = 0; b < info.size(); ++b) {
+    const std::vector<glm::dvec2>& hull = info[b].hull;
+    for (size_t i = 0; i < hull.size(); ++i) {
+      const glm::dvec2 a = hull[i], c = hull[(i + 1) % hull.size()];
+      const int n = std::max(1, static_cast<int>(std::ceil(glm::length(c - a) / kOutlineStepM)));
+      for (int k = 0; k < n; ++k) {
+        const glm::dvec2 p = a + (c - a) * (double(k) / n);
+        out[b].emplace_back(p.x, p.y, info[b].lo.y);
+      }
+    }
+  }
+  return out;
+}
+
 // Item-buffer samples along the street of half-edge h, shared by both
 // directions. Marvie's ACH: 8 positions along the cell (its two ends, shared
 // with the neighbouring streets through `vertex_samples`, and 6 between) × 6
@@ -393,6 +412,7 @@ struct CellBake {
   CaptureRig& rig;
   const ImpostorOptions& opt;
   CapturePlanOptions popt;
+  BlockOutlines outlines;
   double T = 0;  // the threshold angle, radians (Décoret 99 §4.2)
 };
 
@@ -420,7 +440,8 @@ void bakeCellImpostors(const CellBake& cb, uint32_t h, const std::vector<uint32_
       for (auto& blocks : layerBlocks(view, far, cb.info, opt, cb.T, res)) run.push_back({false, float(s0), blocks});
     if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both) run.push_back({true, float(s0), far});
     for (CaptureJob& j : run) {
-      plans.push_back(planCaptures(cb.rig, view.eye_enu, view.heading_deg, view.az_lo, view.az_hi, j.blocks, cb.popt));
+      plans.push_back(planCaptures(cb.rig, view.eye_enu, view.heading_deg, view.az_lo, view.az_hi, j.blocks, cb.popt,
+                                   &cb.outlines));
       jobs.push_back(std::move(j));
     }
   }
@@ -481,7 +502,7 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
   res.tables.display_width = static_cast<uint16_t>(opt.display_width);
   res.tables.display_height = static_cast<uint16_t>(opt.display_height);
   if (opt.mode == ImpostorMode::None) return res;
-  CellBake cb{g, block_meshes, info, rig, opt, popt, 0};
+  CellBake cb{g, block_meshes, info, rig, opt, popt, blockOutlines(info), 0};
   cb.T = pixelsToRadians(opt.threshold_px, opt.display_width, displayFovX(opt));
   size_t done = 0, todo = 0;
   for (uint32_t h = 0; h < H; ++h) todo += want[h];

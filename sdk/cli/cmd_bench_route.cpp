@@ -44,6 +44,7 @@ struct Sample {
   double ms = 0, tris = 0, ssim = 1, psnr = INFINITY, bad = 0;
   double far_bad = 0, holes = 0, spurious = 0, vis_px = 0;
   uint32_t missing = 0;
+  std::vector<MissingObject> missing_shown;  // what shows on each missing block's pixels
   uint32_t cell = 0;  // the runtime's cell for the pose
   uint64_t far_px = 0;
 };
@@ -256,6 +257,7 @@ Sample RouteBench::measureMode(size_t i, size_t m, uint32_t& cell) {
   FarMetrics f = measureFar(in);
   s.far_bad = f.far_bad, s.holes = f.holes, s.spurious = f.spurious;
   s.vis_px = f.visibility_error_px, s.missing = f.missing_objects, s.far_px = f.far_px;
+  s.missing_shown = f.missing_shown;
   if (m == kBlvd && !o_.html_dir.empty() && baked(fs.cell)) {
     Kept k;
     k.pose = i;
@@ -342,10 +344,16 @@ nlohmann::json RouteBench::summary() const {
     bare += !has;
     double lat = 0, lon = 0, hgt = 0;
     city_.frame().reverse({poses_[i].x, poses_[i].y, 0.0}, lat, lon, hgt);
+    nlohmann::json shown = nlohmann::json::array();
+    for (const MissingObject& o : s.missing_shown)
+      shown.push_back({{"block", o.block}, {"px", o.px}, {"own", o.own}, {"other_layer", o.other_layer},
+                       {"geometry", o.geometry}, {"nothing", o.nothing},
+                       {"bad", o.bad}});
     per.push_back({{"lat", lat}, {"lon", lon}, {"heading", poses_[i].heading_deg},
                    {"route_cell", poses_[i].cell}, {"cell", s.cell}, {"baked", has}, {"far_px", s.far_px},
                    {"far_bad", s.far_bad}, {"holes", s.holes}, {"spurious", s.spurious},
-                   {"visibility_error_px", s.vis_px}, {"missing_objects", s.missing}});
+                   {"visibility_error_px", s.vis_px}, {"missing_objects", s.missing},
+                   {"missing", shown}});
   }
   j["blvd_poses"] = per;
   j["poses_off_route_cell"] = off_route;

@@ -91,6 +91,16 @@ bool standsFor(uint32_t t, uint32_t b, const FarInputs& in) {
   return t - 1 == b;
 }
 
+// Counts one pixel of far block `b` by what test id `t` shows there.
+void tally(MissingObject& o, uint32_t t, uint32_t b, const FarInputs& in) {
+  o.block = b;
+  ++o.px;
+  if (standsFor(t, b, in)) ++o.own;
+  else if (t == 0) ++o.nothing;
+  else if (t & kItemImpostor) ++o.other_layer;
+  else ++o.geometry;
+}
+
 }  // namespace
 
 std::vector<float> distanceTransform2(const std::vector<uint8_t>& seed, int w, int h) {
@@ -119,7 +129,7 @@ FarMetrics measureFar(const FarInputs& in) {
   const float tol2 = float(in.edge_tolerance_px) * float(in.edge_tolerance_px);
   m.classes.assign(n, 0);
   uint64_t far_bad = 0, holes = 0, spurious = 0;
-  std::unordered_map<uint32_t, std::pair<uint32_t, uint32_t>> objects;  // block -> (pixels, stood for)
+  std::unordered_map<uint32_t, MissingObject> objects;  // far block -> what shows on its pixels
   for (size_t i = 0; i < n; ++i) {
     if (F[i]) {
       ++m.far_px;
@@ -127,9 +137,9 @@ FarMetrics measureFar(const FarInputs& in) {
       far_bad += bad[i];
       holes += hole;
       m.classes[i] = (bad[i] || hole) ? 2 : 1;
-      auto& o = objects[in.ref_items[i] - 1];
-      ++o.first;
-      o.second += standsFor(in.test_items[i], in.ref_items[i] - 1, in);
+      MissingObject& o = objects[in.ref_items[i] - 1];
+      tally(o, in.test_items[i], in.ref_items[i] - 1, in);
+      o.bad += bad[i];
     } else if (D[i] && bad[i] && dF[i] > tol2) {
       ++spurious;
       m.classes[i] = 3;
@@ -139,8 +149,10 @@ FarMetrics measureFar(const FarInputs& in) {
   m.holes = double(holes) / double(n);
   m.spurious = double(spurious) / double(n);
   for (const auto& [b, o] : objects)
-    if (o.first >= in.min_object_px && 2 * o.second < o.first) m.missing.push_back(b);
-  std::sort(m.missing.begin(), m.missing.end());
+    if (o.px >= in.min_object_px && 2 * o.own < o.px) m.missing_shown.push_back(o);
+  std::sort(m.missing_shown.begin(), m.missing_shown.end(),
+            [](const MissingObject& a, const MissingObject& b) { return a.block < b.block; });
+  for (const MissingObject& o : m.missing_shown) m.missing.push_back(o.block);
   m.missing_objects = uint32_t(m.missing.size());
 
   const std::vector<uint8_t> bF = boundary(F, in.w, in.h), bD = boundary(D, in.w, in.h);

@@ -56,6 +56,17 @@ struct FarInputs {
   uint32_t min_object_px = 200;   // missing objects: blocks at least this large in F
 };
 
+// What a mode shows on a missing object's pixels: why it is missing.
+struct MissingObject {
+  uint32_t block = 0;
+  uint32_t px = 0;           // its pixels in F
+  uint32_t own = 0;          // shown by what stands for it
+  uint32_t other_layer = 0;  // covered by an impostor layer that does not hold it
+  uint32_t geometry = 0;     // covered by another block's geometry
+  uint32_t nothing = 0;      // sky or ground: no layer drew there
+  uint32_t bad = 0;          // of its pixels, those whose colour is off (a driver sees these)
+};
+
 struct FarMetrics {
   uint64_t far_px = 0;            // |F|
   double far_bad = 0;             // share of F
@@ -63,6 +74,7 @@ struct FarMetrics {
   double spurious = 0;            // share of the frame
   uint32_t missing_objects = 0;
   std::vector<uint32_t> missing;  // their block ids
+  std::vector<MissingObject> missing_shown;  // the same blocks, what shows on their pixels
   double visibility_error_px = 0; // 95th percentile of silhouette displacement
   uint64_t silhouette_px = 0;     // boundary pixels of F
   // Per pixel, for the error overlay: 0 outside F and fine, 1 in F and

@@ -119,6 +119,13 @@ TEST(FarMetrics, AnObjectShownByTheWrongLayerIsMissing) {
   FarMetrics m = p.measure();
   ASSERT_EQ(m.missing_objects, 1u);
   EXPECT_EQ(m.missing[0], kFarA);
+  // What shows on its pixels says why: the wrong layer on 200, itself on 100.
+  ASSERT_EQ(m.missing_shown.size(), 1u);
+  EXPECT_EQ(m.missing_shown[0].block, kFarA);
+  EXPECT_EQ(m.missing_shown[0].px, 300u);
+  EXPECT_EQ(m.missing_shown[0].other_layer, 200u);
+  EXPECT_EQ(m.missing_shown[0].own, 100u);
+  EXPECT_EQ(m.missing_shown[0].geometry + m.missing_shown[0].nothing, 0u);
   // Covered by its own layer on exactly half: not missing.
   Pair q;
   q.both(10, 10, 40, 20, kFarA, 0);
@@ -129,6 +136,13 @@ TEST(FarMetrics, AnObjectShownByTheWrongLayerIsMissing) {
   r.both(10, 10, 29, 20, kFarA, 0);
   r.paint(false, 10, 10, 29, 20, 0, 0);
   EXPECT_EQ(r.measure().missing_objects, 0u);
+  // Not drawn at all: its pixels show nothing.
+  Pair z;
+  z.both(10, 10, 40, 20, kFarA, 0);
+  z.paint(false, 10, 10, 40, 20, 0, 0);
+  const FarMetrics mz = z.measure();
+  ASSERT_EQ(mz.missing_shown.size(), 1u);
+  EXPECT_EQ(mz.missing_shown[0].nothing, 300u);
 }
 
 TEST(FarMetrics, DistanceTransformIsExact) {
