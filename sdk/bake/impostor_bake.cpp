@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <map>
-#include <unordered_map>
 
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
@@ -14,7 +12,10 @@
 #include "bake/atlas.h"
 #include "bake/depth_mesh.h"
 #include "bake/layers.h"
+#include "bake/rig_pool.h"
+#include "bake/street_points.h"
 #include "bake/texture_encode.h"
+#include "bake/visibility_bake.h"
 #include "core/log.h"
 #include "package/glb.h"
 
@@ -23,43 +24,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-constexpr double kEyeHeight = 1.5;
-
-// Sparse per-sample pixel counts: (block, pixels).
-using Counts = std::vector<std::pair<uint32_t, uint32_t>>;
-
-glm::dvec2 pointAt(const graph::StreetGraph& g, const graph::HalfEdge& e, double s) {
-  const glm::dvec2* p = &g.points[e.pts_begin];
-  for (uint32_t i = 1; i < e.pts_count; ++i) {
-    const double l = glm::length(p[i] - p[i - 1]);
-    if (s <= l || i + 1 == e.pts_count) return l > 0 ? p[i - 1] + (p[i] - p[i - 1]) * std::min(1.0, s / l) : p[i];
-    s -= l;
-  }
-  return p[e.pts_count - 1];
-}
-
-// D99 §5.3: "full 360° views ... recording the visible objects into an item
-// buffer"; Marvie's ACH: the same buffers in 6 directions (4 around, up, down).
-Counts sampleAt(CaptureRig& rig, glm::dvec2 p, int res, std::vector<uint32_t>& scratch) {
-  std::fill(scratch.begin(), scratch.end(), 0u);
-  render::Camera cam;
-  cam.eye_enu = {p.x, p.y, kEyeHeight};
-  cam.fov_y_deg = 90.0;
-  cam.width = cam.height = res;
-  cam.near_m = 0.3;
-  cam.far_m = 6000.0;
-  static const double dirs[6][2] = {{0, 0}, {90, 0}, {180, 0}, {270, 0}, {0, 89.9}, {0, -89.9}};
-  for (const auto& d : dirs) {
-    cam.heading_deg = d[0];
-    cam.pitch_deg = d[1];
-    rig.itemBuffer(cam, scratch);
-  }
-  Counts c;
-  for (uint32_t b = 0; b < scratch.size(); ++b)
-    if (scratch[b]) c.emplace_back(b, scratch[b]);
-  return c;
-}
 
 struct BlockInfo {
   std::vector<glm::dvec2> hull;  // ground footprint (east, north)
@@ -174,11 +138,19 @@ CellView cellView(const graph::StreetGraph& g, const graph::HalfEdge& e, double 
   return v;
 }
 
+// What one cell adds to the bake's counters (ImpostorBakeResult's).
+struct CellCounters {
+  size_t capped_cells = 0;
+  double capped_worst_px = 0;
+  size_t budget_cells = 0;
+  double budget_min_density = 1.0;
+};
+
 // D99 §4.2's layers of the far blocks for one run's viewing segment, capped
 // at max_layers (the report says how much parallax error a merge admitted).
 std::vector<std::vector<uint32_t>> layerBlocks(const CellView& view, const std::vector<uint32_t>& far,
                                                const std::vector<BlockInfo>& info, const ImpostorOptions& opt,
-                                               double T, ImpostorBakeResult& res) {
+                                               double T, CellCounters& res) {
   std::vector<LayerObject> objs;
   for (uint32_t b : far)
     objs.push_back({b, info[b].hull, info[b].top >= opt.landmark_height_m ? opt.landmark_scale : 1.0});
@@ -201,7 +173,7 @@ std::vector<std::vector<uint32_t>> layerBlocks(const CellView& view, const std::
 // at most opt.cell_texels texels (where they would hold more at one texel
 // per display pixel); counted in `res` for the bake report.
 void fitTexelBudget(std::vector<std::vector<CaptureShot>>& plans, const ImpostorOptions& opt,
-                    const CapturePlanOptions& popt, ImpostorBakeResult& res) {
+                    const CapturePlanOptions& popt, CellCounters& res) {
   uint64_t full = 0;
   for (const auto& p : plans)
     for (const CaptureShot& s : p) full += fullDensityTexels(s, popt);
@@ -225,13 +197,13 @@ AtlasLayout layoutAtlas(std::vector<CaptureShot>& shots, const CapturePlanOption
   }
 }
 
-// A layer's captures made into one textured depth mesh blob (S97 §4.2): each
-// capture's depth mesh, its texture coordinates moved into the atlas, and the
-// atlas as the texture. False when nothing survives (nothing covered, or Draco
-// kept nothing).
+// A layer's captures made into one textured depth mesh blob `glb` (S97 §4.2):
+// each capture's depth mesh, its texture coordinates moved into the atlas,
+// and the atlas as the texture. False when nothing survives (nothing covered,
+// or Draco kept nothing).
 bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::vector<uint32_t>& blocks,
-                  const ImpostorOptions& opt, const CapturePlanOptions& popt, package::PackageWriter& writer,
-                  graph::ImpostorLayer& il, ImpostorRecord& rec) {
+                  const ImpostorOptions& opt, const CapturePlanOptions& popt, graph::ImpostorLayer& il,
+                  ImpostorRecord& rec, std::vector<uint8_t>& glb) {
   const auto tl = Clock::now();
   const AtlasLayout layout = layoutAtlas(shots, popt);
   CaptureImage atlas;
@@ -275,7 +247,7 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
   package::GlbOptions glb_opt;
   glb_opt.normal_bits = 0;
   package::GlbMeshCounts counts;
-  std::vector<uint8_t> glb = package::encodeGlb(mesh, glb_opt, &counts);
+  glb = package::encodeGlb(mesh, glb_opt, &counts);
   if (counts.triangles == 0) {
     BLVD_LOG_DEBUG("cell %u layer %u: no impostor (Draco kept no triangle)", rec.cell, rec.layer);
     return false;
@@ -291,7 +263,6 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
   rec.texture_width = atlas.width;
   rec.texture_height = atlas.height;
   rec.jpeg = mesh.image;
-  il.blob = writer.addBlob(std::move(glb));
   rec.seconds = since(tl);
   return true;
 }
@@ -346,70 +317,11 @@ BlockOutlines blockOutlines(const std::vector<BlockInfo>& info) {
   return out;
 }
 
-// Item-buffer samples along the street of half-edge h, shared by both
-// directions. Marvie's ACH: 8 positions along the cell (its two ends, shared
-// with the neighbouring streets through `vertex_samples`, and 6 between) × 6
-// directions; blocks any sample saw, with the cell's local blocks at 0.
-graph::CellVisibility streetVisibility(const graph::StreetGraph& g, uint32_t h, CaptureRig& rig,
-                                       const ImpostorOptions& opt, std::unordered_map<uint32_t, Counts>& vertex_samples,
-                                       std::vector<uint32_t>& scratch, size_t& samples_taken) {
-  const graph::HalfEdge& e = g.halfedges[h];
-  std::vector<const Counts*> samples;
-  for (uint32_t v : {e.origin, g.endVertex(h)}) {
-    auto it = vertex_samples.find(v);
-    if (it == vertex_samples.end()) {
-      it = vertex_samples.emplace(v, sampleAt(rig, g.vertices[v].p, opt.item_resolution, scratch)).first;
-      ++samples_taken;
-    }
-    samples.push_back(&it->second);
-  }
-  const int n_in = std::max(0, opt.positions_per_cell - 2);
-  std::vector<Counts> interior;
-  interior.reserve(n_in);
-  for (int i = 1; i <= n_in; ++i) {
-    const double s = e.length * i / (n_in + 1);
-    interior.push_back(sampleAt(rig, pointAt(g, e, s), opt.item_resolution, scratch));
-    ++samples_taken;
-  }
-  for (const Counts& c : interior) samples.push_back(&c);
-  std::map<uint32_t, double> acc;
-  for (const Counts* c : samples)
-    for (const auto& [b, px] : *c) acc[b] += px;
-  for (uint32_t l = g.local_blocks.offsets[h]; l < g.local_blocks.offsets[h + 1]; ++l)
-    acc.emplace(g.local_blocks.items[l], 0.0);
-  const double norm = 1.0 / (double(samples.size()) * 6.0 * opt.item_resolution * opt.item_resolution);
-  graph::CellVisibility vis;
-  for (const auto& [b, px] : acc) {
-    vis.blocks.push_back(b);
-    vis.ach.push_back(static_cast<float>(px * norm));
-  }
-  return vis;
-}
-
-// 1. PVS + ACH from item buffers at samples along every wanted street.
-void bakeVisibility(const graph::StreetGraph& g, CaptureRig& rig, const ImpostorOptions& opt,
-                    const std::vector<bool>& want, ImpostorBakeResult& res, const Progress& progress) {
-  const size_t H = g.halfedges.size();
-  res.tables.visibility.assign(H, {});
-  std::unordered_map<uint32_t, Counts> vertex_samples;  // shared by every street at a junction
-  std::vector<uint32_t> scratch(rig.blockCount());
-  size_t done = 0;
-  for (uint32_t h = 0; h < H; ++h) {
-    const graph::HalfEdge& e = g.halfedges[h];
-    if (h > e.twin) continue;  // both directions share the samples
-    if (!want[h] && !want[e.twin]) continue;
-    res.tables.visibility[h] = streetVisibility(g, h, rig, opt, vertex_samples, scratch, res.samples);
-    res.tables.visibility[e.twin] = res.tables.visibility[h];
-    if (progress) progress("visibility (item buffers)", double(++done), double(H / 2));
-  }
-}
-
-// What the impostors of every cell share: the rig, the blocks, the options.
+// What the impostors of every cell share: the blocks, the options.
 struct CellBake {
   const graph::StreetGraph& g;
   const std::vector<geo::MeshData>& block_meshes;
   const std::vector<BlockInfo>& info;
-  CaptureRig& rig;
   const ImpostorOptions& opt;
   CapturePlanOptions popt;
   BlockOutlines outlines;
@@ -423,43 +335,66 @@ struct CaptureJob {
   std::vector<uint32_t> blocks;
 };
 
+// One cell's impostors as a worker makes them; committed in cell order.
+struct CellImpostors {
+  struct Layer {
+    graph::ImpostorLayer il;  // its blob not yet in the package
+    ImpostorRecord rec;
+    std::vector<uint8_t> glb;
+  };
+  std::vector<Layer> layers;
+  CellCounters counters;
+};
+
 // 2–4. One cell: per run (cellRuns), its layers and/or single impostor, each
 // planned from the run's vantage point; every capture of the cell planned
 // first, then sized to the cell's texel budget, then captured as textured
 // depth meshes.
-void bakeCellImpostors(const CellBake& cb, uint32_t h, const std::vector<uint32_t>& far,
-                       package::PackageWriter& writer, ImpostorBakeResult& res) {
+CellImpostors bakeCellImpostors(const CellBake& cb, CaptureRig& rig, uint32_t h, const std::vector<uint32_t>& far) {
   const graph::HalfEdge& e = cb.g.halfedges[h];
   const ImpostorOptions& opt = cb.opt;
+  CellImpostors out;
   std::vector<CaptureJob> jobs;
   std::vector<std::vector<CaptureShot>> plans;
   for (const auto& [s0, s1] : cellRuns(cb.g, e, opt)) {
-    const CellView view = cellView(cb.g, e, s0, s1, opt, cb.rig);
+    const CellView view = cellView(cb.g, e, s0, s1, opt, rig);
     std::vector<CaptureJob> run;
     if (opt.mode == ImpostorMode::Layered || opt.mode == ImpostorMode::Both)
-      for (auto& blocks : layerBlocks(view, far, cb.info, opt, cb.T, res)) run.push_back({false, float(s0), blocks});
+      for (auto& blocks : layerBlocks(view, far, cb.info, opt, cb.T, out.counters))
+        run.push_back({false, float(s0), blocks});
     if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both) run.push_back({true, float(s0), far});
     for (CaptureJob& j : run) {
-      plans.push_back(planCaptures(cb.rig, view.eye_enu, view.heading_deg, view.az_lo, view.az_hi, j.blocks, cb.popt,
-                                   &cb.outlines));
+      plans.push_back(
+          planCaptures(rig, view.eye_enu, view.heading_deg, view.az_lo, view.az_hi, j.blocks, cb.popt, &cb.outlines));
       jobs.push_back(std::move(j));
     }
   }
-  fitTexelBudget(plans, opt, cb.popt, res);
+  fitTexelBudget(plans, opt, cb.popt, out.counters);
   uint32_t layer_index = 0;
   for (size_t j = 0; j < jobs.size(); ++j) {
     if (plans[j].empty()) continue;
-    ImpostorRecord rec;
-    rec.cell = h;
-    rec.single = jobs[j].single;
-    rec.layer = layer_index++;
-    rec.run_from_m = jobs[j].run_from;
-    graph::ImpostorLayer il;
-    il.run_from_m = jobs[j].run_from;
-    if (!captureLayer(cb.rig, plans[j], jobs[j].blocks, opt, cb.popt, writer, il, rec)) continue;
-    (rec.single ? res.tables.impostors[h].single : res.tables.impostors[h].layered).push_back(std::move(il));
-    res.records.push_back(std::move(rec));
+    CellImpostors::Layer l;
+    l.rec.cell = h;
+    l.rec.single = jobs[j].single;
+    l.rec.layer = layer_index++;
+    l.rec.run_from_m = jobs[j].run_from;
+    l.il.run_from_m = jobs[j].run_from;
+    if (captureLayer(rig, plans[j], jobs[j].blocks, opt, cb.popt, l.il, l.rec, l.glb)) out.layers.push_back(std::move(l));
   }
+  return out;
+}
+
+// A cell's impostors into the package and the result, and its counters.
+void commitCell(uint32_t h, CellImpostors& c, package::PackageWriter& writer, ImpostorBakeResult& res) {
+  for (CellImpostors::Layer& l : c.layers) {
+    l.il.blob = writer.addBlob(std::move(l.glb));
+    (l.rec.single ? res.tables.impostors[h].single : res.tables.impostors[h].layered).push_back(std::move(l.il));
+    res.records.push_back(std::move(l.rec));
+  }
+  res.capped_cells += c.counters.capped_cells;
+  res.capped_worst_px = std::max(res.capped_worst_px, c.counters.capped_worst_px);
+  res.budget_cells += c.counters.budget_cells;
+  res.budget_min_density = std::min(res.budget_min_density, c.counters.budget_min_density);
 }
 
 // The cell's potentially visible blocks that are not its local blocks.
@@ -481,17 +416,17 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
   popt.texture_max = opt.texture_max;
   popt.max_span_deg = opt.max_span_deg;
   popt.display_ppr = 0.5 * opt.display_height / std::tan(glm::radians(opt.display_fov_y_deg) * 0.5);
-  // The largest view the rig draws: a capture, an item buffer or a scout view.
+  // The largest view a rig draws: a capture, an item buffer or a scout view.
   const int side = std::max({opt.texture_max, opt.item_resolution, popt.scout_height});
-  CaptureRig rig(block_meshes, side, side);
-  BLVD_LOG_INFO("impostors: capturing on %s", rig.backendName());
+  RigPool pool(block_meshes, side, opt.jobs);
+  BLVD_LOG_INFO("impostors: capturing on %s, %d workers", pool.backendName(), pool.workers());
   const std::vector<BlockInfo> info = blockInfo(block_meshes);
   std::vector<bool> want(H, opt.only_cells.empty());
   for (uint32_t c : opt.only_cells)
     if (c < H) want[c] = true;
 
   auto t0 = Clock::now();
-  bakeVisibility(g, rig, opt, want, res, progress);
+  bakeVisibility(g, pool, opt, want, res, progress);
   res.pvs_seconds = since(t0);
   BLVD_LOG_INFO("impostors: %zu item-buffer samples in %.1f s", res.samples, res.pvs_seconds);
 
@@ -502,16 +437,24 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
   res.tables.display_width = static_cast<uint16_t>(opt.display_width);
   res.tables.display_height = static_cast<uint16_t>(opt.display_height);
   if (opt.mode == ImpostorMode::None) return res;
-  CellBake cb{g, block_meshes, info, rig, opt, popt, blockOutlines(info), 0};
+  CellBake cb{g, block_meshes, info, opt, popt, blockOutlines(info), 0};
   cb.T = pixelsToRadians(opt.threshold_px, opt.display_width, displayFovX(opt));
-  size_t done = 0, todo = 0;
-  for (uint32_t h = 0; h < H; ++h) todo += want[h];
-  for (uint32_t h = 0; h < H; ++h) {
-    if (!want[h]) continue;
-    const std::vector<uint32_t> far = farBlocks(cb, h, res.tables.visibility[h]);
-    if (progress) progress("impostors (capture + depth mesh)", double(++done), double(todo));
-    if (!far.empty()) bakeCellImpostors(cb, h, far, writer, res);
-  }
+  std::vector<uint32_t> cells;  // wanted cells with far blocks, in order
+  std::vector<std::vector<uint32_t>> far(H);
+  for (uint32_t h = 0; h < H; ++h)
+    if (want[h] && !(far[h] = farBlocks(cb, h, res.tables.visibility[h])).empty()) cells.push_back(h);
+  // Batches of a few cells per worker: their blobs wait in memory until
+  // committed in cell order, so the package is the same with any workers.
+  const size_t batch = size_t(4 * pool.workers());
+  std::vector<CellImpostors> made(batch);
+  size_t committed = 0;
+  pool.runInBatches(
+      cells.size(), batch,
+      [&](CaptureRig& rig, size_t i) { made[i % batch] = bakeCellImpostors(cb, rig, cells[i], far[cells[i]]); },
+      [&](size_t done) {
+        for (; committed < done; ++committed) commitCell(cells[committed], made[committed % batch], writer, res);
+        if (progress) progress("impostors (capture + depth mesh)", double(done), double(cells.size()));
+      });
   res.impostor_seconds = since(t0);
   BLVD_LOG_INFO("impostors: %zu meshes in %.1f s", res.records.size(), res.impostor_seconds);
   return res;

@@ -48,6 +48,9 @@ struct ImpostorOptions {
   TextureCodec texture_codec = TextureCodec::Jpeg;
   int texture_quality = 75;
   std::vector<uint32_t> only_cells; // bake impostors only for these cells (empty: all)
+  // Capture workers, each with its own GL context (0: one per CPU). The
+  // package is the same with any number (bake/rig_pool.h).
+  int jobs = 0;
 };
 
 // One impostor as the bake report shows it.

@@ -3,6 +3,7 @@
 #include <cstdlib>
 
 #include "bake/bake.h"
+#include "bake/rig_pool.h"
 #include "cli/bake_report.h"
 #include "cli/commands.h"
 #include "cli/route.h"
@@ -124,6 +125,10 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->add_option("--max-span", o->bake.impostor.max_span_deg,
                   "widest azimuth one impostor capture holds, degrees (docs/decisions/0010)")
       ->capture_default_str()->check(CLI::Range(10.0, 120.0));
+  cmd->add_option("--jobs", o->bake.impostor.jobs,
+                  "capture workers for item buffers and impostors, each with its own GL context (0: one per CPU); "
+                  "the package is the same with any number")
+      ->capture_default_str()->check(CLI::Range(0, 64));
   cmd->add_option("--skirt", o->bake.impostor.skirt_px,
                   "pixels of skirt hung under far geometry's lower edge in each capture (0: none)")
       ->capture_default_str()->check(CLI::Range(0, 8));
@@ -174,6 +179,10 @@ void addBake(CLI::App& app, Runner& run) {
                                    const bake::LodStats& lod) {
           writeBakeReport(o->report_dir, o->in, g, r, lod);
         };
+      // With a worker per core, llvmpipe's own rasteriser threads only
+      // contend with them: each worker rasterises on its own thread
+      // (docs/decisions/0016). A value the user set is kept.
+      if (bake::RigPool::resolveWorkers(o->bake.impostor.jobs) > 1) ::setenv("LP_NUM_THREADS", "0", 0);
       printSummary(bake::bakeCity(o->in, o->out, o->bake), o->in, o->out, o->bake.osm.default_height_m);
       return 0;
     };
