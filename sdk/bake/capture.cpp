@@ -55,6 +55,15 @@ void CaptureRig::drawIds(const render::Camera& cam, const char* what) {
     throw core::Error(core::Status::Internal, std::string(what) + ": " + renderer_->lastError());
 }
 
+void CaptureRig::addIdCounts(size_t n, std::vector<uint32_t>& counts) const {
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* p = &pixels_[i * 4];
+    if (p[3] == 0) continue;
+    const uint32_t id = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16;
+    if (id >= 1 && id <= counts.size()) ++counts[id - 1];
+  }
+}
+
 void CaptureRig::itemBuffer(const render::Camera& cam, std::vector<uint32_t>& counts) {
   list_.clear();
   ids_.clear();
@@ -64,13 +73,7 @@ void CaptureRig::itemBuffer(const render::Camera& cam, std::vector<uint32_t>& co
     ids_.push_back(static_cast<uint32_t>(b + 1));
   }
   drawIds(cam, "bake item buffer");
-  const size_t n = size_t(cam.width) * cam.height;
-  for (size_t i = 0; i < n; ++i) {
-    const uint8_t* p = &pixels_[i * 4];
-    if (p[3] == 0) continue;
-    const uint32_t id = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16;
-    if (id >= 1 && id <= counts.size()) ++counts[id - 1];
-  }
+  addIdCounts(size_t(cam.width) * cam.height, counts);
 }
 
 void CaptureRig::coverage(const render::Camera& cam, const std::vector<uint32_t>& blocks, std::vector<uint8_t>& mask,
@@ -83,13 +86,8 @@ void CaptureRig::coverage(const render::Camera& cam, const std::vector<uint32_t>
   drawIds(cam, "bake coverage");
   const size_t n = size_t(cam.width) * cam.height;
   mask.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    const uint8_t* p = &pixels_[i * 4];
-    mask[i] = p[3] != 0;
-    if (!mask[i] || !counts) continue;
-    const uint32_t id = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16;
-    if (id >= 1 && id <= counts->size()) ++(*counts)[id - 1];
-  }
+  for (size_t i = 0; i < n; ++i) mask[i] = pixels_[i * 4 + 3] != 0;
+  if (counts) addIdCounts(n, *counts);
 }
 
 bool CaptureRig::insideGeometry(const glm::dvec3& eye_enu) {

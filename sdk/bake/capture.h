@@ -49,6 +49,8 @@ class CaptureRig {
  private:
   // Draws list_ with ids_ in an item-buffer pass and reads it into pixels_.
   void drawIds(const render::Camera& cam, const char* what);
+  // Adds the pixels of each id (1-based) in the first n of pixels_ to counts[id - 1].
+  void addIdCounts(size_t n, std::vector<uint32_t>& counts) const;
 
   std::unique_ptr<render::Context> ctx_;
   std::unique_ptr<render::Renderer> renderer_;

@@ -43,8 +43,7 @@ constexpr size_t kWorstFrames = 12;
 struct Sample {
   double ms = 0, tris = 0, ssim = 1, psnr = INFINITY, bad = 0;
   double far_bad = 0, holes = 0, spurious = 0, vis_px = 0;
-  uint32_t missing = 0;
-  std::vector<MissingObject> missing_shown;  // what shows on each missing block's pixels
+  std::vector<MissingObject> missing;  // missing objects, with what shows on their pixels
   uint32_t cell = 0;  // the runtime's cell for the pose
   uint64_t far_px = 0;
 };
@@ -124,7 +123,7 @@ nlohmann::json modeSummary(const std::vector<Sample>& v, const std::vector<bool>
   for (size_t i = 0; i < v.size(); ++i) {
     if (!scored[i]) continue;
     if (double(v[i].far_px) >= kFarBadMinShare * double(frame_px)) far_bad.push_back(v[i].far_bad);
-    missing_poses += v[i].missing > 0;
+    missing_poses += !v[i].missing.empty();
   }
   return {{"frame_ms_p50", pct(col(&Sample::ms, false), 50)},
           {"frame_ms_p95", pct(col(&Sample::ms, false), 95)},
@@ -256,8 +255,7 @@ Sample RouteBench::measureMode(size_t i, size_t m, uint32_t& cell) {
   in.ref_items = ref_items_.data(), in.test_items = items_.data();
   FarMetrics f = measureFar(in);
   s.far_bad = f.far_bad, s.holes = f.holes, s.spurious = f.spurious;
-  s.vis_px = f.visibility_error_px, s.missing = f.missing_objects, s.far_px = f.far_px;
-  s.missing_shown = f.missing_shown;
+  s.vis_px = f.visibility_error_px, s.missing = f.missing_shown, s.far_px = f.far_px;
   if (m == kBlvd && !o_.html_dir.empty() && baked(fs.cell)) {
     Kept k;
     k.pose = i;
@@ -345,14 +343,14 @@ nlohmann::json RouteBench::summary() const {
     double lat = 0, lon = 0, hgt = 0;
     city_.frame().reverse({poses_[i].x, poses_[i].y, 0.0}, lat, lon, hgt);
     nlohmann::json shown = nlohmann::json::array();
-    for (const MissingObject& o : s.missing_shown)
+    for (const MissingObject& o : s.missing)
       shown.push_back({{"block", o.block}, {"px", o.px}, {"own", o.own}, {"other_layer", o.other_layer},
                        {"geometry", o.geometry}, {"nothing", o.nothing},
                        {"bad", o.bad}});
     per.push_back({{"lat", lat}, {"lon", lon}, {"heading", poses_[i].heading_deg},
                    {"route_cell", poses_[i].cell}, {"cell", s.cell}, {"baked", has}, {"far_px", s.far_px},
                    {"far_bad", s.far_bad}, {"holes", s.holes}, {"spurious", s.spurious},
-                   {"visibility_error_px", s.vis_px}, {"missing_objects", s.missing},
+                   {"visibility_error_px", s.vis_px}, {"missing_objects", s.missing.size()},
                    {"missing", shown}});
   }
   j["blvd_poses"] = per;
@@ -383,7 +381,7 @@ void RouteBench::writeWorst(HtmlPage& page) {
       if (c == 2)
         cap = "far_bad " + fmt(100 * s.far_bad, 1) + " % of the far region, spurious " + fmt(100 * s.spurious, 2) +
               " %, holes " + fmt(100 * s.holes, 2) + " % of the frame, silhouettes " + fmt(s.vis_px, 1) +
-              " px, missing objects " + std::to_string(s.missing);
+              " px, missing objects " + std::to_string(s.missing.size());
       figs.push_back({name, cap});
     }
   }
