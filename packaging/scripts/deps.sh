@@ -9,7 +9,9 @@ pkgs=(
   libcgal-dev libgmp-dev libmpfr-dev libmeshoptimizer-dev libzstd-dev libcli11-dev
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
   libgtest-dev libgmock-dev libbenchmark-dev gpsd gpsd-clients
-  libx11-dev
+  libx11-dev libssl-dev
+  # tests/cluster: a one-node Slurm cluster started by the test itself.
+  slurm-wlm munge
   # tests/vcan: the qemu guest with a vcan bus. Its kernel, busybox-static and
   # can-utils are fetched by `apt-get download` into the build folder, never installed.
   qemu-system-x86 zstd xz-utils

@@ -4,15 +4,19 @@
 #include <cmath>
 #include <limits>
 
+#include <sys/resource.h>
+
 #include <nlohmann/json.hpp>
 
 #include "bake/block_mesh.h"
+#include "bake/digest.h"
 #include "bake/local_model.h"
 #include "bake/progress.h"
 #include "bake/pool_sizing.h"
 #include "bake/street_map.h"
 #include "bake/tile.h"
 #include "bake/triangulate.h"
+#include "blvd/blvd.h"
 #include "core/log.h"
 #include "graph/block_table.h"
 #include "graph/segment_grid.h"
@@ -85,11 +89,14 @@ void buildBlocks(const OsmCity& city, StreetMap& map, const std::vector<std::vec
 // Visibility and impostors of the cells (all, or `route`'s), into the package.
 graph::CellTables impostorsOf(const graph::StreetGraph& g, const std::vector<geo::MeshData>& block_meshes,
                               const std::vector<uint32_t>& route, const BakeOptions& opt,
-                              package::PackageWriter& writer, BakeSummary& sum, Progress& progress) {
+                              package::PackageWriter& writer, BakeSummary& sum, Progress& progress,
+                              ShardManifest& shard) {
   if (opt.impostor.mode == ImpostorMode::None) return {};
   std::string current;
   ImpostorOptions iopt = opt.impostor;
   iopt.only_cells = route;
+  iopt.shard_index = opt.shard.index;
+  iopt.shard_count = opt.shard.count;
   const ImpostorBakeResult ir =
       bakeImpostors(g, block_meshes, iopt, writer, [&](const char* stage, double d, double t) {
         if (current != stage) progress.stage(current = stage);
@@ -105,6 +112,11 @@ graph::CellTables impostorsOf(const graph::StreetGraph& g, const std::vector<geo
     sum.impostor_bytes += r.bytes;
   }
   if (opt.on_impostors) opt.on_impostors(g, ir, sum.lod);
+  shard.streets = ir.shard_streets;
+  shard.plan_costs = ir.shard_costs;
+  shard.blocks_drawn = ir.shard_blocks_drawn;
+  shard.plan_sha256 = planDigest(ir.shard_plan);
+  for (const auto& p : ir.shard_plan) shard.plan_streets += p.size();
   return ir.tables;
 }
 
@@ -186,6 +198,29 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
   return meta.dump(1);
 }
 
+// CPU seconds of this process so far, every thread's, user and system.
+double cpuSeconds() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  auto sec = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+  return sec(ru.ru_utime) + sec(ru.ru_stime);
+}
+
+// The manifest of a shard file: who it is, what it was baked from.
+ShardManifest& identifyShard(ShardManifest& m, const std::string& osm_path, const OsmCity& city,
+                             const BakeOptions& opt, const std::vector<uint32_t>& route, uint32_t block_blobs) {
+  m.index = opt.shard.index;
+  m.count = opt.shard.count;
+  m.input_name = osm_path.substr(osm_path.find_last_of('/') + 1);
+  m.input_bytes = city.source_bytes;
+  m.input_sha256 = sha256FileHex(osm_path);
+  m.options_sha256 = sha256Hex(bakeIdentityJson(opt, route));
+  m.generator = "blvd bake " + std::to_string(BLVD_VERSION_MAJOR) + "." + std::to_string(BLVD_VERSION_MINOR) + "." +
+                std::to_string(BLVD_VERSION_PATCH);
+  m.block_blobs = block_blobs;
+  return m;
+}
+
 // A tiled bake repeats the city: its counts grow with the copies.
 void scaleForTiles(const TileLayout& tiles, BakeSummary& sum) {
   const uint64_t n = tiles.copies;
@@ -197,9 +232,51 @@ void scaleForTiles(const TileLayout& tiles, BakeSummary& sum) {
 
 }  // namespace
 
+void addPackageSections(package::PackageWriter& w, PackageSections s, const graph::CellTables& tables) {
+  w.addSection(package::kSectionGraph, std::move(s.graph));
+  w.addSection(package::kSectionCells, std::move(s.cells));
+  w.addSection(package::kSectionSpatialIndex, std::move(s.spatial_index));
+  w.addSection(package::kSectionBlocks, std::move(s.blocks));
+  if (!tables.visibility.empty()) {
+    std::vector<uint64_t> visibility_at, impostors_at;
+    w.addSection(package::kSectionVisibility, graph::serializeVisibility(tables, &visibility_at));
+    w.addSection(package::kSectionImpostors, graph::serializeImpostors(tables, &impostors_at));
+    w.addSection(package::kSectionCellTableIndex, graph::serializeCellTableIndex(visibility_at, impostors_at));
+  }
+  w.addSection(package::kSectionMeta, std::move(s.meta));
+}
+
+std::string metaWithBlobCount(const std::vector<uint8_t>& meta, uint32_t blobs) {
+  nlohmann::json j = nlohmann::json::parse(meta.begin(), meta.end());
+  j["tile"]["blobs_per_tile"] = blobs;
+  return j.dump(1);
+}
+
+std::string bakeIdentityJson(const BakeOptions& opt, const std::vector<uint32_t>& route) {
+  const ImpostorOptions& i = opt.impostor;
+  const nlohmann::json j = {
+      {"osm", {opt.osm.default_height_m, opt.osm.level_height_m}},
+      {"blocks", {package::glbCodecName(opt.block_codec), opt.draco_level, opt.local_radius_m}},
+      {"lod", {opt.lod.enabled, opt.lod.ratios}},
+      {"tile", {opt.tile.nx, opt.tile.ny, opt.tile.gap_m}},
+      {"impostor",
+       {int(i.mode), i.texture_max, i.threshold_px, i.max_layers, i.display_width, i.display_height,
+        i.display_fov_y_deg, i.grid_px, i.skirt_px, i.positions_per_cell, i.item_resolution, i.pullback_m,
+        i.max_span_deg, i.view_margin_deg, i.cell_texels, i.run_length_m, i.run_turn_deg, i.max_runs,
+        i.landmark_height_m, i.landmark_scale, int(i.texture_codec), i.texture_quality}},
+      {"route", route},
+  };
+  return j.dump();
+}
+
 BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, const BakeOptions& opt) {
   const auto t0 = std::chrono::steady_clock::now();
   checkLodOptions(opt.lod);
+  if (opt.shard.count > 0 && (opt.tile.nx * opt.tile.ny > 1 || opt.on_impostors))
+    throw core::Error(core::Status::InvalidArg, "a shard of a bake cannot be tiled or reported: merge the shards first");
+  if (opt.shard.count > 0 && opt.shard.index >= opt.shard.count)
+    throw core::Error(core::Status::InvalidArg, "shard " + std::to_string(opt.shard.index) + " of " +
+                                                    std::to_string(opt.shard.count) + ": the index must be below the count");
   BakeSummary sum;
   Progress progress(opt.quiet);
 
@@ -224,31 +301,35 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
 
   // Chosen on the city before any tiling, so the same cells in a 1x and a tiled package.
   const std::vector<uint32_t> route = opt.select_cells ? opt.select_cells(g) : std::vector<uint32_t>{};
-  graph::CellTables tables = impostorsOf(g, block_meshes, route, opt, writer, sum, progress);
+  const uint32_t block_blobs = writer.blobCount();
+  ShardManifest shard;
+  graph::CellTables tables = impostorsOf(g, block_meshes, route, opt, writer, sum, progress, shard);
 
   const bool tiled = opt.tile.nx * opt.tile.ny > 1;
   if (tiled) progress.stage("tiling " + std::to_string(opt.tile.nx) + "x" + std::to_string(opt.tile.ny));
-  const TileLayout tiles = tileCity(g, blocks, tables, writer, opt.tile);  // 1x1: no change
+  TileLayout tiles = tileCity(g, blocks, tables, writer, opt.tile);  // 1x1: no change
+  if (opt.shard.count > 0) tiles.blobs = 0;  // the package's blob count: the merge sets it (metaWithBlobCount)
   if (tiled) scaleForTiles(tiles, sum);
 
   progress.stage("writing package");
   const std::vector<std::string> bad = graph::checkInvariants(g);
   if (!bad.empty()) throw core::Error(core::Status::Internal, "street graph invariant broken: " + bad.front());
   writer.setHeader(packageHeader(city, g, blocks, tables, writer, sum));
-  writer.addSection(package::kSectionGraph, graph::serializeGraph(g));
-  writer.addSection(package::kSectionCells, graph::serializeCells(g));
   graph::SegmentGrid grid;
   grid.build(g);
-  writer.addSection(package::kSectionSpatialIndex, graph::serializeSegmentGrid(grid));
-  writer.addSection(package::kSectionBlocks, graph::serializeBlocks(blocks));
-  if (!tables.visibility.empty()) {
-    std::vector<uint64_t> visibility_at, impostors_at;
-    writer.addSection(package::kSectionVisibility, graph::serializeVisibility(tables, &visibility_at));
-    writer.addSection(package::kSectionImpostors, graph::serializeImpostors(tables, &impostors_at));
-    writer.addSection(package::kSectionCellTableIndex, graph::serializeCellTableIndex(visibility_at, impostors_at));
-  }
   const std::string meta = packageMeta(osm_path, city, opt, tiles, route, sum);
-  writer.addSection(package::kSectionMeta, std::vector<uint8_t>(meta.begin(), meta.end()));
+  addPackageSections(writer,
+                     {graph::serializeGraph(g), graph::serializeCells(g), graph::serializeSegmentGrid(grid),
+                      graph::serializeBlocks(blocks), std::vector<uint8_t>(meta.begin(), meta.end())},
+                     tables);
+  if (opt.shard.count > 0) {
+    identifyShard(shard, osm_path, city, opt, route, block_blobs);
+    shard.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    shard.cpu_seconds = cpuSeconds();
+    const std::string m = manifestJson(shard);
+    writer.addSection(package::kSectionShard, std::vector<uint8_t>(m.begin(), m.end()));
+    sum.shard_streets = shard.streets;
+  }
   writer.write(out_path);
   sum.package_bytes = writer.fileBytes();
   progress.finish();

@@ -9,6 +9,7 @@
 #include "bake/impostor_bake.h"
 #include "bake/lod_chain.h"
 #include "bake/osm_reader.h"
+#include "bake/shard.h"
 #include "bake/tile.h"
 
 namespace blvd::bake {
@@ -37,6 +38,9 @@ struct BakeOptions {
   // Chooses the cells that get impostors (all when unset), e.g. a benchmark
   // route; called on the city before tiling (so on copy 0's ids).
   std::function<std::vector<uint32_t>(const graph::StreetGraph&)> select_cells;
+  // Bake one shard of the city into a shard file (bake/shard.h), not a
+  // package. Not with tile or on_impostors (a shard sees part of the cells).
+  ShardSpec shard;
 };
 
 struct BakeSummary {
@@ -50,9 +54,26 @@ struct BakeSummary {
   uint64_t source_bytes = 0, package_bytes = 0;
   double street_km = 0;  // street length in the graph, each two-way street once
   double seconds = 0;
+  std::vector<uint32_t> shard_streets;  // a shard's streets (lower half-edges)
 };
 
 // Throws core::Error on bad input (naming the file) or I/O failure.
 BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, const BakeOptions& opt);
+
+// What a package holds besides its header and blobs, serialised; every
+// package and shard file lays them out with addPackageSections, so a merge
+// of shards writes the bytes a single bake writes.
+struct PackageSections {
+  std::vector<uint8_t> graph, cells, spatial_index, blocks, meta;
+};
+void addPackageSections(package::PackageWriter& w, PackageSections s, const graph::CellTables& tables);
+
+// The META section of a shard (bake/shard.h) as the merged package has it:
+// with the package's blob count, which a shard cannot know.
+std::string metaWithBlobCount(const std::vector<uint8_t>& meta, uint32_t blobs);
+
+// Everything in `opt` that changes the package's bytes, and the impostor
+// route, as canonical JSON (a shard's options identity).
+std::string bakeIdentityJson(const BakeOptions& opt, const std::vector<uint32_t>& route);
 
 }  // namespace blvd::bake

@@ -5,6 +5,7 @@
 
 #include <glm/trigonometric.hpp>
 
+#include "bake/street_points.h"
 #include "core/status.h"
 
 namespace blvd::bake {
@@ -27,7 +28,7 @@ PinholeCamera pinholeOf(const render::Camera& cam) {
 }
 
 CaptureRig::CaptureRig(const std::vector<geo::MeshData>& block_meshes, int max_width, int max_height,
-                       render::Backend backend)
+                       render::Backend backend, const std::vector<bool>& draw)
     : max_w_(max_width), max_h_(max_height) {
   std::string err;
   ctx_ = render::createContext(backend, err);
@@ -40,7 +41,7 @@ CaptureRig::CaptureRig(const std::vector<geo::MeshData>& block_meshes, int max_w
   if (!renderer_) throw core::Error(core::Status::Backend, "bake capture: " + err);
   handles_.resize(block_meshes.size());
   for (size_t b = 0; b < block_meshes.size(); ++b)
-    if (!block_meshes[b].empty()) handles_[b] = renderer_->upload(block_meshes[b]);
+    if (!block_meshes[b].empty() && (draw.empty() || draw[b])) handles_[b] = renderer_->upload(block_meshes[b]);
   pixels_.resize(size_t(max_width) * max_height * 4);
   depth_pixels_.resize(pixels_.size());
 }
@@ -97,7 +98,7 @@ bool CaptureRig::insideGeometry(const glm::dvec3& eye_enu) {
   cam.fov_y_deg = 2.0;
   cam.width = cam.height = 4;
   cam.near_m = 0.05;
-  cam.far_m = 6000.0;
+  cam.far_m = kViewDistanceM;
   list_.clear();
   for (const render::MeshHandle& h : handles_)
     if (h.id != 0) list_.push_back(h);

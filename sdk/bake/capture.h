@@ -18,10 +18,11 @@ namespace blvd::bake {
 
 class CaptureRig {
  public:
-  // Uploads every block's mesh once. Throws core::Error(Backend) if no GL
+  // Uploads every block's mesh once (only those `draw` names, when not
+  // empty; the others are never drawn). Throws core::Error(Backend) if no GL
   // context or renderer can be made.
   CaptureRig(const std::vector<geo::MeshData>& block_meshes, int max_width, int max_height,
-             render::Backend backend = render::Backend::Auto);
+             render::Backend backend = render::Backend::Auto, const std::vector<bool>& draw = {});
   ~CaptureRig();
 
   // Renders every block as its id (block + 1) and adds each block's pixel

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "bake/capture.h"
+#include "bake/street_points.h"
 #include "render/camera.h"
 
 namespace blvd::bake {
@@ -49,7 +50,7 @@ struct CapturePlanOptions {
   // outline. At 32 (of 0, 8, 32, 128 and every block measured) San Francisco's
   // poses missing a far block fell from 36 to 25 (decision 0015).
   int scout_min_px = 32;
-  double near_m = 0.5, far_m = 6000.0;
+  double near_m = 0.5, far_m = kViewDistanceM;
 };
 
 struct CaptureShot {

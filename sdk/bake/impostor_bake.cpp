@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
 
@@ -13,6 +14,7 @@
 #include "bake/depth_mesh.h"
 #include "bake/layers.h"
 #include "bake/rig_pool.h"
+#include "bake/shard_plan.h"
 #include "bake/street_points.h"
 #include "bake/texture_encode.h"
 #include "bake/visibility_bake.h"
@@ -406,6 +408,43 @@ std::vector<uint32_t> farBlocks(const CellBake& cb, uint32_t h, const graph::Cel
   return far;
 }
 
+// A shard's part of the bake: only its streets stay wanted (shard_plan.h).
+void keepShard(const graph::StreetGraph& g, const ImpostorOptions& opt, std::vector<bool>& want,
+               ImpostorBakeResult& res) {
+  const ShardPlan plan = planShards(g, want, opt, opt.shard_count);
+  res.shard_streets = plan.streets[opt.shard_index];
+  res.shard_plan = plan.streets;
+  res.shard_costs = plan.cost;
+  std::vector<bool> mine(g.halfedges.size(), false);
+  for (uint32_t h : res.shard_streets) mine[h] = mine[g.halfedges[h].twin] = true;
+  for (size_t h = 0; h < want.size(); ++h) want[h] = want[h] && mine[h];
+}
+
+// Farthest a block can be from the eye and still be drawn: the far plane
+// along the widest corner ray of any capture (spans up to 120 x 90 degrees
+// put it at 1 / 0.447 of the far plane).
+constexpr double kReachM = 3.0 * kViewDistanceM;
+
+// The blocks a shard's rigs draw: those whose footprint box lies within
+// kReachM of the box around its streets; the others are beyond every far
+// plane, so the captures are the same without them.
+std::vector<bool> blocksInReach(const graph::StreetGraph& g, const std::vector<BlockInfo>& info,
+                                const std::vector<bool>& want) {
+  glm::dvec2 lo(1e300), hi(-1e300);
+  for (uint32_t h = 0; h < g.halfedges.size(); ++h) {
+    if (!want[h]) continue;
+    const graph::HalfEdge& e = g.halfedges[h];
+    for (uint32_t i = 0; i < e.pts_count; ++i) lo = glm::min(lo, g.points[e.pts_begin + i]), hi = glm::max(hi, g.points[e.pts_begin + i]);
+  }
+  std::vector<bool> draw(info.size(), false);
+  for (size_t b = 0; b < info.size(); ++b) {
+    const glm::dvec2 blo(info[b].lo.x, -info[b].hi.z), bhi(info[b].hi.x, -info[b].lo.z);  // glTF z is south
+    const glm::dvec2 gap = glm::max(glm::max(blo - hi, lo - bhi), glm::dvec2(0.0));
+    draw[b] = glm::length(gap) <= kReachM;
+  }
+  return draw;
+}
+
 }  // namespace
 
 ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<geo::MeshData>& block_meshes,
@@ -416,14 +455,20 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
   popt.texture_max = opt.texture_max;
   popt.max_span_deg = opt.max_span_deg;
   popt.display_ppr = 0.5 * opt.display_height / std::tan(glm::radians(opt.display_fov_y_deg) * 0.5);
-  // The largest view a rig draws: a capture, an item buffer or a scout view.
-  const int side = std::max({opt.texture_max, opt.item_resolution, popt.scout_height});
-  RigPool pool(block_meshes, side, opt.jobs);
-  BLVD_LOG_INFO("impostors: capturing on %s, %d workers", pool.backendName(), pool.workers());
   const std::vector<BlockInfo> info = blockInfo(block_meshes);
   std::vector<bool> want(H, opt.only_cells.empty());
   for (uint32_t c : opt.only_cells)
     if (c < H) want[c] = true;
+  std::vector<bool> draw;
+  if (opt.shard_count > 0) {
+    keepShard(g, opt, want, res);
+    draw = blocksInReach(g, info, want);
+    res.shard_blocks_drawn = size_t(std::count(draw.begin(), draw.end(), true));
+  }
+  // The largest view a rig draws: a capture, an item buffer or a scout view.
+  const int side = std::max({opt.texture_max, opt.item_resolution, popt.scout_height});
+  RigPool pool(block_meshes, side, opt.jobs, draw);
+  BLVD_LOG_INFO("impostors: capturing on %s, %d workers", pool.backendName(), pool.workers());
 
   auto t0 = Clock::now();
   bakeVisibility(g, pool, opt, want, res, progress);

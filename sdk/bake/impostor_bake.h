@@ -51,6 +51,10 @@ struct ImpostorOptions {
   // Capture workers, each with its own GL context (0: one per CPU). The
   // package is the same with any number (bake/rig_pool.h).
   int jobs = 0;
+  // One shard of the bake (bake/shard.h): only the streets of shard
+  // shard_index of shard_count (shard_plan.h) are baked, and its rigs draw
+  // only the blocks within reach of them. 0 shards: the whole bake.
+  uint32_t shard_index = 0, shard_count = 0;
 };
 
 // One impostor as the bake report shows it.
@@ -76,6 +80,12 @@ struct ImpostorBakeResult {
   double capped_worst_px = 0;       // largest weight a merge admitted, in display pixels
   size_t budget_cells = 0;          // cells whose captures the texel budget scaled down
   double budget_min_density = 1.0;  // the lowest density it left (texels per display pixel)
+  // A shard's streets (lower half-edges, ascending), the estimated cost of
+  // each shard (shard_plan.h) and the blocks its rigs drew.
+  std::vector<uint32_t> shard_streets;
+  std::vector<std::vector<uint32_t>> shard_plan;  // every shard's streets
+  std::vector<double> shard_costs;
+  size_t shard_blocks_drawn = 0;
 };
 
 // block_meshes: per block (face) its full geometry, glTF axes. Blobs go into

@@ -32,9 +32,10 @@ int RigPool::resolveWorkers(int n) {
   return static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 16u));
 }
 
-RigPool::RigPool(const std::vector<geo::MeshData>& block_meshes, int side, int workers) : s_(new Shared) {
+RigPool::RigPool(const std::vector<geo::MeshData>& block_meshes, int side, int workers, const std::vector<bool>& draw)
+    : s_(new Shared) {
   const int n = resolveWorkers(workers);
-  for (int i = 0; i < n; ++i) threads_.emplace_back([this, &block_meshes, side] { work(block_meshes, side); });
+  for (int i = 0; i < n; ++i) threads_.emplace_back([this, &block_meshes, side, &draw] { work(block_meshes, side, draw); });
   std::exception_ptr failed;
   {
     std::unique_lock<std::mutex> lk(s_->m);
@@ -60,11 +61,11 @@ void RigPool::stopAll() {
     if (t.joinable()) t.join();
 }
 
-void RigPool::work(const std::vector<geo::MeshData>& block_meshes, int side) {
+void RigPool::work(const std::vector<geo::MeshData>& block_meshes, int side, const std::vector<bool>& draw) {
   Shared& s = *s_;
   std::unique_ptr<CaptureRig> rig;
   try {
-    rig = std::make_unique<CaptureRig>(block_meshes, side, side);
+    rig = std::make_unique<CaptureRig>(block_meshes, side, side, render::Backend::Auto, draw);
   } catch (...) {
     std::lock_guard<std::mutex> lk(s.m);
     if (!s.start_error) s.start_error = std::current_exception();

@@ -21,8 +21,9 @@ namespace blvd::bake {
 class RigPool {
  public:
   // Starts `workers` threads (0: one per online CPU), each making its rig of
-  // `side` x `side` pixels. Throws what a rig throws (core::Error(Backend)).
-  RigPool(const std::vector<geo::MeshData>& block_meshes, int side, int workers);
+  // `side` x `side` pixels, with the blocks `draw` names (empty: all).
+  // Throws what a rig throws (core::Error(Backend)).
+  RigPool(const std::vector<geo::MeshData>& block_meshes, int side, int workers, const std::vector<bool>& draw = {});
   ~RigPool();
   RigPool(const RigPool&) = delete;
   RigPool& operator=(const RigPool&) = delete;
@@ -45,7 +46,7 @@ class RigPool {
 
  private:
   struct Shared;
-  void work(const std::vector<geo::MeshData>& block_meshes, int side);
+  void work(const std::vector<geo::MeshData>& block_meshes, int side, const std::vector<bool>& draw);
 
   void stopAll();
 

@@ -1,5 +1,5 @@
-// Points along a cell's street polyline, and the eye height the bake's
-// item buffers and captures look from.
+// Points along a cell's street polyline, and the eye height and view
+// distance of the bake's item buffers and captures.
 #pragma once
 #include <algorithm>
 
@@ -11,6 +11,7 @@
 namespace blvd::bake {
 
 constexpr double kEyeHeight = 1.5;  // metres above the street
+constexpr double kViewDistanceM = 6000.0;  // far plane of every item buffer and capture
 
 // The point at arc length `s` along half-edge `e` (clamped to its ends).
 inline glm::dvec2 pointAt(const graph::StreetGraph& g, const graph::HalfEdge& e, double s) {

@@ -23,7 +23,7 @@ Counts sampleAt(CaptureRig& rig, glm::dvec2 p, const ImpostorOptions& opt) {
   cam.fov_y_deg = 90.0;
   cam.width = cam.height = res;
   cam.near_m = 0.3;
-  cam.far_m = 6000.0;
+  cam.far_m = kViewDistanceM;
   static const double dirs[6][2] = {{0, 0}, {90, 0}, {180, 0}, {270, 0}, {0, 89.9}, {0, -89.9}};
   for (const auto& d : dirs) {
     cam.heading_deg = d[0];

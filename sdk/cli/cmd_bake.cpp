@@ -71,6 +71,8 @@ void addBake(CLI::App& app, Runner& run) {
     std::string block_codec = "meshopt";
     std::string impostor = "layered", texture_codec = "jpeg", only_route, lod = "chain", lod_ratios = "0.5,0.25,0.1", tile = "1x1";
     uint64_t seed = 1;
+    std::string shard;
+    uint32_t shards = 0;
   };
   auto o = std::make_shared<Opts>();
   cmd->add_option("input", o->in, "OpenStreetMap extract: .osm.pbf, .osm, .osm.gz or .osm.bz2")->required()->check(CLI::ExistingFile);
@@ -151,6 +153,10 @@ void addBake(CLI::App& app, Runner& run) {
                   "bake impostors only for the cells of a drive (auto:N with --seed), e.g. for benchmarks");
   cmd->add_option("--seed", o->seed, "seed of --impostor-route")->capture_default_str();
   cmd->add_option("--report", o->report_dir, "write an HTML bake report (map, impostor thumbnails) to this folder");
+  cmd->add_option("--shard", o->shard,
+                  "bake one shard into a shard file for `blvd pack merge`: I/N, I with --shards N, or env "
+                  "(SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX; docs/cluster-bake.md)");
+  cmd->add_option("--shards", o->shards, "number of shards (with --shard I or env)")->check(CLI::Range(1u, 1u << 20));
   cmd->callback([o, &run] {
     run = [o] {
       package::parseGlbCodec(o->no_draco ? "plain" : o->block_codec, o->bake.block_codec);
@@ -183,7 +189,17 @@ void addBake(CLI::App& app, Runner& run) {
       // contend with them: each worker rasterises on its own thread
       // (docs/decisions/0016). A value the user set is kept.
       if (bake::RigPool::resolveWorkers(o->bake.impostor.jobs) > 1) ::setenv("LP_NUM_THREADS", "0", 0);
-      printSummary(bake::bakeCity(o->in, o->out, o->bake), o->in, o->out, o->bake.osm.default_height_m);
+      if (!o->shard.empty()) {
+        if (!o->report_dir.empty()) throw core::Error(core::Status::InvalidArg, "--report: not with --shard (a shard holds part of the cells)");
+        o->bake.shard = bake::parseShardSpec(o->shard, o->shards, [](const char* k) -> const char* { return std::getenv(k); });
+      } else if (o->shards) {
+        throw core::Error(core::Status::InvalidArg, "--shards: give the shard with --shard I or --shard env");
+      }
+      const bake::BakeSummary sum = bake::bakeCity(o->in, o->out, o->bake);
+      printSummary(sum, o->in, o->out, o->bake.osm.default_height_m);
+      if (o->bake.shard.count)
+        std::printf("  shard %u of %u: %zu streets; merge all %u with `blvd pack merge`\n", o->bake.shard.index,
+                    o->bake.shard.count, sum.shard_streets.size(), o->bake.shard.count);
       return 0;
     };
   });

@@ -194,7 +194,7 @@ int cellInfo(const std::string& path, int cell) {
 }  // namespace
 
 void addPack(CLI::App& app, Runner& run) {
-  auto* pack = app.add_subcommand("pack", "inspect, verify or extract from a package");
+  auto* pack = app.add_subcommand("pack", "inspect, verify or extract from a package; merge bake shards");
   pack->require_subcommand(1);
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
@@ -224,6 +224,7 @@ void addPack(CLI::App& app, Runner& run) {
     if (*block < 0 && *cell < 0) throw CLI::ValidationError("extract", "give --block N or --cell N");
     run = [path, block, cell, out] { return extract(*path, *block, *cell, *out); };
   });
+  addPackMerge(*pack, run);
 }
 
 }  // namespace blvd::cli

@@ -15,6 +15,8 @@ using Runner = std::function<int()>;
 // Each adds its subcommand to `app` and sets `run` when it is selected.
 void addBake(CLI::App& app, Runner& run);
 void addPack(CLI::App& app, Runner& run);
+// `blvd pack merge` (cmd_pack_merge.cpp), under `pack`.
+void addPackMerge(CLI::App& pack, Runner& run);
 void addView(CLI::App& app, Runner& run);
 void addBench(CLI::App& app, Runner& run);
 // `blvd bench memory` and its per-package child `bench memory-drive`, under `bench`.

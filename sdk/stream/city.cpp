@@ -36,6 +36,11 @@ core::Status City::open(const std::string& path, std::string& err, Tables tables
   streets_ = nullptr;
   core::Status st = package::PackageReader::open(path, reader_, err);
   if (st != core::Status::Ok) return st;
+  if (reader_.hasSection(package::kSectionShard)) {
+    err = path + ": a shard of a bake, not a package: merge the shards with `blvd pack merge`";
+    reader_.close();
+    return core::Status::Unsupported;
+  }
   st = graph == GraphTables::Paged ? openPaged(paging, err) : openWhole(err);
   if (st != core::Status::Ok) return st;
   if (tables == Tables::All && (st = openRenderTables(err)) != core::Status::Ok) return st;
