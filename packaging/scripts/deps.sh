@@ -9,7 +9,9 @@ pkgs=(
   libcgal-dev libgmp-dev libmpfr-dev libmeshoptimizer-dev libzstd-dev libcli11-dev
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
   libgtest-dev libgmock-dev libbenchmark-dev gpsd gpsd-clients
-  libx11-dev libssl-dev
+  libx11-dev libssl-dev libcurl4-openssl-dev
+  # tests/remote: a real HTTP server started by the tests.
+  nginx-light
   # tests/cluster: a one-node Slurm cluster started by the test itself.
   slurm-wlm munge
   # tests/vcan: the qemu guest with a vcan bus. Its kernel, busybox-static and
