@@ -16,7 +16,7 @@ cmake --build build -j"$jobs"
 #    allocator failing at each call: LeakSanitizer checks that nothing leaks).
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DBLVD_SANITIZE=ON -DBLVD_WERROR=ON > /dev/null
 cmake --build build-asan -j"$jobs" --target test_package test_graph_serialize test_gnss test_can \
-  fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc fuzz_can_frame fuzz_shard_manifest test_runtime_fault
+  fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc fuzz_can_frame fuzz_shard_manifest fuzz_cache_entry test_runtime_fault
 # The runtime test needs the Monaco package: the fixture's own bake, run with
 # step 1's build (a sanitized CGAL bake would take many minutes).
 (cd build && ctest --output-on-failure -R '^bake\.monaco_geofabrik$')
