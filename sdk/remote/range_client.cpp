@@ -51,6 +51,7 @@ struct RangeClient::Attempt {
   std::string etag, retry_after;
   uint64_t range_first = 0, range_last = 0, range_total = 0;
   bool has_range = false;
+  uint64_t content_length = 0;
   uint64_t received = 0, filled = 0;
   bool enough = false;  // a 200 answer reached the range's end: stopped on purpose
   uint64_t cap = 0;     // bytes per second, 0: none
@@ -84,6 +85,8 @@ struct RangeClient::Attempt {
       a.status = sp == std::string::npos ? 0 : std::strtol(line.c_str() + sp + 1, nullptr, 10);
     } else if (headerValue(line, "ETag", v)) {
       a.etag = v;
+    } else if (headerValue(line, "Content-Length", v)) {
+      a.content_length = std::strtoull(v.c_str(), nullptr, 10);
     } else if (headerValue(line, "Retry-After", v)) {
       a.retry_after = v;
     } else if (headerValue(line, "Content-Range", v)) {
@@ -167,6 +170,11 @@ RangeClient::Outcome RangeClient::attempt(uint64_t offset, uint64_t size, std::v
     return st = core::Status::Corrupt, Outcome::Fail;
   }
   if (a.status == 206 || a.status == 200) {
+    const uint64_t end = a.status == 206 ? a.range_last + 1 : a.received;
+    if (allow_short_ && end < offset + size && end > offset && (a.status == 200 ? rc == CURLE_OK : a.range_last + 1 == a.range_total)) {
+      size = end - offset;  // the file ends inside the range: what there is
+      out.resize(size);
+    }
     const bool right_range = a.status == 200 || (a.has_range && a.range_first == offset && a.range_last == offset + size - 1);
     if (!right_range) return why = code + " with Content-Range for another range", Outcome::Retry;
     if (a.filled != size) {
@@ -177,6 +185,7 @@ RangeClient::Outcome RangeClient::attempt(uint64_t offset, uint64_t size, std::v
     }
     if (etag_.empty()) etag_ = a.etag;
     if (a.has_range) total_ = a.range_total;
+    if (a.status == 200) total_ = a.content_length;  // the whole file's length
     return Outcome::Done;
   }
   why = code;
@@ -193,6 +202,18 @@ RangeClient::Outcome RangeClient::attempt(uint64_t offset, uint64_t size, std::v
 }
 
 core::Status RangeClient::fetch(uint64_t offset, uint64_t size, std::vector<uint8_t>& out, std::string& err) {
+  allow_short_ = false;
+  return fetchRange(offset, size, out, err);
+}
+
+core::Status RangeClient::fetchUpTo(uint64_t offset, uint64_t size, std::vector<uint8_t>& out, std::string& err) {
+  allow_short_ = true;
+  const core::Status st = fetchRange(offset, size, out, err);
+  allow_short_ = false;
+  return st;
+}
+
+core::Status RangeClient::fetchRange(uint64_t offset, uint64_t size, std::vector<uint8_t>& out, std::string& err) {
   if (!curl_) return err = url_ + ": libcurl could not start", core::Status::Internal;
   out.assign(size, 0);
   if (size == 0) return core::Status::Ok;

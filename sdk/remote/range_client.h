@@ -56,6 +56,10 @@ class RangeClient {
   // attempts), NotFound for 404, InvalidArg for a range beyond the file
   // (416), Corrupt when the resource changed (changed() is then true).
   core::Status fetch(uint64_t offset, uint64_t size, std::vector<uint8_t>& out, std::string& err);
+  // The same, but a range that runs past the file's end gives the bytes up
+  // to the end (out is shorter), as HTTP serves it: for a first read of a
+  // file whose size is not known yet.
+  core::Status fetchUpTo(uint64_t offset, uint64_t size, std::vector<uint8_t>& out, std::string& err);
 
   const std::string& url() const { return url_; }
   const std::string& etag() const { return etag_; }   // pinned by the first response ("" until then)
@@ -68,6 +72,7 @@ class RangeClient {
   enum class Outcome { Done, Retry, Fail };
   Outcome attempt(uint64_t offset, uint64_t size, std::vector<uint8_t>& out, double& wait_s, core::Status& st,
                   std::string& why);
+  core::Status fetchRange(uint64_t offset, uint64_t size, std::vector<uint8_t>& out, std::string& err);
 
   std::string url_;
   LinkOptions opt_;
@@ -75,6 +80,7 @@ class RangeClient {
   std::string etag_;
   uint64_t total_ = 0;
   bool changed_ = false;
+  bool allow_short_ = false;  // fetchUpTo: a range past the end is served to the end
   LinkStats stats_;
 };
 
