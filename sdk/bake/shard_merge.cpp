@@ -39,12 +39,6 @@ OpenShard openShard(const std::string& path) {
   return s;
 }
 
-std::string tagName(uint32_t tag) {
-  std::string s(4, ' ');
-  for (int i = 0; i < 4; ++i) s[i] = char((tag >> (8 * i)) & 0xFF);
-  return s;
-}
-
 bool sameBytes(const package::Span& a, const package::Span& b) {
   return a.size == b.size && std::equal(a.data, a.data + a.size, b.data);
 }
@@ -69,7 +63,7 @@ void checkSameBake(const OpenShard& first, const OpenShard& s) {
     throw refuse(s.path + ": its shard plan differs from " + first.path + "'s");
   for (uint32_t tag : kShared)
     if (!sameBytes(s.reader.section(tag), first.reader.section(tag)))
-      throw refuse(s.path + ": its " + tagName(tag) + " section differs from " + first.path + "'s");
+      throw refuse(s.path + ": its " + package::tagToString(tag) + " section differs from " + first.path + "'s");
   for (uint32_t i = 0; i < a.block_blobs; ++i)
     if (i >= s.reader.blobCount() || s.reader.blobInfo(i).crc != first.reader.blobInfo(i).crc ||
         s.reader.blobInfo(i).size != first.reader.blobInfo(i).size)

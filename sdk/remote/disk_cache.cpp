@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/bytes.h"
 #include "package/format.h"
 
 namespace blvd::remote {
@@ -24,17 +25,25 @@ struct EntryHeader {
   uint64_t size = 0;
 };
 
-void putU32(uint8_t* p, uint32_t v) { for (int i = 0; i < 4; ++i) p[i] = uint8_t(v >> (8 * i)); }
-void putU64(uint8_t* p, uint64_t v) { for (int i = 0; i < 8; ++i) p[i] = uint8_t(v >> (8 * i)); }
-uint32_t getU32(const uint8_t* p) { uint32_t v = 0; for (int i = 0; i < 4; ++i) v |= uint32_t(p[i]) << (8 * i); return v; }
-uint64_t getU64(const uint8_t* p) { uint64_t v = 0; for (int i = 0; i < 8; ++i) v |= uint64_t(p[i]) << (8 * i); return v; }
+// The entry header's fields from its bytes; false when the magic is not ours.
+bool parseHeader(const uint8_t* b, EntryHeader& h) {
+  if (std::memcmp(b, kMagic, 8) != 0) return false;
+  core::ByteReader r(b + 8, DiskCache::kHeaderBytes - 8, "cache entry header");
+  h.blob = r.get<uint32_t>(), h.crc = r.get<uint32_t>(), h.size = r.get<uint64_t>();
+  return true;
+}
+
+std::vector<uint8_t> headerBytes(const EntryHeader& h) {
+  core::ByteWriter w;
+  w.putBytes(kMagic, 8);
+  w.put(h.blob), w.put(h.crc), w.put(h.size);
+  return std::move(w.bytes());
+}
 
 bool readHeader(const std::string& path, EntryHeader& h) {
   uint8_t b[DiskCache::kHeaderBytes];
   std::ifstream f(path, std::ios::binary);
-  if (!f.read(reinterpret_cast<char*>(b), sizeof b) || std::memcmp(b, kMagic, 8) != 0) return false;
-  h.blob = getU32(b + 8), h.crc = getU32(b + 12), h.size = getU64(b + 16);
-  return true;
+  return f.read(reinterpret_cast<char*>(b), sizeof b) && parseHeader(b, h);
 }
 
 // Writes all of `n` bytes; false on any error (a full disk).
@@ -123,11 +132,11 @@ bool DiskCache::get(uint32_t blob, uint32_t crc, std::vector<uint8_t>& out) {
   if (it == entries_.end()) return ++stats_.misses, false;
   std::ifstream f(pathOf(blob), std::ios::binary);
   uint8_t hb[kHeaderBytes];
+  EntryHeader h;
   out.resize(it->second.bytes - kHeaderBytes);
   const bool read = f.read(reinterpret_cast<char*>(hb), sizeof hb) &&
                     f.read(reinterpret_cast<char*>(out.data()), std::streamsize(out.size()));
-  if (!read || std::memcmp(hb, kMagic, 8) != 0 || getU32(hb + 8) != blob || getU32(hb + 12) != crc ||
-      package::crc32c(out.data(), out.size()) != crc) {
+  if (!read || !parseHeader(hb, h) || h.blob != blob || h.crc != crc || package::crc32c(out.data(), out.size()) != crc) {
     drop(blob, true);
     out.clear();
     return ++stats_.misses, false;
@@ -153,12 +162,10 @@ bool DiskCache::put(uint32_t blob, uint32_t crc, const uint8_t* data, size_t siz
   if (dir_.empty() || package::crc32c(data, size) != crc) return ++stats_.not_cached, false;
   drop(blob, false);
   if (need > max_bytes_ || !makeRoom(need)) return ++stats_.not_cached, false;
-  uint8_t h[kHeaderBytes];
-  std::memcpy(h, kMagic, 8);
-  putU32(h + 8, blob), putU32(h + 12, crc), putU64(h + 16, size);
+  const std::vector<uint8_t> h = headerBytes({blob, crc, size});
   const std::string path = pathOf(blob), tmp = path + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  bool ok = fd >= 0 && writeAll(fd, h, sizeof h) && writeAll(fd, data, size);
+  bool ok = fd >= 0 && writeAll(fd, h.data(), h.size()) && writeAll(fd, data, size);
   if (fd >= 0) ok = ::close(fd) == 0 && ok;
   if (!ok || ::rename(tmp.c_str(), path.c_str()) != 0) {
     ::unlink(tmp.c_str());

@@ -74,11 +74,8 @@ bool ServerProcess::startNginx(const std::string& work, const std::string& root,
       << "  scgi_temp_path " << work << "/scgi;\n  server {\n    listen 127.0.0.1:" << port_ << ";\n"
       << "    root " << root << ";\n    location /slow/ { alias " << root << "/; limit_rate " << slow_bytes_per_s
       << "; }\n  }\n}\n";
-  for (const char* nginx : {"/usr/sbin/nginx", "nginx"})
-    if (::access(nginx, X_OK) == 0 || std::string(nginx) == "nginx") {
-      if (!spawn(nginx, {"-p", work, "-c", work + "/nginx.conf"}, why)) return false;
-      break;
-    }
+  const char* nginx = ::access("/usr/sbin/nginx", X_OK) == 0 ? "/usr/sbin/nginx" : "nginx";  // sbin may be off PATH
+  if (!spawn(nginx, {"-p", work, "-c", work + "/nginx.conf"}, why)) return false;
   if (!waitFor([&] { return answers(port_); })) return stop(), why = "nginx did not answer (see " + work + "/error.log)", false;
   return true;
 }
