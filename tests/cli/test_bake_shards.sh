@@ -54,4 +54,4 @@ refused "a shard of a bake, not a package" "$blvd" pack info s0.blvdshard
 refused "index 3 is out of range for 3 shards" "$blvd" bake "$osm" -o bad.blvd "${opts[@]}" --shard 3/3
 refused "cannot be tiled" "$blvd" bake "$osm" -o bad.blvd --quiet --impostor none --tile 2x2 --shard 0/2
 refused "--report: not with --shard" "$blvd" bake "$osm" -o bad.blvd "${opts[@]}" --shard 0/2 --report rep
-echo "bake shards: 3 shards (explicit, JOB_COMPLETION_INDEX, SLURM_ARRAY_TASK_ID) merge to $(stat -c %s merged.blvd) bytes identical to the single bake; 9 refusals named"
+echo "bake shards: 3 shards (explicit, JOB_COMPLETION_INDEX, SLURM_ARRAY_TASK_ID) merge to $(stat -c %s merged.blvd) bytes identical to the single bake; 11 refusals named"
