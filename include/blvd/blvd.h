@@ -82,6 +82,7 @@ typedef enum blvd_status {
   BLVD_ERR_INTERNAL = 9,    /* a bug in blvd; please report it */
   BLVD_ERR_NOT_FOUND = 10,  /* the requested item does not exist */
   BLVD_ERR_TIMEOUT = 11,    /* a wait ended before its condition held */
+  BLVD_ERR_UNAVAILABLE = 12,/* data not here now: offline, or the link is down; try again later */
   BLVD_STATUS_FORCE_32 = 0x7fffffff
 } blvd_status;
 
@@ -149,7 +150,8 @@ typedef enum blvd_prefetch_priority {
 
 typedef struct blvd_runtime_desc {
   uint32_t struct_size;     /* sizeof(blvd_runtime_desc); 0 is treated as the current size */
-  const char* package_path; /* required: a .blvd file made by `blvd bake`; copied */
+  const char* package_path; /* required: a .blvd file made by `blvd bake`, or its http:// or https://
+                             * URL (see cache_path below); copied */
   uint32_t width;           /* frame width in pixels; 0 means 800 */
   uint32_t height;          /* frame height in pixels; 0 means 480 */
   blvd_backend backend;     /* 0 means BLVD_BACKEND_AUTO */
@@ -213,7 +215,37 @@ typedef struct blvd_runtime_desc {
    * and decoded again; the source cell is not released until the copy is done. 0 or positive: on
    * (the default); negative: off, every cell decodes all its blocks. */
   int32_t block_reuse;
+
+  /* ---- a package on a server (package_path an http:// or https:// URL) ----
+   * HTTP range requests fetch the header and directory (the first 16 KiB), the tables (graph,
+   * cells, blocks, visibility: written to a mirror in cache_path, read as from a local file) and
+   * then one cell's blobs at a time, neighbours in one request, into a disk cache of at most
+   * cache_bytes, keyed by the package's content (header and directory CRC), never by URL. Every
+   * blob is CRC-checked before it is cached and before it is used. A cell whose data is not there
+   * never blocks a frame: the frame is flagged BLVD_FRAME_DEGRADED and draws what is resident,
+   * and the cell is asked for again. A package replaced on the server is noticed (ETag, If-Match):
+   * blvd_stats.package_changed becomes 1, cached cells keep drawing, nothing of the new one is
+   * mixed in; the next create fetches the new package and rebuilds the cache. One process at a
+   * time per cache folder. */
+  const char* cache_path;        /* folder of the table mirror and blob cache; NULL means
+                                  * $XDG_CACHE_HOME/blvd, else $HOME/.cache/blvd, else /tmp/blvd-cache */
+  uint64_t cache_bytes;          /* the most the folder holds, mirror included; 0 means 256 MiB. Below
+                                  * the tables plus the largest blob: BLVD_ERR_INVALID_ARG */
+  uint64_t link_max_bytes_per_s; /* bandwidth cap of the package's link; 0: none */
+  uint32_t link_mode;            /* a blvd_link_mode; 0 means BLVD_LINK_ONLINE */
 } blvd_runtime_desc;
+
+/* What a package on a server may fetch. */
+typedef enum blvd_link_mode {
+  BLVD_LINK_ONLINE = 0,  /* the current cell and the predicted ones */
+  BLVD_LINK_METERED = 1, /* the current cell and the next one only; further predictions from the cache */
+  BLVD_LINK_OFFLINE = 2, /* nothing: cached cells only (a start offline opens from the mirror) */
+  BLVD_LINK_FORCE_32 = 0x7fffffff
+} blvd_link_mode;
+
+/* Switches what a package on a server may fetch (no effect on a local package). Errors:
+ * BLVD_ERR_INVALID_ARG for an unknown mode. Render thread. */
+BLVD_API blvd_status blvd_set_link_mode(blvd_runtime* rt, blvd_link_mode mode);
 
 /* Returns `desc` with every zero field replaced by its default. Any thread. */
 BLVD_API blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* desc);
@@ -352,6 +384,21 @@ typedef struct blvd_stats {
   uint64_t blocks_reused;         /* blocks copied from another resident cell instead of decoded
                                    * (blvd_runtime_desc.block_reuse) ... */
   uint64_t block_levels_copied;   /* ... and their levels of detail, one mesh each */
+  /* A package on a server (zero for a local one): */
+  uint64_t link_requests;         /* HTTP requests, retries included */
+  uint64_t link_bytes;            /* body bytes received */
+  double link_bytes_per_s;        /* throughput of recent fetches (0 until one) */
+  uint64_t cache_hits;            /* blobs served from the disk cache ... */
+  uint64_t cache_misses;          /* ... and not found there */
+  uint64_t cache_bytes;           /* on disk now, table mirror included: never above cache_bytes */
+  uint64_t link_waits;            /* cell loads whose data was not available (offline, link down): asked
+                                   * for again after 2 s, not counted in load_errors */
+  uint32_t package_changed;       /* 1: the package on the server was replaced since create */
+  double cached_ahead_m;          /* road ahead along the route (the current cell's rest included) whose
+                                   * cells are all in the disk cache: divided by the speed, the seconds a
+                                   * drive can go without the link */
+  double prefetch_horizon_m;      /* how far ahead the link prefetch fetches: the speed times 30 s plus
+                                   * twice a cell's fetch time at the measured throughput, at least 400 m */
 } blvd_stats;
 
 /* Fills *stats up to stats->struct_size. Render thread. */
@@ -685,12 +732,17 @@ typedef struct blvd_tracker blvd_tracker; /* opaque */
 
 typedef struct blvd_tracker_desc {
   uint32_t struct_size;          /* sizeof(blvd_tracker_desc); 0 is treated as the current size */
-  const char* package_path;      /* the package whose street graph poses are matched on; NULL:
+  const char* package_path;      /* the package whose street graph poses are matched on (a path,
+                                  * or an http:// or https:// URL as in blvd_runtime_desc); NULL:
                                   * no map matching (fusion and dead reckoning only) */
   double origin_lat, origin_lon; /* without a package: the origin of the local x/y frame
                                   * (WGS 84 degrees); ignored with one (the package's origin) */
   float eye_height_m;            /* blvd_pose.camera_z above the street; 0 means 1.5 */
   uint32_t ring_capacity;        /* feeds held until the next get_pose; 0 means 512 */
+  const char* cache_path;        /* a package on a server: as blvd_runtime_desc (its tables only) */
+  uint64_t cache_bytes;
+  uint64_t link_max_bytes_per_s;
+  uint32_t link_mode;
 } blvd_tracker_desc;
 
 /* Opens the package's street graph (CRC-checked; nothing else is read) and

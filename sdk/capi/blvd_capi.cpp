@@ -9,6 +9,7 @@
 #include "capi/binding.h"
 #include "core/sized.h"
 #include "core/status.h"
+#include "runtime/package_source.h"
 
 namespace blvd::capi {
 thread_local std::string t_create_error;  // blvd_last_error(NULL)
@@ -29,7 +30,7 @@ const char* blvd_version_string(void) {
 }
 
 const char* blvd_status_string(blvd_status s) {
-  if (s < 0 || s > BLVD_ERR_TIMEOUT) return "unknown status";
+  if (s < 0 || s > BLVD_ERR_UNAVAILABLE) return "unknown status";
   return blvd::core::statusString(static_cast<blvd::core::Status>(s));
 }
 
@@ -144,10 +145,7 @@ blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const char* pack
   }
   return guarded(nullptr, [&] {
     blvd::stream::City city;
-    std::string err;
-    const blvd::core::Status st =
-        city.open(d.package_path, err, blvd::stream::City::Tables::All, blvd::stream::City::GraphTables::Paged);
-    if (st != blvd::core::Status::Ok) throw blvd::core::Error(st, err);
+    blvd::runtime::openCity(city, d.package_path, blvd::runtime::linkDesc(d), blvd::stream::City::Tables::All);
     const blvd::runtime::MemoryPlan plan = blvd::runtime::planMemory(d, city);
     *cpu_bytes = plan.cpu_bytes;
     if (gpu_bytes) *gpu_bytes = plan.gpu_bytes;
@@ -201,6 +199,16 @@ blvd_status blvd_set_render_mode(blvd_runtime* rt, blvd_render_mode mode, float 
     return BLVD_ERR_INVALID_ARG;
   }
   return guarded(rt, [&] { rt->impl->setMode(mode, radius_m); });
+}
+
+blvd_status blvd_set_link_mode(blvd_runtime* rt, blvd_link_mode mode) {
+  if (!rt) return misuse(nullptr, "blvd_set_link_mode: rt is NULL");
+  const int32_t m = blvd::core::rawEnum(mode);
+  if (m < BLVD_LINK_ONLINE || m > BLVD_LINK_OFFLINE) {
+    rt->impl->last_error = "blvd_set_link_mode: unknown link mode " + std::to_string(m);
+    return BLVD_ERR_INVALID_ARG;
+  }
+  return guarded(rt, [&] { rt->impl->setLinkMode(mode); });
 }
 
 blvd_status blvd_runtime_stats(blvd_runtime* rt, blvd_stats* stats) {

@@ -10,6 +10,7 @@
 
 #include "capi/binding.h"
 #include "capi/track_convert.h"
+#include "runtime/package_source.h"
 #include "stream/city.h"
 #include "track/tracker.h"
 
@@ -170,10 +171,7 @@ blvd_status blvd_tracker_create(const blvd_tracker_desc* desc, blvd_tracker** ou
     td.ring_capacity = d.ring_capacity ? d.ring_capacity : 512;
     if (has_package) {
       tr->city = std::make_unique<blvd::stream::City>();
-      std::string err;
-      const core::Status s = tr->city->open(d.package_path, err, blvd::stream::City::Tables::Graph,
-                                            blvd::stream::City::GraphTables::Paged);
-      if (s != core::Status::Ok) throw core::Error(s, err);
+      blvd::runtime::openCity(*tr->city, d.package_path, blvd::runtime::linkDesc(d), blvd::stream::City::Tables::Graph);
       tr->frame = tr->city->frame();
     } else {
       tr->frame = blvd::geo::LocalFrame(d.origin_lat, d.origin_lon);

@@ -25,6 +25,7 @@ void addBench(CLI::App& app, Runner& run) {
   addBenchBudget(*bench, run);
   addBenchScale(*bench, run);
   addBenchDecode(*bench, run);
+  addBenchStream(*bench, run);
 #ifdef BLVD_HAVE_BENCH_TRACK
   addBenchTrack(*bench, run);
 #endif

@@ -27,6 +27,8 @@ void addBenchScale(CLI::App& bench, Runner& run);
 void addBenchBudget(CLI::App& bench, Runner& run);
 // `blvd bench decode` (cmd_bench_decode.cpp).
 void addBenchDecode(CLI::App& bench, Runner& run);
+// `blvd bench stream` (cmd_bench_stream.cpp).
+void addBenchStream(CLI::App& bench, Runner& run);
 // `blvd bench track` (cmd_bench_track.cpp), added to `bench` by addBench.
 void addBenchTrack(CLI::App& bench, Runner& run);
 // "full", "local", "radius:R", "single", "layered"/"blvd" -> mode (+ radius).

@@ -16,6 +16,7 @@ const char* statusString(Status s) {
     case Status::Internal: return "internal error";
     case Status::NotFound: return "not found";
     case Status::Timeout: return "timed out";
+    case Status::Unavailable: return "not available now (offline or link down)";
   }
   return "unknown status";
 }

@@ -19,6 +19,7 @@ enum class Status : int {
   Internal = 9,     // a bug: an invariant did not hold
   NotFound = 10,    // a requested item does not exist
   Timeout = 11,     // a wait ended before its condition held
+  Unavailable = 12, // data not here now: offline, or the link is down; try again later
 };
 
 const char* statusString(Status s);

@@ -142,7 +142,8 @@ bool DiskCache::get(uint32_t blob, uint32_t crc, std::vector<uint8_t>& out) {
     return ++stats_.misses, false;
   }
   it->second.used = ++clock_;
-  touch(blob);  return ++stats_.hits, true;
+  touch(blob);
+  return ++stats_.hits, true;
 }
 
 bool DiskCache::makeRoom(uint64_t need) {

@@ -2,7 +2,12 @@
 #include "remote/remote_package.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <thread>
+
+#include "remote/table_mirror.h"
 
 namespace blvd::remote {
 using namespace package;
@@ -13,6 +18,18 @@ std::string hex(uint64_t v, int digits) {
   std::snprintf(buf, sizeof buf, "%0*llx", digits, static_cast<unsigned long long>(v));
   return buf;
 }
+
+bool linkDown(core::Status st) { return st == core::Status::Io || st == core::Status::Timeout; }
+
+const SectionInfo* findSection(const std::vector<SectionInfo>& sections, uint32_t tag) {
+  for (const SectionInfo& s : sections)
+    if (s.tag == tag) return &s;
+  return nullptr;
+}
+
+// A gap is fetched rather than split into two requests when it costs less than a
+// round trip would at a slow link's speed (4 KiB: 100 ms at 320 kbit/s).
+constexpr uint64_t kRunGap = 4u << 10, kRunMax = 4u << 20;
 
 }  // namespace
 
@@ -28,49 +45,141 @@ core::Status RemotePackage::fetchChecked(uint64_t offset, uint64_t size, uint32_
   return core::Status::Ok;
 }
 
-core::Status RemotePackage::open(const std::string& url, const RemoteOptions& opt, std::string& err) {
-  url_ = url;
-  client_ = std::make_unique<RangeClient>(url, opt.link);
-  cache_.reset();
-  std::vector<uint8_t> first;
-  // The first read learns the file's size (Content-Range's total).
-  core::Status st = client_->fetchUpTo(0, kFirstRead, first, err);
-  if (st != core::Status::Ok) return st;
-  const uint64_t file_size = client_->resourceBytes() ? client_->resourceBytes() : first.size();
-  if ((st = parseHeader(first.data(), first.size(), file_size, url, layout_, err)) != core::Status::Ok) return st;
+// The first 16 KiB from the server, or from the mirror when offline or when
+// the link fails and a mirror is there.
+core::Status RemotePackage::readHead(const RemoteOptions& opt, std::vector<uint8_t>& head, uint64_t& file_size,
+                                     std::string& err) {
+  core::Status st = core::Status::Unavailable;
+  if (opt.mode != LinkMode::Offline) {
+    st = client_->fetchUpTo(0, kFirstRead, head, err);
+    if (st == core::Status::Ok) {
+      file_size = client_->resourceBytes() ? client_->resourceBytes() : head.size();
+      return st;
+    }
+    if (!linkDown(st)) return st;
+  }
+  if (!mirror_.empty() && readMirrorHead(mirror_, kFirstRead, head, file_size)) {
+    offline_start_ = true;
+    return core::Status::Ok;
+  }
+  if (st == core::Status::Unavailable) err = url_ + ": offline, and no tables cached in " + opt.cache_path;
+  return st;
+}
+
+// The mirror (written unless it is this package's already) and the blob
+// index, read from it; without a cache folder, the blob index over the link.
+core::Status RemotePackage::openTables(const std::vector<uint8_t>& head, std::string& err) {
+  const SectionInfo* bidx = findSection(sections_, kSectionBlobIndex);
+  const SectionInfo* bdat = findSection(sections_, kSectionBlobData);
   const uint64_t dir_end = layout_.directory_offset + uint64_t(layout_.directory_count) * kDirEntrySize;
-  std::vector<uint8_t> dir;
-  if (dir_end <= first.size()) {
-    dir.assign(first.begin() + long(layout_.directory_offset), first.begin() + long(dir_end));
-  } else if ((st = client_->fetch(layout_.directory_offset, dir_end - layout_.directory_offset, dir, err)) !=
-             core::Status::Ok) {
+  core::Status st = core::Status::Ok;
+  std::vector<uint8_t> index, have;
+  uint64_t have_size = 0;
+  if (!mirror_.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(std::filesystem::path(mirror_).parent_path(), ec);
+    if (ec) return err = mirror_ + ": " + ec.message(), core::Status::Io;
+    mirror_bytes_ = mirrorBytes(sections_, head.size());
+    const bool same = readMirrorHead(mirror_, dir_end, have, have_size) && have_size == layout_.file_size &&
+                      std::equal(have.begin(), have.end(), head.begin(), head.begin() + long(dir_end));
+    if (!same && offline_start_) return err = mirror_ + ": not the mirror of " + url_, core::Status::Corrupt;
+    if (!same && (st = writeMirror(*client_, mirror_, layout_.file_size, head, sections_, err)) != core::Status::Ok)
+      return st;
+  }
+  blobs_.clear();
+  if (!bidx || !bdat) return core::Status::Ok;
+  if (!mirror_.empty()) {
+    if (!readMirror(mirror_, bidx->offset, bidx->size, index) || crc32c(index.data(), index.size()) != bidx->crc)
+      return err = mirror_ + ": section BIDX at offset " + std::to_string(bidx->offset) + ": CRC mismatch",
+             core::Status::Corrupt;
+  } else if ((st = fetchChecked(bidx->offset, bidx->size, bidx->crc, "section BIDX", index, err)) != core::Status::Ok) {
     return st;
   }
-  if ((st = parseDirectory(dir.data(), dir.size(), layout_, url, sections_, err)) != core::Status::Ok) return st;
-  identity_ = hex(crc32c(dir.data(), dir.size(), crc32c(first.data(), layout_.header_size)), 8) + "-" + hex(file_size, 12);
-  const auto find = [&](uint32_t tag) {
-    return std::find_if(sections_.begin(), sections_.end(), [&](const SectionInfo& s) { return s.tag == tag; });
-  };
-  const auto bidx = find(kSectionBlobIndex), bdat = find(kSectionBlobData);
-  blobs_.clear();
-  if (bidx != sections_.end() && bdat != sections_.end()) {
-    std::vector<uint8_t> index;
-    if ((st = fetchChecked(bidx->offset, bidx->size, bidx->crc, "section BIDX", index, err)) != core::Status::Ok)
-      return st;
-    if ((st = parseBlobIndex(index.data(), index.size(), *bidx, *bdat, url, blobs_, err)) != core::Status::Ok) return st;
+  return parseBlobIndex(index.data(), index.size(), *bidx, *bdat, url_, blobs_, err);
+}
+
+core::Status RemotePackage::openCache(const RemoteOptions& opt, std::string& err) {
+  if (opt.cache_path.empty()) return core::Status::Ok;
+  uint64_t largest = 0;
+  for (const BlobInfo& b : blobs_) largest = std::max(largest, b.size);
+  const uint64_t need = mirror_bytes_ + DiskCache::kHeaderBytes + largest;
+  if (opt.cache_bytes < need)
+    return err = opt.cache_path + ": a cache of " + std::to_string(opt.cache_bytes) + " bytes cannot hold " + url_ +
+                 "'s tables (" + std::to_string(mirror_bytes_) + " bytes) and its largest blob (" +
+                 std::to_string(largest) + "): at least " + std::to_string(need) + " bytes",
+           core::Status::InvalidArg;
+  cache_ = std::make_unique<DiskCache>();
+  return cache_->open(opt.cache_path + "/blobs", opt.cache_bytes - mirror_bytes_, identity_, err);
+}
+
+core::Status RemotePackage::open(const std::string& url, const RemoteOptions& opt, std::string& err) {
+  url_ = url;
+  mirror_ = opt.cache_path.empty() ? "" : opt.cache_path + "/tables.blvd";
+  mode_ = opt.mode;
+  offline_start_ = false;
+  mirror_bytes_ = 0;
+  client_ = std::make_unique<RangeClient>(url, opt.link);
+  cache_.reset();
+  std::vector<uint8_t> head;
+  uint64_t file_size = 0;
+  core::Status st = readHead(opt, head, file_size, err);
+  if (st != core::Status::Ok) return st;
+  const std::string name = offline_start_ ? mirror_ : url;
+  if ((st = parseHeader(head.data(), head.size(), file_size, name, layout_, err)) != core::Status::Ok) return st;
+  const uint64_t dir_end = layout_.directory_offset + uint64_t(layout_.directory_count) * kDirEntrySize;
+  if (dir_end > head.size())  // the bake puts it in the first 16 KiB; a longer one is read whole
+    st = offline_start_ ? (readMirrorHead(mirror_, dir_end, head, file_size) ? st : core::Status::Corrupt)
+                        : client_->fetchUpTo(0, dir_end, head, err);
+  if (st != core::Status::Ok || head.size() < dir_end) return err = name + ": directory past the end", core::Status::Corrupt;
+  const uint8_t* dir = head.data() + layout_.directory_offset;
+  if ((st = parseDirectory(dir, dir_end - layout_.directory_offset, layout_, name, sections_, err)) != core::Status::Ok)
+    return st;
+  identity_ = hex(crc32c(dir, dir_end - layout_.directory_offset, crc32c(head.data(), layout_.header_size)), 8) + "-" +
+              hex(file_size, 12);
+  st = openTables(head, err);
+  {
+    std::lock_guard<std::mutex> lock(stats_mu_);
+    link_stats_ = client_->stats();
   }
-  if (!opt.cache_path.empty()) {
-    cache_ = std::make_unique<DiskCache>();
-    if ((st = cache_->open(opt.cache_path, opt.cache_bytes, identity_, err)) != core::Status::Ok) return st;
-  }
-  return core::Status::Ok;
+  return st == core::Status::Ok ? openCache(opt, err) : st;
 }
 
 core::Status RemotePackage::section(uint32_t tag, std::vector<uint8_t>& out, std::string& err) {
-  for (const SectionInfo& s : sections_)
-    if (s.tag == tag) return fetchChecked(s.offset, s.size, s.crc, "section " + tagToString(tag), out, err);
-  err = url_ + ": no section " + tagToString(tag);
-  return core::Status::NotFound;
+  const SectionInfo* s = findSection(sections_, tag);
+  if (!s) return err = url_ + ": no section " + tagToString(tag), core::Status::NotFound;
+  if (!mirror_.empty()) {
+    if (!readMirror(mirror_, s->offset, s->size, out) || crc32c(out.data(), out.size()) != s->crc)
+      return err = mirror_ + ": section " + tagToString(tag) + " at offset " + std::to_string(s->offset) +
+                   ": CRC mismatch",
+             core::Status::Corrupt;
+    return core::Status::Ok;
+  }
+  return onLink(false, s->size, [&] { return fetchChecked(s->offset, s->size, s->crc, "section " + tagToString(tag), out, err); });
+}
+
+template <typename F>
+core::Status RemotePackage::onLink(bool background, uint64_t bytes, F&& f) {
+  if (background) {
+    while (foreground_.load(std::memory_order_relaxed) > 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  } else {
+    foreground_.fetch_add(1, std::memory_order_relaxed);
+  }
+  core::Status st;
+  {
+    std::lock_guard<std::mutex> link(link_mu_);
+    const auto t0 = std::chrono::steady_clock::now();
+    st = f();
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::lock_guard<std::mutex> lock(stats_mu_);
+    if (st == core::Status::Ok && s > 0) {
+      const double r = double(bytes) / s;
+      throughput_bps_ = throughput_bps_ > 0 ? 0.7 * throughput_bps_ + 0.3 * r : r;
+    }
+    link_stats_ = client_->stats();
+    changed_.store(client_->changed(), std::memory_order_relaxed);
+  }
+  if (!background) foreground_.fetch_sub(1, std::memory_order_relaxed);
+  return st;
 }
 
 core::Status RemotePackage::blob(uint32_t i, std::vector<uint8_t>& out, std::string& err, bool* from_cache) {
@@ -80,17 +189,101 @@ core::Status RemotePackage::blob(uint32_t i, std::vector<uint8_t>& out, std::str
   }
   const BlobInfo& b = blobs_[i];
   if (from_cache) *from_cache = false;
-  if (cache_ && cache_->get(i, b.crc, out)) {
-    if (from_cache) *from_cache = true;
-    return core::Status::Ok;
+  if (cache_) {
+    std::lock_guard<std::mutex> lock(cache_mu_);
+    if (cache_->get(i, b.crc, out)) {
+      if (from_cache) *from_cache = true;
+      return core::Status::Ok;
+    }
   }
-  const core::Status st = fetchChecked(b.offset, b.size, b.crc, "blob " + std::to_string(i), out, err);
-  if (st == core::Status::Ok && cache_) cache_->put(i, b.crc, out.data(), out.size());
+  if (mode() == LinkMode::Offline)
+    return err = url_ + ": blob " + std::to_string(i) + " is not cached and the link is offline",
+           core::Status::Unavailable;
+  const core::Status st =
+      onLink(false, b.size, [&] { return fetchChecked(b.offset, b.size, b.crc, "blob " + std::to_string(i), out, err); });
+  if (st == core::Status::Ok && cache_) {
+    std::lock_guard<std::mutex> lock(cache_mu_);
+    cache_->put(i, b.crc, out.data(), out.size());
+  }
   return st;
 }
 
+// ids[0 .. n) lie in file order with small gaps: one request, split and
+// checked blob by blob; a blob whose CRC fails is not cached (Corrupt).
+core::Status RemotePackage::fetchRun(const uint32_t* run, size_t n, std::string& err, bool background) {
+  const uint64_t begin = blobs_[run[0]].offset, end = blobs_[run[n - 1]].offset + blobs_[run[n - 1]].size;
+  std::vector<uint8_t> bytes;
+  const core::Status st =
+      onLink(background, end - begin, [&] { return client_->fetch(begin, end - begin, bytes, err); });
+  if (st != core::Status::Ok) return st;
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  for (size_t k = 0; k < n; ++k) {
+    const BlobInfo& b = blobs_[run[k]];
+    const uint8_t* p = bytes.data() + (b.offset - begin);
+    if (crc32c(p, b.size) != b.crc)
+      return err = url_ + ": blob " + std::to_string(run[k]) + " at offset " + std::to_string(b.offset) +
+                   ": CRC mismatch",
+             core::Status::Corrupt;
+    cache_->put(run[k], b.crc, p, b.size);
+  }
+  return core::Status::Ok;
+}
+
+core::Status RemotePackage::fetchBlobs(const uint32_t* ids, size_t n, std::string& err, bool background) {
+  if (!cache_) return core::Status::Ok;  // nowhere to keep them: blob() fetches each
+  std::vector<uint32_t> want;
+  {
+    std::lock_guard<std::mutex> lock(cache_mu_);
+    for (size_t k = 0; k < n; ++k)
+      if (ids[k] < blobs_.size() && !cache_->contains(ids[k])) want.push_back(ids[k]);
+  }
+  std::sort(want.begin(), want.end(), [&](uint32_t a, uint32_t b) { return blobs_[a].offset < blobs_[b].offset; });
+  want.erase(std::unique(want.begin(), want.end()), want.end());
+  if (!want.empty() && mode() == LinkMode::Offline)
+    return err = url_ + ": " + std::to_string(want.size()) + " blobs are not cached and the link is offline",
+           core::Status::Unavailable;
+  for (size_t b = 0; b < want.size();) {
+    size_t e = b + 1;
+    while (e < want.size() && blobs_[want[e]].offset <= blobs_[want[e - 1]].offset + blobs_[want[e - 1]].size + kRunGap &&
+           blobs_[want[e]].offset + blobs_[want[e]].size - blobs_[want[b]].offset <= kRunMax)
+      ++e;
+    const core::Status st = fetchRun(want.data() + b, e - b, err, background);
+    if (st != core::Status::Ok) return st;
+    b = e;
+  }
+  return core::Status::Ok;
+}
+
+core::Status RemotePackage::revalidate(std::string& err) {
+  if (mode() == LinkMode::Offline) return core::Status::Unavailable;
+  std::vector<uint8_t> bytes;
+  return onLink(true, 16, [&] { return client_->fetch(0, 16, bytes, err); });
+}
+
+bool RemotePackage::cached(uint32_t i) const {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  return cache_ && cache_->contains(i);
+}
+
 void RemotePackage::pin(const std::vector<uint32_t>& blobs) {
+  std::lock_guard<std::mutex> lock(cache_mu_);
   if (cache_) cache_->pin(blobs);
+}
+
+RemoteStats RemotePackage::stats() const {
+  RemoteStats s;
+  {
+    std::lock_guard<std::mutex> lock(cache_mu_);
+    if (cache_) s.cache = cache_->stats(), s.cache_bytes = cache_->bytes(), s.cache_bytes_max = cache_->maxBytes();
+  }
+  std::lock_guard<std::mutex> lock(stats_mu_);
+  s.link = link_stats_;
+  s.changed = changed();
+  s.mirror_bytes = mirror_bytes_;
+  s.cache_bytes += mirror_bytes_;
+  s.throughput_bps = throughput_bps_;
+  s.offline_start = offline_start_;
+  return s;
 }
 
 }  // namespace blvd::remote

@@ -3,10 +3,15 @@
 namespace blvd::runtime {
 
 uint32_t CellChoice::choose(glm::dvec2 p, double heading_deg, double& arc_m) {
+  if (has_last_pose_ && p == last_p_ && heading_deg == last_heading_) {
+    arc_m = last_arc_;
+    return last_cell_;
+  }
   double cost = 0;
   uint32_t cell = city_.nearestCell(p, heading_deg, &arc_m, &cost);
   if (cell != graph::kNone) cell = continued(cell, cost, p, heading_deg, arc_m);
   last_cell_ = cell;
+  has_last_pose_ = true, last_p_ = p, last_heading_ = heading_deg, last_arc_ = arc_m;
   return cell;
 }
 

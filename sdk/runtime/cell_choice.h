@@ -24,10 +24,12 @@ class CellChoice {
 
   CellChoice(const stream::City& city, const stream::Residency& residency) : city_(city), residency_(residency) {}
   // The cell of a host-set pose at `p` heading `heading_deg`, and the arc
-  // length along it; kNone off the map.
+  // length along it; kNone off the map. The same pose asked again (a
+  // degraded frame drawn again after blvd_wait_resident) gets the same
+  // answer: a second step from the answer itself would move on a cell.
   uint32_t choose(glm::dvec2 p, double heading_deg, double& arc_m);
   // The tracker placed this frame's camera: the next host pose starts afresh.
-  void forget() { last_cell_ = graph::kNone; }
+  void forget() { last_cell_ = graph::kNone, has_last_pose_ = false; }
 
  private:
   uint32_t continued(uint32_t cell, double cost, glm::dvec2 p, double heading_deg, double& arc_m) const;
@@ -35,6 +37,9 @@ class CellChoice {
   const stream::City& city_;
   const stream::Residency& residency_;
   uint32_t last_cell_ = graph::kNone;
+  bool has_last_pose_ = false;
+  glm::dvec2 last_p_{0, 0};
+  double last_heading_ = 0, last_arc_ = 0;
 };
 
 }  // namespace blvd::runtime

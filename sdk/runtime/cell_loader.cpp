@@ -355,10 +355,16 @@ bool CellLoader::decode(Staging& s) {
   s.mesh_count = 0;
   s.uploaded = 0;
   s.error[0] = 0;
+  s.unavailable = false;
   std::string err;
-  auto fail = [&](const std::string& what) {
+  // `st`: a link that is down, offline, or a package replaced on the server
+  // makes the cell unavailable (asked for again later), not a load error.
+  auto fail = [&](const std::string& what, core::Status st = core::Status::Corrupt) {
     std::snprintf(s.error, sizeof s.error, "cell %u: %s", s.cell, what.c_str());
+    const remote::RemotePackage* r = city_.remote();
     std::lock_guard<std::mutex> lock(mu_);
+    s.unavailable = r && (st == core::Status::Unavailable || st == core::Status::Io ||
+                          st == core::Status::Timeout || r->changed());
     s.state = Staging::Failed;
     return true;
   };
@@ -393,6 +399,13 @@ bool CellLoader::decode(Staging& s) {
   };
   // One open per block: its blob's CRC and GLB JSON once for all its levels
   // (decision 0008 §13); the open's cost counts with level 0's.
+  // A package on a server: the cell's blobs into the disk cache first,
+  // neighbours in one request.
+  if (remote::RemotePackage* r = city_.remote()) {
+    city_.cellBlobs(s.cell, s.skip, s.skip_count, s.blob_ids);
+    const core::Status st = r->fetchBlobs(s.blob_ids.data(), s.blob_ids.size(), err);
+    if (st != core::Status::Ok) return fail(err, st);
+  }
   stream::City::BlockBlob blob;
   for (const uint32_t b : city_.streets().localBlocks(s.cell)) {
     if (std::find(s.skip, s.skip + s.skip_count, b) != s.skip + s.skip_count) continue;  // the runtime copies it
@@ -404,7 +417,7 @@ bool CellLoader::decode(Staging& s) {
       const int64_t cpu0 = threadCpuNs();
       if (k == 0) {
         const core::Status st = city_.openBlock(b, blob, err);
-        if (st != core::Status::Ok) return fail(err);
+        if (st != core::Status::Ok) return fail(err, st);
       }
       const core::Status st = city_.decodeBlockLevel(blob, k, s.scratch, err);
       if (k + 1 == rec.lod_count) blob.close();
@@ -423,7 +436,7 @@ bool CellLoader::decode(Staging& s) {
     if (abandoned()) return false;
     const int64_t cpu0 = threadCpuNs();
     const core::Status st = city_.decodeImpostorBlob(l.blob, s.scratch, err);
-    if (st != core::Status::Ok) return fail(err);
+    if (st != core::Status::Ok) return fail(err, st);
     if (!stage(in_single ? MeshKind::Single : MeshKind::Layered, in_single ? j - layered : j, 0)) return true;
     measured(s, true, units, threadCpuNs() - cpu0);
   }

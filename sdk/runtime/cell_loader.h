@@ -65,6 +65,8 @@ struct Staging {
   // mesh (a SCHED_IDLE thread may not run again soon on a busy CPU).
   std::atomic<bool> abandon{false};
   char error[256] = {0};
+  bool unavailable = false;  // Failed because the data is not here now (offline, link down): ask again later
+  std::vector<uint32_t> blob_ids;  // a package on a server: the cell's blobs, fetched before decoding
   geo::MeshData scratch;  // the decoder's reusable buffers (one per slot: jobs may run at once)
   std::vector<stream::LayerInfo> layers;  // the cell's impostor layers, sized at create
 };

@@ -70,6 +70,7 @@ void CellSlots::stream(stream::Residency& residency, uint32_t cell, double arc_m
     else loader_.cancelQueued();
   }
   request(residency, cell);
+  pinWanted(residency);
   uploadStaged(upload_budget_ms);
 }
 
@@ -81,6 +82,7 @@ void CellSlots::request(stream::Residency& residency, uint32_t cell) {
     bool have = false;
     for (const CellSlot& s : slots_) have |= s.cell == c && s.state != CellSlot::Empty;
     if (have || std::find(failed_cells_.begin(), failed_cells_.end(), c) != failed_cells_.end()) continue;
+    if (!mayFetch(c, r)) continue;
     // A slot that shared blocks are being copied from stays.
     for (size_t i = 0; i < slots_.size(); ++i) copy_sources_[i] = slots_[i].copy_refs > 0;
     const uint32_t v = residency.victim(slot_cells_.data(), slot_cells_.size(), r, copy_sources_.get());

@@ -72,6 +72,7 @@ struct CellSlot {
 // What the slots count, for blvd_stats.
 struct SlotCounters {
   uint64_t load_errors = 0, evictions = 0, blocks_reused = 0, block_levels_copied = 0;
+  uint64_t link_waits = 0;  // loads whose data was not available (offline, link down)
   double upload_ms = 0, upload_ms_max = 0;
 };
 
@@ -99,6 +100,13 @@ class CellSlots {
  private:
   void request(stream::Residency& residency, uint32_t cell);
   void empty(size_t i);
+  // A package on a server (link_slots.cpp): whether the r-th wanted cell may
+  // be asked for now (not waiting after an unavailable load; offline, or
+  // metered past the next cell, only when its blobs are all cached); the
+  // wanted cells' blobs pinned in the disk cache; an unavailable load.
+  bool mayFetch(uint32_t cell, uint32_t r);
+  void pinWanted(const stream::Residency& residency);
+  void waitForLink(uint32_t cell);
   // slot_upload.cpp
   void uploadStaged(double budget_ms);
   bool uploadMeshes(CellSlot& slot, Staging& st, std::chrono::steady_clock::time_point t0, double budget_ms,
@@ -123,6 +131,13 @@ class CellSlots {
   uint32_t skip_scratch_[kMaxSkippedBlocks] = {};
   std::vector<uint32_t> failed_cells_;  // cells whose load failed, not retried (fixed ring)
   size_t failed_next_ = 0;
+  struct LinkWait {
+    uint32_t cell = graph::kNone;
+    std::chrono::steady_clock::time_point until{};
+  };
+  LinkWait link_waits_[8];  // cells whose data was unavailable: not asked for again before `until`
+  size_t link_wait_next_ = 0;
+  std::vector<uint32_t> pinned_cells_, blob_scratch_, pin_scratch_;  // a package on a server only
   render::SlabUpload pending_upload_;  // the mesh being copied into its slab, chunk by chunk
   render::SlabUpload pending_copy_;    // the shared block level being copied GPU-side
   uint64_t high_water_ = 0;

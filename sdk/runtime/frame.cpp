@@ -29,6 +29,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
     const uint64_t errors = slots_->counters().load_errors;
     slots_->stream(*residency_, cell, arc_m, speed, desc_.upload_budget_ms);
     if (slots_->counters().load_errors != errors) last_error = slots_->lastError();  // blvd_stats.load_errors
+    link_prefetch_->plan(cell, *residency_, speed);
   }
   draw_->build(mode_, radius_m_, cell, arc_m, cam_, *slots_, budget_.get());
   render::FrameStats fs;

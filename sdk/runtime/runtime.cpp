@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "core/log.h"
+#include "runtime/package_source.h"
 
 namespace blvd::runtime {
 using core::Error;
@@ -24,8 +25,7 @@ Allocator hostAllocator(const blvd_runtime_desc& desc) {
 
 Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   std::string err;
-  Status st = city_.open(desc.package_path, err, stream::City::Tables::All, stream::City::GraphTables::Paged);
-  if (st != Status::Ok) throw Error(st, err);
+  openCity(city_, desc.package_path, linkDesc(desc), stream::City::Tables::All);
 
   // The plan first: a budget error must come before anything is allocated.
   plan_ = planMemory(desc, city_);
@@ -63,6 +63,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   stats_.render_scale = 1.f;
   residency_ = std::make_unique<stream::Residency>(city_.streets(), plan_.resident_cells, desc.route_capacity);
   choice_ = std::make_unique<CellChoice>(city_, *residency_);
+  link_prefetch_ = std::make_unique<LinkPrefetch>(city_);
   setMode(desc.mode, desc.radius_m);
   cam_.fov_y_deg = desc.fov_y_deg;
   cam_.far_m = desc.far_m;
@@ -93,6 +94,7 @@ void Runtime::logPageCaches() const {
 }
 
 Runtime::~Runtime() {
+  link_prefetch_.reset();  // joins the prefetch thread before the city goes
   loader_.reset();  // joins the loader thread before the city goes
   logPageCaches();
   FrameClocks::release(clock_);
@@ -141,6 +143,10 @@ void Runtime::setMode(blvd_render_mode mode, float radius_m) {
   radius_m_ = radius_m > 0 ? radius_m : 250.f;
 }
 
+void Runtime::setLinkMode(blvd_link_mode mode) {
+  if (remote::RemotePackage* r = city_.remote()) r->setMode(static_cast<remote::LinkMode>(mode));
+}
+
 void Runtime::setRoute(const uint32_t* cells, size_t n) {
   if (n && !cells) throw Error(Status::InvalidArg, "blvd_set_route: cells is NULL");
   if (!residency_->setRoute(cells, n))
@@ -163,7 +169,8 @@ void Runtime::waitResident(double timeout_ms) {
     if (slots_->counters().load_errors != errors) throw Error(Status::Corrupt, slots_->lastError());
     if (msSince(t0) > timeout_ms)
       throw Error(Status::Timeout, "cell " + std::to_string(cell) + " not resident after " +
-                                       std::to_string(timeout_ms) + " ms");
+                                       std::to_string(timeout_ms) + " ms" +
+                                       (slots_->counters().link_waits ? ": " + slots_->lastError() : ""));
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
 }
@@ -197,6 +204,19 @@ void Runtime::stats(blvd_stats* out) const {
   s.prefetch_share_wait_ms = loader_->shareWaitMs();
   s.loader_cpu_ms = loader_->cpuMs(false);
   s.prefetch_cpu_ms = loader_->cpuMs(true);
+  s.link_waits = c.link_waits;
+  if (const remote::RemotePackage* r = city_.remote()) {
+    const remote::RemoteStats rs = r->stats();
+    s.link_requests = rs.link.requests;
+    s.link_bytes = rs.link.bytes;
+    s.link_bytes_per_s = rs.throughput_bps;
+    s.cache_hits = rs.cache.hits;
+    s.cache_misses = rs.cache.misses;
+    s.cache_bytes = rs.cache_bytes;
+    s.package_changed = rs.changed ? 1 : 0;
+    s.cached_ahead_m = link_prefetch_->cachedAheadM();
+    s.prefetch_horizon_m = link_prefetch_->horizonM();
+  }
   std::memcpy(out, &s, std::min<size_t>(s.struct_size, sizeof s));
 }
 

@@ -20,6 +20,7 @@
 #include "runtime/cell_choice.h"
 #include "runtime/cell_loader.h"
 #include "runtime/cell_slots.h"
+#include "runtime/link_prefetch.h"
 #include "runtime/draw_list.h"
 #include "runtime/frame_clock.h"
 #include "runtime/memory_plan.h"
@@ -45,6 +46,7 @@ class Runtime {
   void setPoseLocal(double x, double y, double heading_deg, double pitch_deg);
   void setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg);
   void setMode(blvd_render_mode mode, float radius_m);
+  void setLinkMode(blvd_link_mode mode);
   void setRoute(const uint32_t* cells, size_t n);
   void waitResident(double timeout_ms);
 
@@ -104,6 +106,7 @@ class Runtime {
   std::unique_ptr<track::Tracker> tracker_;
   blvd_camera_source camera_source_ = BLVD_CAMERA_HOST;  // render thread
   std::atomic<double> last_feed_t_{0.0};  // the newest fed time, from any feeding thread
+  std::unique_ptr<LinkPrefetch> link_prefetch_;  // last: its thread reads city_ and stops first
 };
 
 }  // namespace blvd::runtime

@@ -27,6 +27,14 @@ void CellSlots::uploadStaged(double budget_ms) {
       loader_.release(st);
       continue;
     }
+    if (st->state == Staging::Failed && st->unavailable) {
+      last_error_ = st->error;
+      waitForLink(st->cell);
+      const uint32_t target = st->target;
+      loader_.release(st);
+      empty(target);
+      continue;
+    }
     if (st->state == Staging::Failed) {
       last_error_ = st->error;
       ++counters_.load_errors;

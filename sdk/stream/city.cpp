@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
@@ -47,6 +48,51 @@ core::Status City::open(const std::string& path, std::string& err, Tables tables
   const auto& h = reader_.header();
   frame_ = geo::LocalFrame(h.origin_lat, h.origin_lon, h.origin_h);
   return core::Status::Ok;
+}
+
+bool City::isUrl(const std::string& path) {
+  return path.rfind("http://", 0) == 0 || path.rfind("https://", 0) == 0;
+}
+
+core::Status City::openUrl(const std::string& url, const remote::RemoteOptions& remote, std::string& err,
+                           Tables tables, GraphTables graph, const PagedGraphDesc& paging) {
+  if (remote.cache_path.empty()) return err = url + ": a package on a server needs a cache folder", core::Status::InvalidArg;
+  for (int attempt = 0;; ++attempt) {
+    remote_ = std::make_unique<remote::RemotePackage>();
+    core::Status st = remote_->open(url, remote, err);
+    if (st == core::Status::Ok) st = open(remote_->mirrorPath(), err, tables, graph, paging);
+    if (st == core::Status::Ok) return st;
+    // A mirror a killed process or a bad disk left wrong: fetched again, once.
+    const bool refetch = st == core::Status::Corrupt && attempt == 0 && !remote_->mirrorPath().empty() &&
+                         remote_->mode() != remote::LinkMode::Offline && !remote_->stats().offline_start;
+    reader_.close();
+    if (!refetch) {
+      remote_.reset();
+      return st;
+    }
+    std::remove(remote_->mirrorPath().c_str());
+  }
+}
+
+void City::cellBlobs(uint32_t cell, const uint32_t* skip, uint32_t skip_count, std::vector<uint32_t>& out) const {
+  out.clear();
+  for (const uint32_t b : streets().localBlocks(cell)) {
+    if (std::find(skip, skip + skip_count, b) != skip + skip_count) continue;
+    const graph::BlockRecord rec = block(b);
+    if (rec.lod_count > 0 && rec.blob != 0xffffffffu) out.push_back(rec.blob);
+  }
+  std::vector<LayerInfo> layers(std::max<uint32_t>(1, max_cell_layers_));
+  uint32_t layered = 0, single = 0;
+  cellLayers(cell, layers.data(), uint32_t(layers.size()), &layered, &single);
+  for (uint32_t j = 0; j < layered + single; ++j) out.push_back(layers[j].blob);
+}
+
+core::Status City::blobBytes(uint32_t i, package::Span& s, std::vector<uint8_t>& hold, std::string& err) const {
+  if (!remote_) return reader_.blob(i, s, err);
+  const core::Status st = remote_->blob(i, hold, err);
+  if (st != core::Status::Ok) return st;
+  s = package::Span{hold.data(), hold.size(), remote_->blobInfo(i).offset};
+  return st;
 }
 
 core::Status City::openWhole(std::string& err) {
@@ -220,10 +266,10 @@ core::Status City::openBlock(uint32_t b, BlockBlob& blob, std::string& err) cons
     return core::Status::NotFound;
   }
   package::Span s;
-  core::Status st = reader_.blob(rec.blob, s, err);
+  core::Status st = blobBytes(rec.blob, s, blob.bytes_, err);
   if (st != core::Status::Ok) return st;
   blob.span_ = s;
-  blob.reader_ = &reader_;
+  blob.reader_ = remote_ ? nullptr : &reader_;
   st = blob.glb_.open(s.data, s.size, err);
   if (st != core::Status::Ok) {
     err = reader_.name() + ": block " + std::to_string(b) + " at offset " + std::to_string(s.offset) + ": " + err;
@@ -266,10 +312,11 @@ core::Status City::decodeBlockLevel(const BlockBlob& blob, uint32_t lod, geo::Me
 
 core::Status City::decodeImpostorBlob(uint32_t blob, geo::MeshData& out, std::string& err) const {
   package::Span s;
-  core::Status st = reader_.blob(blob, s, err);
+  std::vector<uint8_t> hold;  // a package on a server's: the blob
+  core::Status st = blobBytes(blob, s, hold, err);
   if (st != core::Status::Ok) return st;
   st = package::decodeGlb(s.data, s.size, out, err);
-  reader_.dropPages(s);
+  if (!remote_) reader_.dropPages(s);
   if (st != core::Status::Ok)
     err = reader_.name() + ": impostor blob " + std::to_string(blob) + " at offset " + std::to_string(s.offset) +
           ": " + err;

@@ -20,6 +20,7 @@
 #include "stream/cell_table_pages.h"
 #include "stream/paged_graph.h"
 #include "package/reader.h"
+#include "remote/remote_package.h"
 
 namespace blvd::stream {
 
@@ -42,6 +43,20 @@ class City {
   enum class GraphTables { Whole, Paged };
   core::Status open(const std::string& path, std::string& err, Tables tables = Tables::All,
                     GraphTables graph = GraphTables::Whole, const PagedGraphDesc& paging = {});
+  // The same for a package on a server (`url`: http:// or https://): its
+  // tables are mirrored in remote.cache_path (required) and read from there
+  // as from a local package; blobs come through the disk cache
+  // (remote/remote_package.h). A mirror that fails its checks is fetched
+  // again, once (never offline). Unavailable offline without a mirror.
+  core::Status openUrl(const std::string& url, const remote::RemoteOptions& remote, std::string& err,
+                       Tables tables = Tables::All, GraphTables graph = GraphTables::Paged,
+                       const PagedGraphDesc& paging = {});
+  static bool isUrl(const std::string& path);
+  // The package on a server, or nullptr for a local one.
+  remote::RemotePackage* remote() const { return remote_.get(); }
+  // Blobs cell `cell` draws (its non-empty local blocks but skip[0 ..
+  // skip_count), its impostor layers) into out (cleared first).
+  void cellBlobs(uint32_t cell, const uint32_t* skip, uint32_t skip_count, std::vector<uint32_t>& out) const;
 
   const package::PackageReader& package() const { return reader_; }
   const package::PackageHeader& header() const { return reader_.header(); }
@@ -107,6 +122,7 @@ class City {
     friend class City;
     uint32_t block_ = 0xffffffffu;
     package::Span span_{};
+    std::vector<uint8_t> bytes_;  // the blob, for a package on a server
     package::GlbDocument glb_;
     const package::PackageReader* reader_ = nullptr;
   };
@@ -135,6 +151,9 @@ class City {
   core::Status openPaged(const PagedGraphDesc& paging, std::string& err);
   core::Status openRenderTables(std::string& err);
   core::Status requiredSection(uint32_t tag, package::Span& s, std::string& err) const;  // Corrupt when absent
+  // Blob i's bytes: a span of the mapping, or of `hold` fetched through remote_.
+  core::Status blobBytes(uint32_t i, package::Span& s, std::vector<uint8_t>& hold, std::string& err) const;
+  std::unique_ptr<remote::RemotePackage> remote_;
   package::PackageReader reader_;
   graph::StreetGraph graph_;
   std::vector<graph::BlockRecord> blocks_;

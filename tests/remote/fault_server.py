@@ -8,6 +8,10 @@ for the range client's tests. Serves the files of ROOT under /<fault>/<name>:
   retry503  the first request answers 503 with Retry-After: 1, then as ok
   stall     the first request sends nothing for 3 s, then as ok
   etag      ETag "v1" for the first 2 requests, then "v2" (If-Match "v1" -> 412)
+  drive     a drive's link: of every 13 requests, the 4th is cut mid-body, the 7th
+            answered 200 with the whole file, the 10th 503 with Retry-After: 1;
+            and while ROOT/.down exists, a request is accepted and answered
+            with nothing (a tunnel) until the file goes
 
 Usage: fault_server.py ROOT PORT_FILE  (binds a free loopback port, writes it to
 PORT_FILE, serves until killed)."""
@@ -46,6 +50,19 @@ class Handler(http.server.BaseHTTPRequestHandler):
         n = count((fault, name, self.headers.get("Range")))
         total = count((fault, name))
         etag = '"v1"'
+        k = total % 13
+        if fault == "drive":
+            while os.path.exists(os.path.join(ROOT, ".down")):
+                time.sleep(0.2)
+                if not os.path.exists(os.path.join(ROOT, ".down")):
+                    self.connection.shutdown(2)  # the tunnel's end: this request is lost
+                    return
+        if fault == "drive" and k == 10:
+            self.send_response(503)
+            self.send_header("Retry-After", "1")
+            self.send_header("Content-Length", "0")
+            self.end_headers()
+            return
         if fault == "etag":
             etag = '"v1"' if total <= 2 else '"v2"'
         if fault == "retry503" and total == 1:
@@ -63,7 +80,7 @@ class Handler(http.server.BaseHTTPRequestHandler):
             self.end_headers()
             return
         rng = re.match(r"bytes=(\d+)-(\d+)$", self.headers.get("Range", ""))
-        if rng and fault != "full200":
+        if rng and fault != "full200" and not (fault == "drive" and k == 7):
             a, b = int(rng.group(1)), min(int(rng.group(2)), len(data) - 1)
             body = data[a:b + 1]
             self.send_response(206)
@@ -74,7 +91,7 @@ class Handler(http.server.BaseHTTPRequestHandler):
         self.send_header("ETag", etag)
         self.send_header("Content-Length", str(len(body)))
         self.end_headers()
-        if fault == "cut" and n == 1:
+        if (fault == "cut" and n == 1) or (fault == "drive" and k == 4):
             self.wfile.write(body[:len(body) // 2])
             self.wfile.flush()
             self.connection.shutdown(2)

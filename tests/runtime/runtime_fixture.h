@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "blvd/blvd.h"
 
@@ -31,6 +32,24 @@ inline blvd_stats statsOf(blvd_runtime* rt) {
   s.struct_size = sizeof s;
   EXPECT_EQ(blvd_runtime_stats(rt, &s), BLVD_OK);
   return s;
+}
+
+// The frame at pose (x, y, heading), drawn whole: a degraded frame waits for
+// its cell and is drawn again. width × height RGBA8.
+inline std::vector<uint8_t> wholeFrame(blvd_runtime* rt, double x, double y, double heading_deg, uint32_t width,
+                                       uint32_t height, double timeout_ms = 120000) {
+  EXPECT_EQ(blvd_set_pose_local(rt, x, y, float(heading_deg), 0.f), BLVD_OK);
+  blvd_frame_stats fs{};
+  fs.struct_size = sizeof fs;
+  EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
+  if (fs.flags & BLVD_FRAME_DEGRADED) {
+    EXPECT_EQ(blvd_wait_resident(rt, timeout_ms), BLVD_OK) << blvd_last_error(rt);
+    EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
+  }
+  EXPECT_EQ(fs.flags & BLVD_FRAME_DEGRADED, 0u);
+  std::vector<uint8_t> px(size_t(width) * height * 4);
+  EXPECT_EQ(blvd_read_pixels(rt, px.data(), px.size()), BLVD_OK) << blvd_last_error(rt);
+  return px;
 }
 
 // The thread of this process named `name` (blvd-loader, blvd-prefetch), or 0.

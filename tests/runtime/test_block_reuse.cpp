@@ -23,21 +23,8 @@ using blvd_test::statsOf;
 
 blvd_test::Drive drive(uint32_t cells, double step_m) { return blvd_test::impostorDrive(cells, step_m); }
 
-// The frame of pose p, drawn whole (a degraded frame waits for its cell and
-// is drawn again).
 std::vector<uint8_t> frame(blvd_runtime* rt, const blvd_test::DrivePose& p, const blvd_runtime_desc& d) {
-  EXPECT_EQ(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), BLVD_OK);
-  blvd_frame_stats fs{};
-  fs.struct_size = sizeof fs;
-  EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
-  if (fs.flags & BLVD_FRAME_DEGRADED) {
-    EXPECT_EQ(blvd_wait_resident(rt, 30000), BLVD_OK) << blvd_last_error(rt);
-    EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
-  }
-  EXPECT_EQ(fs.flags & BLVD_FRAME_DEGRADED, 0u);
-  std::vector<uint8_t> px(size_t(d.width) * d.height * 4);
-  EXPECT_EQ(blvd_read_pixels(rt, px.data(), px.size()), BLVD_OK) << blvd_last_error(rt);
-  return px;
+  return blvd_test::wholeFrame(rt, p.x, p.y, p.heading_deg, d.width, d.height, 30000);
 }
 
 // Draws every pose of `dr` in both runtimes and fails for each pair of frames

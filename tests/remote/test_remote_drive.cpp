@@ -1,0 +1,192 @@
+// A runtime on a package served over HTTP (blvd_runtime_desc.package_path a
+// URL) against the same runtime on the local file: a cold start fetches the
+// tables and the first cell's blobs and nothing else; a drive draws the same
+// frames as the local file's, its cache never above cache_bytes after any
+// frame; a drive through a misbehaving link (cut bodies, 200 for a range,
+// 503 with Retry-After, a 30 s tunnel) keeps drawing while the link is down
+// and ends with the same poses and frames.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <fstream>
+#include <thread>
+
+#include "geo/local_frame.h"
+#include "remote_drive.h"
+#include "stream/city.h"
+
+using namespace blvd_test;
+
+namespace {
+
+uint64_t cellBlobBytes(uint32_t cell, std::vector<uint32_t>& blobs) {
+  blvd::stream::City city;
+  std::string err;
+  EXPECT_EQ(city.open(BLVD_TEST_PACKAGE, err, blvd::stream::City::Tables::All, blvd::stream::City::GraphTables::Paged),
+            blvd::core::Status::Ok)
+      << err;
+  city.cellBlobs(cell, nullptr, 0, blobs);
+  uint64_t n = 0;
+  for (const uint32_t b : blobs) n += city.package().blobInfo(b).size;
+  return n;
+}
+
+}  // namespace
+
+TEST_F(RemoteDriveTest, AColdStartFetchesTheTablesAndTheFirstCellOnly) {
+  const Drive dr = impostorDrive(1, 10.0);
+  ASSERT_FALSE(dr.cells.empty());
+  const std::string url = nginx_->url("/monaco.blvd"), cache = work_ + "/cold";
+  const blvd_runtime_desc d = urlDesc(url, cache, 64ull << 20);
+  Rt r;
+  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+  const uint32_t route[] = {dr.cells[0]};  // nothing predicted past it
+  ASSERT_EQ(blvd_set_route(r.rt, route, 1), BLVD_OK);
+  const DrivePose& p = dr.poses[dr.poses.size() / 2];  // mid-cell: the cell the runtime picks
+  ASSERT_EQ(p.cell, dr.cells[0]);
+  wholeFrame(r.rt, p, d);
+  blvd_frame_stats fs{};
+  fs.struct_size = sizeof fs;
+  ASSERT_EQ(blvd_render(r.rt, &fs), BLVD_OK);
+  ASSERT_EQ(fs.cell, dr.cells[0]);
+  const blvd_stats s = stats(r.rt);
+  std::vector<uint32_t> blobs;
+  const uint64_t cell_bytes = cellBlobBytes(dr.cells[0], blobs);
+  // The first 16 KiB (header, directory), the rest of the tables, then the
+  // cell's blobs, neighbours in one request.
+  const uint64_t tables = s.cache_bytes - cell_bytes - blobs.size() * 24;  // 24: an entry's header
+  EXPECT_LE(s.link_requests, 2 + blobs.size());
+  EXPECT_GE(s.link_bytes, tables + cell_bytes);
+  EXPECT_LE(s.link_bytes, tables + cell_bytes + (blobs.size() - 1) * 4096);  // gaps under 4 KiB
+  EXPECT_EQ(s.cache_misses, 0u);  // every blob was fetched before its decode, and served by the cache
+  EXPECT_EQ(s.loads, 1u);
+  EXPECT_GE(s.cache_hits, blobs.size());
+  std::printf("cold start: %llu requests, %llu bytes (tables %llu, cell %u's %zu blobs %llu)\n",
+              (unsigned long long)s.link_requests, (unsigned long long)s.link_bytes, (unsigned long long)tables,
+              dr.cells[0], blobs.size(), (unsigned long long)cell_bytes);
+}
+
+TEST_F(RemoteDriveTest, ADriveDrawsWhatTheLocalFileDrawsInACacheThatNeverGrowsPastItsBytes) {
+  const Drive dr = impostorDrive(24, 12.0);
+  const std::string url = nginx_->url("/monaco.blvd"), cache = work_ + "/small";
+  const uint64_t cache_bytes = 1300000;  // the tables (0.77 MB), the largest blob (0.35 MB) and a little: evictions
+  const blvd_runtime_desc dl = localDesc(), du = urlDesc(url, cache, cache_bytes);
+  Rt local, remote;
+  ASSERT_EQ(blvd_runtime_create(&dl, &local.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_runtime_create(&du, &remote.rt), BLVD_OK) << blvd_last_error(nullptr);
+  for (blvd_runtime* rt : {local.rt, remote.rt}) ASSERT_EQ(blvd_set_route(rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
+  uint32_t differing = 0;
+  for (size_t i = 0; i < dr.poses.size(); ++i) {
+    const std::vector<uint8_t> fl = wholeFrame(local.rt, dr.poses[i], dl), fu = wholeFrame(remote.rt, dr.poses[i], du);
+    if (fl != fu && differing++ < 3)
+      ADD_FAILURE() << "pose " << i << " (cell " << dr.poses[i].cell << "): " << differingPixels(fl, fu) << " pixels differ";
+    const blvd_stats s = stats(remote.rt);
+    ASSERT_LE(s.cache_bytes, cache_bytes) << "pose " << i;
+    ASSERT_LE(diskBytes(cache), cache_bytes + 4096) << "pose " << i;  // the mirror's last block
+  }
+  const blvd_stats s = stats(remote.rt);
+  EXPECT_EQ(s.load_errors, 0u);
+  EXPECT_GT(s.cache_hits, 0u);
+  EXPECT_GT(s.link_bytes, cache_bytes);  // more than the cache holds: blobs were evicted and fetched again
+}
+
+TEST_F(RemoteDriveTest, ADriveThroughABadLinkKeepsDrawingAndEndsWithTheSamePosesAndFrames) {
+  const Drive dr = impostorDrive(10, 15.0);
+  const std::string url = faults_->url("/drive/monaco.blvd"), cache = work_ + "/faults";
+  const blvd_runtime_desc dl = localDesc(), du = urlDesc(url, cache, 64ull << 20);
+  Rt local, remote;
+  ASSERT_EQ(blvd_runtime_create(&dl, &local.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_runtime_create(&du, &remote.rt), BLVD_OK) << blvd_last_error(nullptr);
+  // The same fixes into a tracker over each: the tables came through the faults.
+  blvd_tracker_desc tl{}, tu{};
+  tl.struct_size = tu.struct_size = sizeof tl;
+  tl.package_path = BLVD_TEST_PACKAGE;
+  tu.package_path = url.c_str();
+  tu.cache_path = cache.c_str();
+  tu.cache_bytes = 64ull << 20;
+  blvd_tracker *trl = nullptr, *tru = nullptr;
+  ASSERT_EQ(blvd_tracker_create(&tl, &trl), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_tracker_create(&tu, &tru), BLVD_OK) << blvd_last_error(nullptr);
+  blvd_runtime_info info{};
+  info.struct_size = sizeof info;
+  ASSERT_EQ(blvd_runtime_get_info(local.rt, &info), BLVD_OK);
+  const blvd::geo::LocalFrame origin(info.origin_lat, info.origin_lon);
+
+  const size_t tunnel_at = 1;  // early: the link prefetch is still fetching the road ahead
+  uint32_t differing = 0, frames_in_tunnel = 0;
+  for (size_t i = 0; i < dr.poses.size(); ++i) {
+    const DrivePose& p = dr.poses[i];
+    if (i == tunnel_at) {  // 30 s without an answer, drawing all along, the cell not yet there
+      const uint64_t requests_before = stats(remote.rt).link_requests;
+      std::ofstream(work_ + "/www/.down") << "tunnel";
+      const auto t0 = std::chrono::steady_clock::now();
+      blvd_frame_stats fs{};
+      fs.struct_size = sizeof fs;
+      while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30)) {
+        // Held up in the tunnel at this pose (a pose that jumped about would
+        // give the cell choice another history than the local drive's).
+        ASSERT_EQ(blvd_set_pose_local(remote.rt, p.x, p.y, float(p.heading_deg), 0.f), BLVD_OK);
+        ASSERT_EQ(blvd_render(remote.rt, &fs), BLVD_OK) << blvd_last_error(remote.rt);
+        ++frames_in_tunnel;
+      }
+      std::filesystem::remove(work_ + "/www/.down");
+      EXPECT_GT(stats(remote.rt).link_requests, requests_before) << "nothing asked of the link in the tunnel";
+    }
+    const std::vector<uint8_t> fl = wholeFrame(local.rt, p, dl), fu = wholeFrame(remote.rt, p, du);
+    if (fl != fu && differing++ < 3)
+      ADD_FAILURE() << "pose " << i << " (cell " << p.cell << "): " << differingPixels(fl, fu) << " pixels differ";
+    blvd_gnss_fix fix{};
+    fix.struct_size = sizeof fix;
+    fix.t = double(i);
+    double h = 0;
+    origin.reverse({p.x, p.y, 0}, fix.lat, fix.lon, h);
+    fix.speed_mps = 12.f, fix.track_deg = float(p.heading_deg), fix.hdop = 1.f, fix.h_acc_m = 3.f;
+    fix.mode = BLVD_GNSS_MODE_3D;
+    fix.flags = BLVD_GNSS_HAS_TIME | BLVD_GNSS_HAS_LATLON | BLVD_GNSS_HAS_SPEED | BLVD_GNSS_HAS_TRACK |
+                BLVD_GNSS_HAS_HDOP | BLVD_GNSS_HAS_HACC;
+    ASSERT_EQ(blvd_tracker_feed_gnss(trl, &fix), BLVD_OK);
+    ASSERT_EQ(blvd_tracker_feed_gnss(tru, &fix), BLVD_OK);
+    blvd_pose a{}, b{};
+    a.struct_size = b.struct_size = sizeof a;
+    ASSERT_EQ(blvd_tracker_get_pose(trl, fix.t, &a), BLVD_OK);
+    ASSERT_EQ(blvd_tracker_get_pose(tru, fix.t, &b), BLVD_OK);
+    EXPECT_EQ(a.cell, b.cell) << "fix " << i;
+    EXPECT_EQ(a.x, b.x) << "fix " << i;
+    EXPECT_EQ(a.y, b.y) << "fix " << i;
+  }
+  blvd_tracker_destroy(trl);
+  blvd_tracker_destroy(tru);
+  const blvd_stats s = stats(remote.rt);
+  EXPECT_GE(frames_in_tunnel, 10u) << "frames waited for the link";
+  EXPECT_EQ(s.load_errors, 0u);
+  EXPECT_GT(s.link_requests, 13u);  // every fault of the 13-request cycle came round
+  std::printf("bad link: %u frames drawn in the 30 s tunnel, %llu link waits, %llu requests\n", frames_in_tunnel,
+              (unsigned long long)s.link_waits, (unsigned long long)s.link_requests);
+}
+
+TEST_F(RemoteDriveTest, TheLinkPrefetchesTheRouteAheadBeyondTheCellSlots) {
+  const Drive dr = impostorDrive(40, 15.0);
+  const std::string url = nginx_->url("/monaco.blvd"), cache = work_ + "/ahead";
+  const blvd_runtime_desc d = urlDesc(url, cache, 64ull << 20);
+  Rt r;
+  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_set_route(r.rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
+  wholeFrame(r.rt, dr.poses[0], d);
+  blvd_stats s = stats(r.rt);
+  EXPECT_GE(s.prefetch_horizon_m, 400.0);  // no speed from host-set poses: the least horizon
+  // The slots hold 4 cells; the prefetch fills the disk cache along the route up to its horizon.
+  for (int k = 0; k < 500 && s.cached_ahead_m < 400.0; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    wholeFrame(r.rt, dr.poses[0], d);
+    s = stats(r.rt);
+  }
+  EXPECT_GE(s.cached_ahead_m, 400.0);
+  // Metered: no prefetch; the drive goes on, the current and next cells fetched as it needs them.
+  ASSERT_EQ(blvd_set_link_mode(r.rt, BLVD_LINK_METERED), BLVD_OK);
+  const uint64_t requests = stats(r.rt).link_requests;
+  for (size_t i = 0; i < dr.poses.size(); i += 4) wholeFrame(r.rt, dr.poses[i], d);
+  s = stats(r.rt);
+  std::printf("prefetch: %.0f m cached ahead, horizon %.0f m; metered drive: %llu more requests\n", s.cached_ahead_m,
+              s.prefetch_horizon_m, (unsigned long long)(s.link_requests - requests));
+  EXPECT_EQ(s.load_errors, 0u);
+}
