@@ -2,7 +2,7 @@
 # `blvd bench stream` on the three link profiles (docs/benchmarks.md): a real
 # nginx on loopback serves the package at 56 kbit/s, 1 Mbit/s and 10 Mbit/s
 # (limit_rate, times the bench's time scale: the drive runs in simulated
-# time), and the bench drives a 200-cell route at 50 km/h from a cold cache
+# time; the client paces to the same rate), and the bench drives a 200-cell route at 50 km/h from a cold cache
 # on each. Prints one JSON object per profile and a Markdown table.
 # Usage: bench_stream.sh [PKG] [WORK] [TIME_SCALE] [CELLS]
 #   default: build/test-monaco.blvd, out/bench-stream, 10, 200

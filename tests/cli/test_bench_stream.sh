@@ -13,7 +13,7 @@ import json, sys
 for p in ("10m", "1m", "56k"):
     j = json.load(open(f"{sys.argv[1]}/{p}.json"))
     assert j["load_errors"] == 0, (p, j)
-    assert j["frames"] > 0 and j["route_cells"] == 8, (p, j)
+    assert j["frames"] > 0 and j["route_cells"] >= 2, (p, j)
     assert 0 < j["peak_cache_bytes"] <= j["cache_bytes"], (p, j)
     assert j["cold_start_requests"] >= 3 and j["time_to_first_frame_s"] > 0, (p, j)
     assert 0 <= j["degraded_share"] <= 1, (p, j)
