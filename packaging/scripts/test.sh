@@ -25,10 +25,11 @@ cp build/test-monaco.blvd build-asan/test-monaco.blvd
 
 # 3. ThreadSanitizer on the tests that share data across threads: the cell
 #    loader's two decoding threads and its frame clock and prefetch share,
-#    the tracker's feeds from any thread, the C API's CAN feeds.
+#    the tracker's feeds from any thread, the C API's CAN feeds, a package over the air
+#    shared by the loaders, the link prefetch and the render thread.
 cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBLVD_TSAN=ON -DBLVD_WERROR=ON \
   -DBLVD_BUILD_SAMPLES=OFF > /dev/null
-cmake --build build-tsan -j"$jobs" --target test_residency test_cell_loader test_track test_capi_can
+cmake --build build-tsan -j"$jobs" --target test_residency test_cell_loader test_track test_capi_can test_remote_threads
 cp build/test-monaco.blvd build-tsan/test-monaco.blvd
 (cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
   ctest --output-on-failure -j"$jobs" -L tsan -FS monaco_package)
