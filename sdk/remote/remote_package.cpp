@@ -270,6 +270,11 @@ void RemotePackage::pin(const std::vector<uint32_t>& blobs) {
   if (cache_) cache_->pin(blobs);
 }
 
+double RemotePackage::throughput() const {
+  std::lock_guard<std::mutex> lock(stats_mu_);
+  return throughput_bps_;
+}
+
 RemoteStats RemotePackage::stats() const {
   RemoteStats s;
   {

@@ -108,6 +108,8 @@ class RemotePackage {
   bool changed() const { return changed_.load(std::memory_order_relaxed); }
   // Never waits for the link (a snapshot taken after each request).
   RemoteStats stats() const;
+  // Bytes per second of recent fetches (0 until one); never waits for the cache either.
+  double throughput() const;
 
   static constexpr uint64_t kFirstRead = 16384;
 

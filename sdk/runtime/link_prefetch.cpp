@@ -30,8 +30,8 @@ LinkPrefetch::~LinkPrefetch() {
 
 void LinkPrefetch::plan(uint32_t cell, const stream::Residency& residency, double speed_mps) {
   if (!remote_ || cell == graph::kNone) return;
-  const remote::RemoteStats s = remote_->stats();
-  const double throughput = s.throughput_bps > 0 ? s.throughput_bps : 1e5;
+  const double measured = remote_->throughput();
+  const double throughput = measured > 0 ? measured : 1e5;
   const double horizon_s = kOutageS + 2.0 * avg_cell_bytes_ / throughput;
   const double horizon = std::max(kMinAheadM, speed_mps * horizon_s);
   horizon_m_.store(horizon, std::memory_order_relaxed);
