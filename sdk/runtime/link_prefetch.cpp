@@ -3,11 +3,32 @@
 
 #include <algorithm>
 
+#include <glm/geometric.hpp>
+
 namespace blvd::runtime {
+namespace {
+
+// Without a route: the successor that goes straightest on (no U-turn), the
+// likeliest way ahead; kNone at a dead end.
+uint32_t straightOn(const graph::GraphSource& g, uint32_t c) {
+  const glm::dvec2 d = graph::cellDirection(g, c, true);
+  const uint32_t twin = g.halfedge(c).twin;
+  uint32_t best = graph::kNone;
+  double best_cos = -2;
+  for (const uint32_t s : g.successors(c)) {
+    if (s == twin) continue;
+    const double k = glm::dot(d, graph::cellDirection(g, s, false));
+    if (k > best_cos) best_cos = k, best = s;
+  }
+  return best;
+}
+
+}  // namespace
 
 LinkPrefetch::LinkPrefetch(const stream::City& city) : city_(city), remote_(city.remote()) {
   if (!remote_) return;
   next_.reserve(kMaxCells);
+  ways_.reserve(kMaxCells + 1);
   wanted_.reserve(64);
   walk_.reserve(kMaxCells);
   const uint64_t blobs = remote_->blobCount() ? remote_->blobCount() : 1;
@@ -28,8 +49,31 @@ LinkPrefetch::~LinkPrefetch() {
   thread_.join();
 }
 
+// Without a route, every way ahead breadth first (Marvie et al.: the
+// neighbours first), each while its start lies within the horizon.
+void LinkPrefetch::addWaysAhead(uint32_t cell, double horizon) {
+  ways_.clear();
+  ways_.push_back({cell, 0.0});
+  for (size_t at = 0; at < ways_.size() && walk_.size() < kMaxCells; ++at) {
+    const auto [c, start] = ways_[at];
+    const double end = start + city_.streets().halfedge(c).length;
+    if (end >= horizon) continue;
+    const uint32_t twin = city_.streets().halfedge(c).twin;
+    for (const uint32_t s : city_.streets().successors(c)) {
+      if (s == twin || walk_.size() >= kMaxCells ||
+          std::any_of(ways_.begin(), ways_.end(), [&](const std::pair<uint32_t, double>& w) { return w.first == s; }))
+        continue;
+      ways_.push_back({s, end});
+      if (std::find(walk_.begin(), walk_.end(), s) == walk_.end()) walk_.push_back(s);  // the road has it already
+    }
+  }
+}
+
 void LinkPrefetch::plan(uint32_t cell, const stream::Residency& residency, double speed_mps) {
   if (!remote_ || cell == graph::kNone) return;
+  // Again when the vehicle enters another cell, and now and then for a new horizon.
+  if (cell == planned_cell_ && ++frames_since_plan_ < 32) return;
+  planned_cell_ = cell, frames_since_plan_ = 0;
   const double measured = remote_->throughput();
   const double throughput = measured > 0 ? measured : 1e5;
   const double horizon_s = kOutageS + 2.0 * avg_cell_bytes_ / throughput;
@@ -37,16 +81,20 @@ void LinkPrefetch::plan(uint32_t cell, const stream::Residency& residency, doubl
   horizon_m_.store(horizon, std::memory_order_relaxed);
   walk_.clear();
   double metres = 0;
+  const bool route = residency.hasRoute();
   for (uint32_t c = cell; c != graph::kNone && walk_.size() < kMaxCells && metres < horizon;
-       c = residency.nextOnRoute(c)) {
+       c = route ? residency.nextOnRoute(c) : straightOn(city_.streets(), c)) {
     if (std::find(walk_.begin(), walk_.end(), c) != walk_.end()) break;  // a looping route: once round
     walk_.push_back(c);
     metres += city_.streets().halfedge(c).length;
   }
-  for (size_t r = walk_.size() == 1 ? 1 : residency.wantedCount(); r < residency.wantedCount(); ++r)
-    walk_.push_back(residency.wanted()[r]);  // off the route: the predicted cells
+  const size_t road = walk_.size();
+  for (size_t r = 1; r < residency.wantedCount(); ++r)  // the slots' predictions (other turns) too
+    if (std::find(walk_.begin(), walk_.end(), residency.wanted()[r]) == walk_.end()) walk_.push_back(residency.wanted()[r]);
+  if (!route) addWaysAhead(cell, horizon);
   {
     std::lock_guard<std::mutex> lock(mu_);
+    road_n_ = road;
     if (next_.empty() || next_.front() != walk_.front()) ++plan_id_;
     next_.assign(walk_.begin(), walk_.end());
     wanted_.assign(residency.wanted(), residency.wanted() + residency.wantedCount());
@@ -59,17 +107,18 @@ bool LinkPrefetch::cellCached(uint32_t cell, std::vector<uint32_t>& scratch) con
   return std::all_of(scratch.begin(), scratch.end(), [&](uint32_t b) { return remote_->cached(b); });
 }
 
-double LinkPrefetch::measureAhead(const std::vector<uint32_t>& cells, std::vector<uint32_t>& scratch) const {
+double LinkPrefetch::measureAhead(const std::vector<uint32_t>& cells, size_t road, std::vector<uint32_t>& scratch) const {
   double m = 0;
-  for (const uint32_t c : cells) {
-    if (!cellCached(c, scratch)) break;
-    m += city_.streets().halfedge(c).length;
+  for (size_t i = 0; i < road && i < cells.size(); ++i) {
+    if (!cellCached(cells[i], scratch)) break;
+    m += city_.streets().halfedge(cells[i]).length;
   }
   return m;
 }
 
 void LinkPrefetch::run() {
   std::vector<uint32_t> cells, wanted, scratch;
+  size_t road = 0;
   uint64_t seen = ~0ull;
   std::string err;
   auto last_request = std::chrono::steady_clock::now();
@@ -82,6 +131,7 @@ void LinkPrefetch::run() {
       if (stop_) return;
       cells = next_;
       wanted = wanted_;
+      road = road_n_;
       seen = id = plan_id_;
     }
     const uint64_t budget = remote_->stats().cache_bytes_max / 2;
@@ -97,9 +147,9 @@ void LinkPrefetch::run() {
       for (const uint32_t b : scratch) planned += remote_->blobInfo(b).size;
       if (planned > budget) break;
       if (remote_->fetchBlobs(scratch.data(), scratch.size(), err, true) != core::Status::Ok) break;  // the link: later
-      cached_ahead_m_.store(measureAhead(cells, scratch), std::memory_order_relaxed);
+      cached_ahead_m_.store(measureAhead(cells, road, scratch), std::memory_order_relaxed);
     }
-    cached_ahead_m_.store(measureAhead(cells, scratch), std::memory_order_relaxed);
+    cached_ahead_m_.store(measureAhead(cells, road, scratch), std::memory_order_relaxed);
     const uint64_t requests = remote_->stats().link.requests;
     if (requests != last_requests) {
       last_requests = requests, last_request = std::chrono::steady_clock::now();

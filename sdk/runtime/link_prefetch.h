@@ -1,5 +1,6 @@
 // Prefetch planned by the link, for a package on a server: the blobs of the
-// cells ahead along the route are fetched into the disk cache, further than
+// cells ahead along the route (without one: every way ahead, breadth first;
+// straight on is the road cachedAheadM() measures) are fetched into the disk cache, further than
 // the cell slots reach, so that the drive rides through a tunnel and the
 // slots' loads find their data on disk (Marvie et al. §4: prefetch the cells
 // ahead, release the furthest; the disk cache's LRU releases).
@@ -9,8 +10,9 @@
 // blob cache's bytes, so the prefetch never evicts what it fetched. A slow
 // link thus looks further ahead: each cell takes longer to arrive.
 //
-// Threads: plan() on the render thread (a mutex for a copy of a few hundred
-// ids, no allocation after the first frames); the fetching on a thread of its
+// Threads: plan() on the render thread, when the cell changes and every 32
+// frames (a mutex for a copy of a few hundred ids, no allocation after the
+// first frames); the fetching on a thread of its
 // own, which yields the link to the loader's requests (RemotePackage's
 // foreground first). Online only: metered and offline fetch nothing here.
 // Online with nothing fetched for kRevalidateS, it asks the server whether
@@ -50,8 +52,10 @@ class LinkPrefetch {
 
  private:
   void run();
+  void addWaysAhead(uint32_t cell, double horizon);
   bool cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const;
-  double measureAhead(const std::vector<uint32_t>& cells, std::vector<uint32_t>& scratch) const;
+  // Metres of cells[0 .. road) cached in a row from the first.
+  double measureAhead(const std::vector<uint32_t>& cells, size_t road, std::vector<uint32_t>& scratch) const;
 
   const stream::City& city_;
   remote::RemotePackage* remote_;
@@ -59,8 +63,12 @@ class LinkPrefetch {
   std::condition_variable cv_;
   std::vector<uint32_t> next_;    // the newest plan: the road ahead, in order (under mu_)
   std::vector<uint32_t> wanted_;  // its cells the slots load themselves: not fetched here (under mu_)
+  size_t road_n_ = 0;             // next_[0 .. road_n_) is the road ahead, the rest other turns (under mu_)
   uint64_t plan_id_ = 0;        // bumped when the plan's first cell changes
   std::vector<uint32_t> walk_;  // plan() scratch, render thread
+  std::vector<std::pair<uint32_t, double>> ways_;  // addWaysAhead's queue: cell, metres to its start
+  uint32_t planned_cell_ = graph::kNone;
+  uint32_t frames_since_plan_ = 0;
   double avg_cell_bytes_ = 0;   // render thread
   bool stop_ = false;
   std::atomic<double> cached_ahead_m_{0}, horizon_m_{0};

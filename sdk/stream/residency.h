@@ -48,6 +48,7 @@ class Residency {
   // the route position update() last found, else the first of all.
   uint32_t nextOnRoute(uint32_t cell) const;
   size_t wantedCount() const { return wanted_n_; }
+  bool hasRoute() const { return route_n_ > 0; }
   // Rank of `cell` in wanted() or kNone.
   uint32_t rank(uint32_t cell) const;
 

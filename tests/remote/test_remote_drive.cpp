@@ -190,3 +190,30 @@ TEST_F(RemoteDriveTest, TheLinkPrefetchesTheRouteAheadBeyondTheCellSlots) {
               s.prefetch_horizon_m, (unsigned long long)(s.link_requests - requests));
   EXPECT_EQ(s.load_errors, 0u);
 }
+
+TEST_F(RemoteDriveTest, WithoutARouteThePrefetchFetchesEveryWayAheadPastTheSlots) {
+  const Drive dr = impostorDrive(40, 15.0);
+  const std::string url = nginx_->url("/monaco.blvd"), cache = work_ + "/straight";
+  const blvd_runtime_desc d = urlDesc(url, cache, 64ull << 20);
+  Rt r;
+  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+  wholeFrame(r.rt, dr.poses[0], d);
+  blvd_stats s = stats(r.rt);
+  // Until the link goes quiet: every way within the horizon fetched.
+  for (uint64_t last = ~0ull; s.link_requests != last;) {
+    last = s.link_requests;
+    for (int k = 0; k < 50; ++k) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      wholeFrame(r.rt, dr.poses[0], d);
+    }
+    s = stats(r.rt);
+  }
+  std::printf("no route: %.0f m straight on cached, horizon %.0f m, %llu requests, %.2f MB cached\n", s.cached_ahead_m,
+              s.prefetch_horizon_m, (unsigned long long)s.link_requests, double(s.cache_bytes) / 1e6);
+  // The slots hold 4 cells; the ways within 400 m are many more.
+  std::vector<uint32_t> blobs;
+  uint64_t four_cells = 0;
+  for (uint32_t k = 0; k < 4; ++k) four_cells += cellBlobBytes(dr.cells[k], blobs);
+  EXPECT_GT(s.cache_bytes, 767568 + 2 * four_cells);
+  EXPECT_EQ(s.load_errors, 0u);
+}
