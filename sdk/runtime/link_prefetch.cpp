@@ -102,15 +102,10 @@ void LinkPrefetch::plan(uint32_t cell, const stream::Residency& residency, doubl
   cv_.notify_one();
 }
 
-bool LinkPrefetch::cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const {
-  city_.cellBlobs(cell, nullptr, 0, scratch);
-  return std::all_of(scratch.begin(), scratch.end(), [&](uint32_t b) { return remote_->cached(b); });
-}
-
 double LinkPrefetch::measureAhead(const std::vector<uint32_t>& cells, size_t road, std::vector<uint32_t>& scratch) const {
   double m = 0;
   for (size_t i = 0; i < road && i < cells.size(); ++i) {
-    if (!cellCached(cells[i], scratch)) break;
+    if (!city_.cellCached(cells[i], scratch)) break;
     m += city_.streets().halfedge(cells[i]).length;
   }
   return m;

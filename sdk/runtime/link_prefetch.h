@@ -53,7 +53,6 @@ class LinkPrefetch {
  private:
   void run();
   void addWaysAhead(uint32_t cell, double horizon);
-  bool cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const;
   // Metres of cells[0 .. road) cached in a row from the first.
   double measureAhead(const std::vector<uint32_t>& cells, size_t road, std::vector<uint32_t>& scratch) const;
 

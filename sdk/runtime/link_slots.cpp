@@ -18,8 +18,7 @@ bool CellSlots::mayFetch(uint32_t cell, uint32_t r) {
     if (w.cell == cell && now < w.until) return false;
   const remote::LinkMode mode = rp->mode();
   if (mode == remote::LinkMode::Online || (mode == remote::LinkMode::Metered && r <= 1)) return true;
-  city_.cellBlobs(cell, nullptr, 0, blob_scratch_);
-  return std::all_of(blob_scratch_.begin(), blob_scratch_.end(), [&](uint32_t b) { return rp->cached(b); });
+  return city_.cellCached(cell, blob_scratch_);
 }
 
 void CellSlots::pinWanted(const stream::Residency& residency) {

@@ -87,6 +87,12 @@ void City::cellBlobs(uint32_t cell, const uint32_t* skip, uint32_t skip_count, s
   for (uint32_t j = 0; j < layered + single; ++j) out.push_back(layers[j].blob);
 }
 
+bool City::cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const {
+  if (!remote_) return true;
+  cellBlobs(cell, nullptr, 0, scratch);
+  return std::all_of(scratch.begin(), scratch.end(), [&](uint32_t b) { return remote_->cached(b); });
+}
+
 core::Status City::blobBytes(uint32_t i, package::Span& s, std::vector<uint8_t>& hold, std::string& err) const {
   if (!remote_) return reader_.blob(i, s, err);
   const core::Status st = remote_->blob(i, hold, err);

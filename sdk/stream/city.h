@@ -57,6 +57,9 @@ class City {
   // Blobs cell `cell` draws (its non-empty local blocks but skip[0 ..
   // skip_count), its impostor layers) into out (cleared first).
   void cellBlobs(uint32_t cell, const uint32_t* skip, uint32_t skip_count, std::vector<uint32_t>& out) const;
+  // Whether every blob `cell` draws is in the disk cache (always, for a
+  // local package). `scratch` holds its blobs after.
+  bool cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const;
 
   const package::PackageReader& package() const { return reader_; }
   const package::PackageHeader& header() const { return reader_.header(); }

@@ -31,6 +31,23 @@ uint64_t cellBlobBytes(uint32_t cell, std::vector<uint32_t>& blobs) {
   return n;
 }
 
+// A runtime on `url` with a 64 MiB cache in `cache`, `route` set or not, its
+// first pose drawn whole.
+struct FirstFrame {
+  std::string url, cache;
+  blvd_runtime_desc d;
+  Rt r;
+  FirstFrame(std::string u, std::string c, const Drive& dr, bool route)
+      : url(std::move(u)), cache(std::move(c)), d(RemoteDriveTest::urlDesc(url, cache, 64ull << 20)) {
+    EXPECT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+    if (!r.rt) return;
+    if (route) {
+      EXPECT_EQ(blvd_set_route(r.rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
+    }
+    wholeFrame(r.rt, dr.poses[0], d);
+  }
+};
+
 }  // namespace
 
 TEST_F(RemoteDriveTest, AColdStartFetchesTheTablesAndTheFirstCellOnly) {
@@ -171,12 +188,10 @@ TEST_F(RemoteDriveTest, ADriveThroughABadLinkKeepsDrawingAndEndsWithTheSamePoses
 
 TEST_F(RemoteDriveTest, TheLinkPrefetchesTheRouteAheadBeyondTheCellSlots) {
   const Drive dr = impostorDrive(40, 15.0);
-  const std::string url = nginx_->url("/monaco.blvd"), cache = work_ + "/ahead";
-  const blvd_runtime_desc d = urlDesc(url, cache, 64ull << 20);
-  Rt r;
-  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
-  ASSERT_EQ(blvd_set_route(r.rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
-  wholeFrame(r.rt, dr.poses[0], d);
+  FirstFrame f(nginx_->url("/monaco.blvd"), work_ + "/ahead", dr, true);
+  ASSERT_TRUE(f.r.rt);
+  Rt& r = f.r;
+  const blvd_runtime_desc& d = f.d;
   blvd_stats s = stats(r.rt);
   EXPECT_GE(s.prefetch_horizon_m, 400.0);  // no speed from host-set poses: the least horizon
   // The slots hold 4 cells; the prefetch fills the disk cache along the route up to its horizon.
@@ -198,11 +213,10 @@ TEST_F(RemoteDriveTest, TheLinkPrefetchesTheRouteAheadBeyondTheCellSlots) {
 
 TEST_F(RemoteDriveTest, WithoutARouteThePrefetchFetchesEveryWayAheadPastTheSlots) {
   const Drive dr = impostorDrive(40, 15.0);
-  const std::string url = nginx_->url("/monaco.blvd"), cache = work_ + "/straight";
-  const blvd_runtime_desc d = urlDesc(url, cache, 64ull << 20);
-  Rt r;
-  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
-  wholeFrame(r.rt, dr.poses[0], d);
+  FirstFrame f(nginx_->url("/monaco.blvd"), work_ + "/straight", dr, false);
+  ASSERT_TRUE(f.r.rt);
+  Rt& r = f.r;
+  const blvd_runtime_desc& d = f.d;
   blvd_stats s = stats(r.rt);
   // Until the link goes quiet: every way within the horizon fetched.
   for (uint64_t last = ~0ull; s.link_requests != last;) {
