@@ -392,13 +392,17 @@ typedef struct blvd_stats {
   uint64_t cache_misses;          /* ... and not found there */
   uint64_t cache_bytes;           /* on disk now, table mirror included: never above cache_bytes */
   uint64_t link_waits;            /* cell loads whose data was not available (offline, link down): asked
-                                   * for again after 2 s, not counted in load_errors */
+                                   * for again after 2 s, not counted in load_errors; and frames drawn
+                                   * degraded because the map of where the vehicle is had not arrived */
   uint32_t package_changed;       /* 1: the package on the server was replaced since create */
   double cached_ahead_m;          /* road ahead along the route (the current cell's rest included) whose
                                    * cells are all in the disk cache: divided by the speed, the seconds a
                                    * drive can go without the link */
   double prefetch_horizon_m;      /* how far ahead the link prefetch fetches: the speed times 30 s plus
                                    * twice a cell's fetch time at the measured throughput, at least 400 m */
+  double cached_ahead_s;          /* cached_ahead_m at the vehicle's speed (0 when it has none) */
+  uint64_t link_table_bytes;      /* of link_bytes, the tables' (header, directory, table pages, blob index) */
+  uint64_t cache_evictions;       /* blobs the disk cache evicted to make room */
 } blvd_stats;
 
 /* Fills *stats up to stats->struct_size. Render thread. */

@@ -10,7 +10,6 @@ namespace blvd::graph {
 namespace {
 
 constexpr uint32_t kGridVersion = 1;
-constexpr size_t kGridHeaderBytes = 4 + 3 * 8 + 4 * 3;  // version, ox oy cell, nx ny entries
 
 int clampTo(int v, int n) { return v < 0 ? 0 : v >= n ? n - 1 : v; }
 

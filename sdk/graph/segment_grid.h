@@ -77,6 +77,7 @@ class SegmentGrid {
 // and that the section holds the offsets and entries it announces, and
 // returns where they start; it throws core::Error(Corrupt) naming the offset.
 std::vector<uint8_t> serializeSegmentGrid(const SegmentGrid& grid);
+inline constexpr size_t kGridHeaderBytes = 4 + 3 * 8 + 4 * 3;  // version, ox oy cell, nx ny entries
 struct StoredGrid {
   GridShape shape;
   uint32_t entries = 0;

@@ -31,9 +31,9 @@ constexpr uint32_t fourcc(char a, char b, char c, char d) {
 inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
 // 2.0: BLCK records carry the levels of detail, IMPO layers their vertex
 // counts, the header the pool sizing fields; 3.0: IMPO layers the run of the
-// cell they serve (docs/package-format.md).
+// cell they serve; 3.2: TPCR, a CRC per table page (docs/package-format.md).
 inline constexpr uint16_t kVersionMajor = 3;  // a reader opens only its own major
-inline constexpr uint16_t kVersionMinor = 1;  // minors add, never change (see spec)
+inline constexpr uint16_t kVersionMinor = 2;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
 inline constexpr uint32_t kSectionSpatialIndex = fourcc('S', 'I', 'D', 'X');  // graph spatial index
@@ -44,9 +44,10 @@ inline constexpr uint32_t kSectionVisibility = fourcc('P', 'V', 'S', 'A');    //
 inline constexpr uint32_t kSectionImpostors = fourcc('I', 'M', 'P', 'O');     // per-cell impostor layers
 inline constexpr uint32_t kSectionCellTableIndex = fourcc('C', 'T', 'I', 'X');  // per-cell PVSA/IMPO offsets
 inline constexpr uint32_t kSectionShard = fourcc('S', 'H', 'R', 'D');  // only in a bake shard file (bake/shard.h)
-// Written by PackageWriter itself; addSection() refuses these two tags.
+// Written by PackageWriter itself; addSection() refuses these three tags.
 inline constexpr uint32_t kSectionBlobIndex = fourcc('B', 'I', 'D', 'X');  // blob offset/size/crc table
 inline constexpr uint32_t kSectionBlobData = fourcc('B', 'D', 'A', 'T');   // the blobs themselves
+inline constexpr uint32_t kSectionTablePages = fourcc('T', 'P', 'C', 'R');  // a CRC per table page (table_pages.h)
 
 inline constexpr size_t kHeaderSize = 256;     // v1.0 header bytes; later minors may grow it
 inline constexpr size_t kDirEntrySize = 32;    // one directory entry

@@ -38,6 +38,9 @@ PackageReader& PackageReader::operator=(PackageReader&& o) noexcept {
     layout_ = o.layout_;
     sections_ = std::move(o.sections_);
     blobs_ = std::move(o.blobs_);
+    table_pages_ = std::move(o.table_pages_);
+    has_table_pages_ = o.has_table_pages_;
+    o.has_table_pages_ = false;
     o.data_ = nullptr;
     o.size_ = 0;
     o.mapped_ = false;
@@ -55,6 +58,7 @@ void PackageReader::close() {
   layout_ = HeaderLayout{};
   sections_.clear();
   blobs_.clear();
+  has_table_pages_ = false;
 }
 
 core::Status PackageReader::open(const std::string& path, PackageReader& out, std::string& err) {
@@ -153,6 +157,11 @@ core::Status PackageReader::validate(std::string& err) {
     if (s != core::Status::Ok) return s;
     dropPages(Span{data_ + index->offset, static_cast<size_t>(index->size), index->offset});  // parsed
   }
+  has_table_pages_ = false;
+  if (const Span t = section(kSectionTablePages); t.data) {
+    if ((s = parseTablePages(t.data, t.size, t.offset, sections_, name_, table_pages_, err)) != core::Status::Ok) return s;
+    has_table_pages_ = true;
+  }
   return core::Status::Ok;
 }
 
@@ -225,6 +234,25 @@ core::Status PackageReader::blob(uint32_t i, Span& out, std::string& err) const 
   return core::Status::Ok;
 }
 
+// Every table page against its CRC in TPCR (the sections' own CRCs passed:
+// a mismatch here is a wrong TPCR).
+core::Status PackageReader::verifyTablePages(std::string& err) const {
+  if (!has_table_pages_) return core::Status::Ok;
+  const Span t = section(kSectionTablePages);
+  const uint32_t page = table_pages_.page_bytes;
+  for (const TablePageRun& r : table_pages_.runs)
+    for (uint32_t k = 0; k < r.pages; ++k) {
+      const uint64_t at = r.section_offset + uint64_t(k) * page;
+      const uint32_t want = tablePageCrc(t.data, r, k);
+      const uint32_t got = crc32c(data_ + at, static_cast<size_t>(std::min<uint64_t>(page, r.section_offset + r.section_size - at)));
+      if (got != want) {
+        err = crcMismatch(name_, "section " + tagToString(r.tag) + " page " + std::to_string(k), at, want, got);
+        return core::Status::Corrupt;
+      }
+    }
+  return core::Status::Ok;
+}
+
 core::Status PackageReader::verify(std::string& err) const {
   if (!isOpen()) {
     err = "package reader is not open";
@@ -246,6 +274,7 @@ core::Status PackageReader::verify(std::string& err) const {
       return core::Status::Corrupt;
     }
   }
+  if ((s = verifyTablePages(err)) != core::Status::Ok) return s;
   Span unused;
   for (uint32_t i = 0; i < blobs_.size(); ++i) {
     s = blob(i, unused, err);

@@ -25,6 +25,7 @@
 
 #include "core/status.h"
 #include "package/format.h"
+#include "package/table_pages.h"
 
 namespace blvd::package {
 
@@ -64,6 +65,8 @@ class PackageReader {
   const std::string& name() const { return name_; }  // the path given to open()
   const PackageHeader& header() const { return layout_.header; }
   uint64_t fileSize() const { return size_; }
+  // The file offset of `p`, a pointer into the mapping.
+  uint64_t offsetOf(const uint8_t* p) const { return static_cast<uint64_t>(p - data_); }
   // Directory order, BIDX and BDAT included (for `blvd pack info`).
   const std::vector<SectionInfo>& sections() const { return sections_; }
 
@@ -75,6 +78,10 @@ class PackageReader {
   // The section's bytes after checking its CRC: NotFound when absent,
   // Corrupt (naming section and offset) when the CRC does not match.
   core::Status checkedSection(uint32_t tag, Span& out, std::string& err) const;
+
+  // The table page CRCs (TPCR, package 3.2), parsed at open; null in an older
+  // package. tablePageCrc() reads them from section(kSectionTablePages).
+  const TablePages* tablePages() const { return has_table_pages_ ? &table_pages_ : nullptr; }
 
   uint32_t blobCount() const { return static_cast<uint32_t>(blobs_.size()); }
   // Offset, size and CRC of blob `i` without reading it (for range clients and
@@ -102,6 +109,7 @@ class PackageReader {
 
  private:
   core::Status validate(std::string& err);
+  core::Status verifyTablePages(std::string& err) const;
 
   const uint8_t* data_ = nullptr;
   size_t size_ = 0;
@@ -110,6 +118,8 @@ class PackageReader {
   HeaderLayout layout_;
   std::vector<SectionInfo> sections_;
   std::vector<BlobInfo> blobs_;
+  TablePages table_pages_;
+  bool has_table_pages_ = false;
 };
 
 }  // namespace blvd::package

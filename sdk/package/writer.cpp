@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "package/format_detail.h"
+#include "package/table_pages.h"
 
 namespace blvd::package {
 
@@ -24,7 +25,8 @@ const uint8_t kZeros[kAlignment] = {};
 
 struct PackageWriter::Layout {
   std::vector<uint8_t> head;   // header + directory
-  std::vector<uint64_t> section_offsets;
+  std::vector<uint8_t> tpcr;   // table page CRCs, after the sections given
+  std::vector<uint64_t> section_offsets;  // the sections given, then TPCR
   std::vector<uint8_t> bidx;   // blob index section bytes
   uint64_t bidx_offset = 0;
   uint64_t bdat_offset = 0;
@@ -38,7 +40,7 @@ void PackageWriter::setHeader(const PackageHeader& header) {
 }
 
 void PackageWriter::addSection(uint32_t tag, std::vector<uint8_t> bytes) {
-  if (tag == kSectionBlobIndex || tag == kSectionBlobData)
+  if (tag == kSectionBlobIndex || tag == kSectionBlobData || tag == kSectionTablePages)
     throw core::Error(core::Status::InvalidArg,
                       "package section " + tagToString(tag) + " is written by PackageWriter itself");
   for (const Section& s : sections_)
@@ -66,9 +68,16 @@ uint32_t PackageWriter::addBlob(std::vector<uint8_t> bytes) {
 uint64_t PackageWriter::sectionBytes(uint32_t tag) const {
   if (tag == kSectionBlobIndex) return kBlobIndexPrefix + blobs_.size() * uint64_t{kBlobEntrySize};
   if (tag == kSectionBlobData) return bdat_size_;
+  if (tag == kSectionTablePages) return tablePages().size();
   for (const Section& s : sections_)
     if (s.tag == tag) return s.bytes.size();
   return 0;
+}
+
+std::vector<uint8_t> PackageWriter::tablePages() const {
+  std::vector<std::pair<uint32_t, const std::vector<uint8_t>*>> tables;
+  for (const Section& s : sections_) tables.emplace_back(s.tag, &s.bytes);
+  return encodeTablePages(tables);
 }
 
 uint64_t PackageWriter::fileBytes() const { return layout().file_size; }
@@ -78,13 +87,17 @@ PackageWriter::Layout PackageWriter::layout() const {
   namespace d = detail::dir;
   namespace b = detail::blob;
   Layout L;
-  const size_t n_dir = sections_.size() + 2;  // + BIDX + BDAT
+  L.tpcr = tablePages();
+  const size_t n_dir = sections_.size() + 3;  // + TPCR + BIDX + BDAT
   uint64_t pos = kHeaderSize + n_dir * kDirEntrySize;
   for (const Section& s : sections_) {
     pos = alignUp(pos);
     L.section_offsets.push_back(pos);
     pos += s.bytes.size();
   }
+  pos = alignUp(pos);
+  L.section_offsets.push_back(pos);
+  pos += L.tpcr.size();
   L.bidx_offset = alignUp(pos);
   const uint64_t bidx_size = sectionBytes(kSectionBlobIndex);
   L.bdat_offset = alignUp(L.bidx_offset + bidx_size);
@@ -111,9 +124,10 @@ PackageWriter::Layout PackageWriter::layout() const {
   };
   for (size_t i = 0; i < sections_.size(); ++i)
     entry(i, sections_[i].tag, L.section_offsets[i], sections_[i].bytes.size(), sections_[i].crc);
-  entry(sections_.size(), kSectionBlobIndex, L.bidx_offset, bidx_size,
-        crc32c(L.bidx.data(), L.bidx.size()));
-  entry(sections_.size() + 1, kSectionBlobData, L.bdat_offset, bdat_size_, bdat_crc_);
+  const size_t n = sections_.size();
+  entry(n, kSectionTablePages, L.section_offsets[n], L.tpcr.size(), crc32c(L.tpcr.data(), L.tpcr.size()));
+  entry(n + 1, kSectionBlobIndex, L.bidx_offset, bidx_size, crc32c(L.bidx.data(), L.bidx.size()));
+  entry(n + 2, kSectionBlobData, L.bdat_offset, bdat_size_, bdat_crc_);
 
   uint8_t* hp = L.head.data();
   std::memcpy(hp + h::kMagic, kMagic, sizeof kMagic);
@@ -180,6 +194,8 @@ void PackageWriter::emit(Sink&& sink) const {
     padTo(L.section_offsets[i]);
     out(sections_[i].bytes);
   }
+  padTo(L.section_offsets[sections_.size()]);
+  out(L.tpcr);
   padTo(L.bidx_offset);
   out(L.bidx);
   for (const Blob& b : blobs_) {

@@ -21,7 +21,8 @@ class PackageWriter {
   const PackageHeader& header() const { return header_; }
 
   // Adds a section. Throws core::Error(InvalidArg) when `tag` was added before
-  // or is BIDX/BDAT (the writer owns those). Sections are laid out in the order
+  // or is TPCR/BIDX/BDAT (the writer owns those: TPCR, a CRC per page of every
+  // section added, goes after them). Sections are laid out in the order
   // they are added, so put the small ones a remote client wants first.
   void addSection(uint32_t tag, std::vector<uint8_t> bytes);
 
@@ -34,7 +35,7 @@ class PackageWriter {
   const std::vector<uint8_t>& blob(uint32_t i) const { return blobs_.at(i).bytes; }
 
   // Bytes the section will occupy without padding; for BIDX and BDAT the size
-  // the writer will give them; 0 for a tag that was not added.
+  // (and TPCR) the writer will give them; 0 for a tag that was not added.
   uint64_t sectionBytes(uint32_t tag) const;
   // Size of the file write() produces.
   uint64_t fileBytes() const;
@@ -61,6 +62,7 @@ class PackageWriter {
   };
   struct Layout;
   Layout layout() const;
+  std::vector<uint8_t> tablePages() const;  // TPCR over the sections given
   template <typename Sink>
   void emit(Sink&& sink) const;
 

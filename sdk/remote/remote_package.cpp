@@ -3,9 +3,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <thread>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "remote/table_mirror.h"
 
@@ -19,7 +24,7 @@ std::string hex(uint64_t v, int digits) {
   return buf;
 }
 
-bool linkDown(core::Status st) { return st == core::Status::Io || st == core::Status::Timeout; }
+bool linkFailed(core::Status st) { return st == core::Status::Io || st == core::Status::Timeout; }
 
 const SectionInfo* findSection(const std::vector<SectionInfo>& sections, uint32_t tag) {
   for (const SectionInfo& s : sections)
@@ -56,10 +61,11 @@ core::Status RemotePackage::readHead(const RemoteOptions& opt, std::vector<uint8
       file_size = client_->resourceBytes() ? client_->resourceBytes() : head.size();
       return st;
     }
-    if (!linkDown(st)) return st;
+    if (!linkFailed(st)) return st;
   }
   if (!mirror_.empty() && readMirrorHead(mirror_, kFirstRead, head, file_size)) {
     offline_start_ = true;
+    if (st != core::Status::Unavailable) markLinkDown();
     return core::Status::Ok;
   }
   if (st == core::Status::Unavailable) err = url_ + ": offline, and no tables cached in " + opt.cache_path;
@@ -83,8 +89,13 @@ core::Status RemotePackage::openTables(const std::vector<uint8_t>& head, std::st
     const bool same = readMirrorHead(mirror_, dir_end, have, have_size) && have_size == layout_.file_size &&
                       std::equal(have.begin(), have.end(), head.begin(), head.begin() + long(dir_end));
     if (!same && offline_start_) return err = mirror_ + ": not the mirror of " + url_, core::Status::Corrupt;
-    if (!same && (st = writeMirror(*client_, mirror_, layout_.file_size, head, sections_, err)) != core::Status::Ok)
+    // With table page CRCs only TPCR and the blob index now; the other tables a page at a time.
+    const SectionInfo* tpcr = findSection(sections_, kSectionTablePages);
+    std::vector<SectionInfo> copy = sections_;
+    if (tpcr) copy = bidx ? std::vector<SectionInfo>{*tpcr, *bidx} : std::vector<SectionInfo>{*tpcr};
+    if (!same && (st = writeMirror(*client_, mirror_, layout_.file_size, head, copy, err)) != core::Status::Ok)
       return st;
+    if (tpcr && (st = openTablePages(*tpcr, err)) != core::Status::Ok) return st;
   }
   blobs_.clear();
   if (!bidx || !bdat) return core::Status::Ok;
@@ -96,6 +107,160 @@ core::Status RemotePackage::openTables(const std::vector<uint8_t>& head, std::st
     return st;
   }
   return parseBlobIndex(index.data(), index.size(), *bidx, *bdat, url_, blobs_, err);
+}
+
+core::Status RemotePackage::openTablePages(const SectionInfo& tpcr, std::string& err) {
+  if (!readMirror(mirror_, tpcr.offset, tpcr.size, tpcr_) || crc32c(tpcr_.data(), tpcr_.size()) != tpcr.crc)
+    return err = mirror_ + ": section TPCR at offset " + std::to_string(tpcr.offset) + ": CRC mismatch",
+           core::Status::Corrupt;
+  const core::Status st = parseTablePages(tpcr_.data(), tpcr_.size(), tpcr.offset, sections_, mirror_, table_pages_, err);
+  if (st != core::Status::Ok) return st;
+  mirror_fd_ = ::open(mirror_.c_str(), O_RDWR | O_CLOEXEC);
+  if (mirror_fd_ < 0) return err = mirror_ + ": cannot open: " + std::strerror(errno), core::Status::Io;
+  tables_complete_ = false;
+  return core::Status::Ok;
+}
+
+RemotePackage::~RemotePackage() {
+  if (mirror_fd_ >= 0) ::close(mirror_fd_);
+}
+
+bool RemotePackage::pagePresent(const TablePageRun& run, uint32_t k) const {
+  thread_local std::vector<uint8_t> buf;
+  const uint64_t at = run.section_offset + uint64_t(k) * table_pages_.page_bytes;
+  const uint64_t n = std::min<uint64_t>(table_pages_.page_bytes, run.section_offset + run.section_size - at);
+  buf.resize(n);
+  return readMirrorAt(mirror_fd_, at, n, buf.data()) && crc32c(buf.data(), n) == tablePageCrc(tpcr_.data(), run, k);
+}
+
+// Pages [k0, k1) of a run, in one request: each checked, then written (a
+// page written twice by two threads gets the same bytes).
+core::Status RemotePackage::fetchTablePages(const TablePageRun& run, uint32_t k0, uint32_t k1, std::string& err,
+                                            bool background) {
+  const uint64_t page = table_pages_.page_bytes, begin = run.section_offset + k0 * page;
+  const uint64_t end = std::min(run.section_offset + k1 * page, run.section_offset + run.section_size);
+  if (mode() == LinkMode::Offline)
+    return err = url_ + ": section " + tagToString(run.tag) + " at offset " + std::to_string(begin) +
+                 ": table page not cached and the link is offline",
+           core::Status::Unavailable;
+  std::vector<uint8_t> bytes;
+  core::Status st = onLink(background, end - begin, [&] { return client_->fetch(begin, end - begin, bytes, err); });
+  if (st != core::Status::Ok) return st;
+  for (uint32_t k = k0; k < k1; ++k) {
+    const uint64_t at = (k - k0) * page, n = std::min<uint64_t>(page, bytes.size() - at);
+    if (crc32c(bytes.data() + at, n) != tablePageCrc(tpcr_.data(), run, k))
+      return err = url_ + ": section " + tagToString(run.tag) + " page " + std::to_string(k) + " at offset " +
+                   std::to_string(begin + at) + ": CRC mismatch",
+             core::Status::Corrupt;
+  }
+  if (!writeMirrorAt(mirror_fd_, begin, bytes.data(), bytes.size()))
+    return err = mirror_ + ": cannot write " + std::to_string(bytes.size()) + " bytes at offset " +
+                 std::to_string(begin) + ": " + std::strerror(errno),
+           core::Status::Io;
+  table_pages_fetched_.fetch_add(k1 - k0, std::memory_order_relaxed);
+  table_bytes_.fetch_add(bytes.size(), std::memory_order_relaxed);
+  return core::Status::Ok;
+}
+
+core::Status RemotePackage::fillTables(std::string& err, const std::function<bool()>& stop) {
+  if (mirror_fd_ < 0 || tables_complete_.load(std::memory_order_relaxed)) return core::Status::Ok;
+  for (const TablePageRun& run : table_pages_.runs)
+    for (uint32_t k = 0; k < run.pages;) {
+      if (stop()) return core::Status::Ok;
+      if (pagePresent(run, k)) {
+        ++k;
+        continue;
+      }
+      uint32_t e = k + 1;
+      while (e < run.pages && e - k < kFillPages && !pagePresent(run, e)) ++e;
+      const core::Status st = fetchTablePages(run, k, e, err, true);
+      if (st != core::Status::Ok) return st;
+      k = e;
+    }
+  tables_complete_.store(true, std::memory_order_relaxed);
+  return core::Status::Ok;
+}
+
+bool RemotePackage::tablesWanted() const {
+  std::lock_guard<std::mutex> lock(wanted_mu_);
+  return wanted_n_ > 0;
+}
+
+void RemotePackage::clearWantedTables() {
+  std::lock_guard<std::mutex> lock(wanted_mu_);
+  wanted_n_ = 0;
+}
+
+bool RemotePackage::linkDown() const {
+  return std::chrono::steady_clock::now().time_since_epoch().count() < link_down_until_.load(std::memory_order_relaxed);
+}
+
+void RemotePackage::markLinkDown() {
+  const auto until = std::chrono::steady_clock::now() + kLinkDownS;
+  link_down_until_.store(until.time_since_epoch().count(), std::memory_order_relaxed);
+}
+
+bool RemotePackage::takeWantedTables(uint64_t* offset, uint64_t* size) {
+  std::lock_guard<std::mutex> lock(wanted_mu_);
+  if (wanted_n_ == 0) return false;
+  *offset = wanted_[0].first, *size = wanted_[0].second;
+  std::copy(wanted_ + 1, wanted_ + wanted_n_, wanted_);
+  --wanted_n_;
+  return true;
+}
+
+// Whether every page of [offset, offset + size) is in the mirror and whole.
+bool RemotePackage::tablesPresent(uint64_t offset, uint64_t size) const {
+  const uint64_t page = table_pages_.page_bytes, end = offset + size;
+  for (uint64_t at = offset; at < end;) {
+    const TablePageRun* run = table_pages_.find(at);
+    if (!run) return true;
+    const uint64_t run_end = std::min(end, run->section_offset + run->section_size);
+    for (uint64_t k = (at - run->section_offset) / page; k <= (run_end - 1 - run->section_offset) / page; ++k)
+      if (!pagePresent(*run, uint32_t(k))) return false;
+    at = run_end;
+  }
+  return true;
+}
+
+core::Status RemotePackage::askForTables(uint64_t offset, uint64_t size, std::string& err) {
+  err = url_ + ": table bytes " + std::to_string(offset) + "-" + std::to_string(offset + size - 1);
+  if (mode() == LinkMode::Offline) return err += ": not cached and the link is offline", core::Status::Unavailable;
+  if (linkDown()) return err += ": not cached and the link is down", core::Status::Unavailable;
+  {
+    std::lock_guard<std::mutex> lock(wanted_mu_);
+    const auto range = std::make_pair(offset, size);
+    if (std::find(wanted_, wanted_ + wanted_n_, range) == wanted_ + wanted_n_ && wanted_n_ < std::size(wanted_))
+      wanted_[wanted_n_++] = range;
+  }
+  if (on_wanted_) on_wanted_();
+  return err += ": asked for over the link", core::Status::Unavailable;
+}
+
+core::Status RemotePackage::ensureTables(uint64_t offset, uint64_t size, std::string& err, bool wait) {
+  if (mirror_fd_ < 0 || size == 0) return core::Status::Ok;
+  if (!wait) return tablesPresent(offset, size) ? core::Status::Ok : askForTables(offset, size, err);
+  std::lock_guard<std::mutex> lock(table_mu_);
+  const uint64_t page = table_pages_.page_bytes, end = offset + size;
+  for (uint64_t at = offset; at < end;) {
+    const TablePageRun* run = table_pages_.find(at);
+    if (!run) return core::Status::Ok;  // TPCR, BIDX: in the mirror since open
+    const uint64_t run_end = std::min(end, run->section_offset + run->section_size);
+    const uint32_t k1 = uint32_t((run_end - 1 - run->section_offset) / page);
+    for (uint32_t k = uint32_t((at - run->section_offset) / page); k <= k1;) {
+      if (pagePresent(*run, k)) {
+        ++k;
+        continue;
+      }
+      uint32_t e = k + 1;
+      while (e <= k1 && !pagePresent(*run, e)) ++e;
+      const core::Status st = fetchTablePages(*run, k, e, err);
+      if (st != core::Status::Ok) return st;
+      k = e;
+    }
+    at = run_end;
+  }
+  return core::Status::Ok;
 }
 
 core::Status RemotePackage::openCache(const RemoteOptions& opt, std::string& err) {
@@ -118,6 +283,8 @@ core::Status RemotePackage::open(const std::string& url, const RemoteOptions& op
   mode_ = opt.mode;
   offline_start_ = false;
   mirror_bytes_ = 0;
+  if (mirror_fd_ >= 0) ::close(mirror_fd_);
+  mirror_fd_ = -1;
   client_ = std::make_unique<RangeClient>(url, opt.link);
   cache_.reset();
   std::vector<uint8_t> head;
@@ -140,6 +307,7 @@ core::Status RemotePackage::open(const std::string& url, const RemoteOptions& op
   {
     std::lock_guard<std::mutex> lock(stats_mu_);
     link_stats_ = client_->stats();
+    table_bytes_ = link_stats_.bytes;  // open reads nothing but tables
   }
   return st == core::Status::Ok ? openCache(opt, err) : st;
 }
@@ -178,6 +346,7 @@ core::Status RemotePackage::onLink(bool background, uint64_t bytes, F&& f) {
     link_stats_ = client_->stats();
     changed_.store(client_->changed(), std::memory_order_relaxed);
   }
+  if (linkFailed(st)) markLinkDown();
   if (!background) foreground_.fetch_sub(1, std::memory_order_relaxed);
   return st;
 }
@@ -288,6 +457,7 @@ RemoteStats RemotePackage::stats() const {
   s.cache_bytes += mirror_bytes_;
   s.throughput_bps = throughput_bps_;
   s.offline_start = offline_start_;
+  s.table_bytes = table_bytes_.load(std::memory_order_relaxed);
   return s;
 }
 

@@ -13,6 +13,12 @@
 // with one byte different differ in identity; the cache is keyed by it. Every
 // section and blob is CRC-checked before it is returned or cached.
 //
+// A package with table page CRCs (TPCR, package 3.2) is mirrored lazily:
+// open copies only its TPCR and blob index, and ensureTables() fetches the
+// table pages a reader is about to read, each checked against its CRC before
+// it is written into the mirror and each time it is found there. A cold start
+// then costs what the first cell reads, not every table.
+//
 // Offline (LinkMode::Offline, or a link that fails at open while a mirror is
 // there) the package opens from the mirror and serves cached blobs only: a
 // blob that is not cached is Status::Unavailable, never a wait.
@@ -21,6 +27,8 @@
 // cached blob is served while another thread waits on the link.
 #pragma once
 #include <atomic>
+#include <chrono>
+#include <functional>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -29,6 +37,7 @@
 
 #include "core/status.h"
 #include "package/format.h"
+#include "package/table_pages.h"
 #include "remote/disk_cache.h"
 #include "remote/range_client.h"
 
@@ -57,12 +66,18 @@ struct RemoteStats {
   uint64_t mirror_bytes = 0;   // of which the table mirror
   uint64_t cache_bytes_max = 0;  // what the blob cache may hold (cache_bytes less the mirror)
   double throughput_bps = 0;   // bytes per second of recent fetches (0 until one)
+  uint64_t table_bytes = 0;    // of link.bytes, the tables' (open, table pages)
   bool changed = false;        // the package on the server is not this one any more
   bool offline_start = false;  // opened from the mirror: the link failed or the mode is offline
 };
 
 class RemotePackage {
  public:
+  RemotePackage() = default;
+  ~RemotePackage();
+  RemotePackage(const RemotePackage&) = delete;
+  RemotePackage& operator=(const RemotePackage&) = delete;
+
   // Io/NotFound when the link or the server fails, Corrupt when what arrives
   // is not a package (err names the URL and the offset), Unsupported for
   // another major version.
@@ -79,6 +94,39 @@ class RemotePackage {
   const std::vector<SectionInfo>& sections() const { return sections_; }
   uint32_t blobCount() const { return uint32_t(blobs_.size()); }
   const BlobInfo& blobInfo(uint32_t i) const { return blobs_[i]; }
+
+  // Whether the mirror fills a table page at a time (ensureTables).
+  bool lazyTables() const { return mirror_fd_ >= 0; }
+  // Makes the mirror hold file bytes [offset, offset + size) of a table
+  // section: each table page they touch is read from the mirror and checked
+  // against its CRC; those missing or wrong are fetched (neighbours in one
+  // request, foreground on the link), checked and written. Unavailable
+  // offline when one is missing; Corrupt when the server's fails its CRC; the
+  // link's status otherwise. Ok at once for an eager mirror or bytes outside
+  // every table section.
+  // Without `wait` (the render thread: a frame never waits for the link) a
+  // missing page is not fetched here but asked for (tablesWanted(); the link
+  // prefetch's thread fetches it) and the call is Unavailable at once.
+  core::Status ensureTables(uint64_t offset, uint64_t size, std::string& err, bool wait = true);
+  // The oldest range a caller that would not wait asked for, if any.
+  bool takeWantedTables(uint64_t* offset, uint64_t* size);
+  bool tablesWanted() const;
+  void clearWantedTables();  // the link failed: a frame asks again
+  // Whether a request failed for the link (not the server) in the last
+  // kLinkDownS: a frame's missing table page is then not even asked for.
+  bool linkDown() const;
+  static constexpr std::chrono::seconds kLinkDownS{2};
+  // Called (on the asking thread) when a range is asked for.
+  void onTablesWanted(std::function<void()> f) { on_wanted_ = std::move(f); }
+  // Fetches every table page the mirror lacks, background priority on the
+  // link, a few pages a request, until done or stop() says so (checked
+  // between requests): a car that has the first frame completes its map
+  // for when the link goes. The link's status.
+  core::Status fillTables(std::string& err, const std::function<bool()>& stop);
+  // Whether fillTables() found every table page there (an eager mirror always).
+  bool tablesComplete() const { return mirror_fd_ < 0 || tables_complete_.load(std::memory_order_relaxed); }
+  // Table pages fetched since open.
+  uint64_t tablePagesFetched() const { return table_pages_fetched_.load(std::memory_order_relaxed); }
 
   // A section's bytes, CRC-checked (NotFound when the package has none).
   core::Status section(uint32_t tag, std::vector<uint8_t>& out, std::string& err);
@@ -118,6 +166,12 @@ class RemotePackage {
                             std::vector<uint8_t>& out, std::string& err);
   core::Status readHead(const RemoteOptions& opt, std::vector<uint8_t>& head, uint64_t& file_size, std::string& err);
   core::Status openTables(const std::vector<uint8_t>& head, std::string& err);
+  core::Status openTablePages(const SectionInfo& tpcr, std::string& err);  // TPCR from the mirror; its descriptor
+  bool pagePresent(const package::TablePageRun& run, uint32_t k) const;  // in the mirror and whole
+  bool tablesPresent(uint64_t offset, uint64_t size) const;
+  core::Status askForTables(uint64_t offset, uint64_t size, std::string& err);  // Unavailable
+  core::Status fetchTablePages(const package::TablePageRun& run, uint32_t k0, uint32_t k1, std::string& err,
+                               bool background = false);
   core::Status openCache(const RemoteOptions& opt, std::string& err);
   core::Status fetchRun(const uint32_t* run, size_t n, std::string& err, bool background);  // ids by offset
   // Runs f (a request) holding the link; a foreground caller goes before
@@ -133,6 +187,19 @@ class RemotePackage {
   std::vector<BlobInfo> blobs_;
   std::atomic<LinkMode> mode_{LinkMode::Online};
   uint64_t mirror_bytes_ = 0;
+  package::TablePages table_pages_;
+  std::vector<uint8_t> tpcr_;  // TPCR's bytes (4 per table page)
+  int mirror_fd_ = -1;         // the mirror, read and written a page at a time when lazy
+  std::mutex table_mu_;        // one foreground ensureTables() at a time (taken before link_mu_)
+  std::atomic<bool> tables_complete_{false};
+  mutable std::mutex wanted_mu_;  // the ranges below
+  std::pair<uint64_t, uint64_t> wanted_[16];
+  size_t wanted_n_ = 0;
+  std::function<void()> on_wanted_;
+  std::atomic<int64_t> link_down_until_{0};  // steady_clock ticks
+  void markLinkDown();
+  static constexpr uint32_t kFillPages = 4;  // 16 KiB a request: 2.3 s of a 56 kbit/s link in front of a frame's page
+  std::atomic<uint64_t> table_pages_fetched_{0}, table_bytes_{0};
   bool offline_start_ = false;
   mutable std::mutex cache_mu_, link_mu_;  // cache_ and client_; when both, cache_mu_ first
   mutable std::mutex stats_mu_;            // the snapshot below

@@ -116,3 +116,11 @@ bool readMirror(const std::string& path, uint64_t offset, uint64_t size, std::ve
 }
 
 }  // namespace blvd::remote
+
+namespace blvd::remote {
+
+bool readMirrorAt(int fd, uint64_t offset, uint64_t size, uint8_t* out) { return preadAll(fd, out, size, offset); }
+
+bool writeMirrorAt(int fd, uint64_t offset, const uint8_t* p, uint64_t size) { return pwriteAll(fd, p, size, offset); }
+
+}  // namespace blvd::remote

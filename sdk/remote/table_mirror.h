@@ -28,8 +28,10 @@ std::vector<std::pair<uint64_t, uint64_t>> mirrorRanges(const std::vector<packag
 // Bytes the mirror holds on disk: `head` plus the ranges.
 uint64_t mirrorBytes(const std::vector<package::SectionInfo>& sections, uint64_t head);
 
-// Writes the mirror at `path`: `head` at offset 0, then each range fetched
-// through `client` in pieces of at most 4 MiB. Io when the disk refuses (a
+// Writes the mirror at `path`: `head` at offset 0, then each range of
+// `sections` (mirrorRanges) fetched through `client` in pieces of at most
+// 4 MiB. A package with table page CRCs gets only its TPCR and BIDX here; its
+// other tables arrive a page at a time (RemotePackage::ensureTables). Io when the disk refuses (a
 // full disk: the temporary is removed), or the link's status.
 core::Status writeMirror(RangeClient& client, const std::string& path, uint64_t file_size,
                          const std::vector<uint8_t>& head, const std::vector<package::SectionInfo>& sections,
@@ -40,6 +42,9 @@ core::Status writeMirror(RangeClient& client, const std::string& path, uint64_t 
 bool readMirrorHead(const std::string& path, size_t n, std::vector<uint8_t>& out, uint64_t& file_size);
 
 // Bytes [offset, offset + size) of the mirror; false when it is short.
+// The *At forms use an open descriptor.
+bool readMirrorAt(int fd, uint64_t offset, uint64_t size, uint8_t* out);
+bool writeMirrorAt(int fd, uint64_t offset, const uint8_t* p, uint64_t size);
 bool readMirror(const std::string& path, uint64_t offset, uint64_t size, std::vector<uint8_t>& out);
 
 }  // namespace blvd::remote

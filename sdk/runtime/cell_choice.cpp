@@ -9,7 +9,14 @@ uint32_t CellChoice::choose(glm::dvec2 p, double heading_deg, double& arc_m) {
   }
   double cost = 0;
   uint32_t cell = city_.nearestCell(p, heading_deg, &arc_m, &cost);
-  if (cell != graph::kNone) cell = continued(cell, cost, p, heading_deg, arc_m);
+  try {
+    if (cell != graph::kNone) cell = continued(cell, cost, p, heading_deg, arc_m);
+  } catch (const core::Error& e) {
+    // The last cell's table pages are not here (a package on a server) and
+    // the link cannot bring them now: the nearest cell, without the
+    // stickiness. When it can, the frame waits for them like any other page.
+    if (e.status() != core::Status::Unavailable || city_.linkMayBringTables()) throw;
+  }
   last_cell_ = cell;
   has_last_pose_ = true, last_p_ = p, last_heading_ = heading_deg, last_arc_ = arc_m;
   return cell;

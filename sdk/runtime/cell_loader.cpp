@@ -350,7 +350,28 @@ void CellLoader::measured(const Staging& s, bool impostor, double units, int64_t
   }
 }
 
+// A package on a server reads its tables over the link too: a read that
+// cannot (offline, a bad record) throws, and fails the cell as a decode
+// error would.
 bool CellLoader::decode(Staging& s) {
+  try {
+    return decodeCell(s);
+  } catch (const core::Error& e) {
+    return markFailed(s, e.what(), e.status());
+  }
+}
+
+bool CellLoader::markFailed(Staging& s, const std::string& what, core::Status st) {
+  std::snprintf(s.error, sizeof s.error, "cell %u: %s", s.cell, what.c_str());
+  const remote::RemotePackage* r = city_.remote();
+  std::lock_guard<std::mutex> lock(mu_);
+  s.unavailable = r && (st == core::Status::Unavailable || st == core::Status::Io || st == core::Status::Timeout ||
+                        r->changed());
+  s.state = Staging::Failed;
+  return true;
+}
+
+bool CellLoader::decodeCell(Staging& s) {
   s.arena.reset();  // the slot was free: release() / give_back() uncounted its bytes
   s.mesh_count = 0;
   s.uploaded = 0;
@@ -359,15 +380,7 @@ bool CellLoader::decode(Staging& s) {
   std::string err;
   // `st`: a link that is down, offline, or a package replaced on the server
   // makes the cell unavailable (asked for again later), not a load error.
-  auto fail = [&](const std::string& what, core::Status st = core::Status::Corrupt) {
-    std::snprintf(s.error, sizeof s.error, "cell %u: %s", s.cell, what.c_str());
-    const remote::RemotePackage* r = city_.remote();
-    std::lock_guard<std::mutex> lock(mu_);
-    s.unavailable = r && (st == core::Status::Unavailable || st == core::Status::Io ||
-                          st == core::Status::Timeout || r->changed());
-    s.state = Staging::Failed;
-    return true;
-  };
+  auto fail = [&](const std::string& what, core::Status st = core::Status::Corrupt) { return markFailed(s, what, st); };
   // An urgent copy took over (promote): give the slot back. Under mu_.
   auto give_back = [&] {
     unaccount(s);

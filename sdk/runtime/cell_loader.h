@@ -160,6 +160,8 @@ class CellLoader {
   void run(bool background);
   // False when the job was abandoned (its slot is then free again).
   bool decode(Staging& s);
+  bool decodeCell(Staging& s);  // decode() without its catch
+  bool markFailed(Staging& s, const std::string& what, core::Status st);  // Failed (unavailable when the link's)
   // Background jobs: waits for a gap between frames to fit a unit of `units`
   // (block: triangles + vertices; impostor: texels + triangles + vertices)
   // at the rate measured so far for its kind.

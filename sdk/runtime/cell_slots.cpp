@@ -87,7 +87,13 @@ void CellSlots::request(stream::Residency& residency, uint32_t cell) {
     for (size_t i = 0; i < slots_.size(); ++i) copy_sources_[i] = slots_[i].copy_refs > 0;
     const uint32_t v = residency.victim(slot_cells_.data(), slot_cells_.size(), r, copy_sources_.get());
     if (v == graph::kNone) break;
-    const uint32_t shared = sharedBlocks(c, v, copy_scratch_, skip_scratch_);
+    uint32_t shared;
+    try {
+      shared = sharedBlocks(c, v, copy_scratch_, skip_scratch_);
+    } catch (const core::Error& e) {
+      if (e.status() != core::Status::Unavailable) throw;
+      continue;  // its table pages are on their way over the link: asked for again next frame
+    }
     if (!loader_.request(c, v, c == cell, skip_scratch_, shared)) break;  // both staging arenas busy
     CellSlot& slot = slots_[v];
     if (slot.cell != graph::kNone) ++counters_.evictions;

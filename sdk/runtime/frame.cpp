@@ -21,16 +21,8 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   const auto t_frame = std::chrono::steady_clock::now();
   if (clock_) clock_->begin(monoNs(t_frame));
   loader_->keepOffCpu(::sched_getcpu());
-  double arc_m, speed;
-  const uint32_t cell = currentCell(arc_m, speed);
-  if (referenceMode()) {
-    draw_->ensureReferenceBlocks(*renderer_);
-  } else {
-    const uint64_t errors = slots_->counters().load_errors;
-    slots_->stream(*residency_, cell, arc_m, speed, desc_.upload_budget_ms);
-    if (slots_->counters().load_errors != errors) last_error = slots_->lastError();  // blvd_stats.load_errors
-    link_prefetch_->plan(cell, *residency_, speed);
-  }
+  double arc_m = 0;
+  const uint32_t cell = streamCell(arc_m);
   draw_->build(mode_, radius_m_, cell, arc_m, cam_, *slots_, budget_.get());
   render::FrameStats fs;
   render::RenderOptions ro;
@@ -50,6 +42,39 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   // The whole call counts against the target: streaming and uploads too.
   afterFrame(std::chrono::duration<double, std::milli>(t_drawn - t_frame).count(), fs, full_pixels, ro.scale);
   if (stats) writeFrameStats(stats, fs, cell);
+}
+
+// The cell the vehicle is in, its slots streamed. A package on a server may
+// not have the map of where the vehicle is yet (its table pages: offline, or
+// the link down): the frame then draws the last cell it drew, degraded.
+uint32_t Runtime::streamCell(double& arc_m) {
+  map_missing_ = false;
+  const stream::City::NoLinkWait no_wait;
+  try {
+    return streamSteps(arc_m, desc_.upload_budget_ms);
+  } catch (const Error& e) {
+    if (!mapMissing(e)) throw;
+    map_missing_ = true;
+    ++map_waits_;
+    last_error = e.what();
+    arc_m = 0;
+    return draw_->lastDrawnCell();
+  }
+}
+
+uint32_t Runtime::streamSteps(double& arc_m, double upload_budget_ms) {
+  double speed;
+  const uint32_t cell = currentCell(arc_m, speed);
+  speed_mps_ = speed;
+  if (referenceMode()) {
+    draw_->ensureReferenceBlocks(*renderer_);
+    return cell;
+  }
+  const uint64_t errors = slots_->counters().load_errors;
+  slots_->stream(*residency_, cell, arc_m, speed, upload_budget_ms);
+  if (slots_->counters().load_errors != errors) last_error = slots_->lastError();  // blvd_stats.load_errors
+  link_prefetch_->plan(cell, *residency_, speed);
+  return cell;
 }
 
 // One draw list for every view (Yilmaz et al. §3.4); each view only changes
@@ -120,7 +145,7 @@ void Runtime::writeFrameStats(blvd_frame_stats* out, const render::FrameStats& f
   s.cell = cell;
   s.impostor_layers = draw_->impostors();
   s.blocks_drawn = draw_->blocks();
-  s.flags = draw_->degraded() ? BLVD_FRAME_DEGRADED : 0;
+  s.flags = draw_->degraded() || map_missing_ ? BLVD_FRAME_DEGRADED : 0;
   std::memcpy(out, &s, std::min<size_t>(size, sizeof s));
 }
 

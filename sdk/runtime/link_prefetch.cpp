@@ -36,11 +36,13 @@ LinkPrefetch::LinkPrefetch(const stream::City& city) : city_(city), remote_(city
   for (uint32_t i = 0; i < remote_->blobCount(); ++i) total += remote_->blobInfo(i).size;
   // A cell's bytes, roughly: its blobs' share (local blocks and layers, a dozen or two).
   avg_cell_bytes_ = double(total) / double(blobs) * 12.0;
+  remote_->onTablesWanted([this] { cv_.notify_one(); });
   thread_ = std::thread([this] { run(); });
 }
 
 LinkPrefetch::~LinkPrefetch() {
   if (!thread_.joinable()) return;
+  remote_->onTablesWanted(nullptr);
   {
     std::lock_guard<std::mutex> lock(mu_);
     stop_ = true;
@@ -74,6 +76,17 @@ void LinkPrefetch::plan(uint32_t cell, const stream::Residency& residency, doubl
   // Again when the vehicle enters another cell, and now and then for a new horizon.
   if (cell == planned_cell_ && ++frames_since_plan_ < 32) return;
   planned_cell_ = cell, frames_since_plan_ = 0;
+  try {
+    planFrom(cell, residency, speed_mps);
+  } catch (const core::Error& e) {
+    // The road ahead's table pages are on their way (a frame never waits for
+    // them): planned again next frame.
+    if (e.status() != core::Status::Unavailable) throw;
+    planned_cell_ = graph::kNone;
+  }
+}
+
+void LinkPrefetch::planFrom(uint32_t cell, const stream::Residency& residency, double speed_mps) {
   const double measured = remote_->throughput();
   const double throughput = measured > 0 ? measured : 1e5;
   const double horizon_s = kOutageS + 2.0 * avg_cell_bytes_ / throughput;
@@ -111,6 +124,28 @@ double LinkPrefetch::measureAhead(const std::vector<uint32_t>& cells, size_t roa
   return m;
 }
 
+// The blobs of `cells` not wanted by the slots, in order, until the plan
+// changes, the link refuses or half the blob cache is planned.
+void LinkPrefetch::fetchAhead(const std::vector<uint32_t>& cells, const std::vector<uint32_t>& wanted, size_t road,
+                              uint64_t id, std::vector<uint32_t>& scratch, std::string& err) {
+  const uint64_t budget = remote_->stats().cache_bytes_max / 2;
+  uint64_t planned = 0;
+  for (const uint32_t c : cells) {
+    if (remote_->mode() != remote::LinkMode::Online || remote_->changed()) break;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (stop_ || plan_id_ != id) break;  // the vehicle moved on: plan again from its cell
+    }
+    if (std::find(wanted.begin(), wanted.end(), c) != wanted.end()) continue;  // the loader fetches it
+    city_.cellBlobs(c, nullptr, 0, scratch);
+    for (const uint32_t b : scratch) planned += remote_->blobInfo(b).size;
+    if (planned > budget) break;
+    if (remote_->fetchBlobs(scratch.data(), scratch.size(), err, true) != core::Status::Ok) break;  // the link: later
+    cached_ahead_m_.store(measureAhead(cells, road, scratch), std::memory_order_relaxed);
+  }
+  cached_ahead_m_.store(measureAhead(cells, road, scratch), std::memory_order_relaxed);
+}
+
 void LinkPrefetch::run() {
   std::vector<uint32_t> cells, wanted, scratch;
   size_t road = 0;
@@ -122,34 +157,36 @@ void LinkPrefetch::run() {
     uint64_t id = 0;
     {
       std::unique_lock<std::mutex> lock(mu_);
-      cv_.wait_for(lock, std::chrono::milliseconds(500), [&] { return stop_ || plan_id_ != seen; });
+      cv_.wait_for(lock, std::chrono::milliseconds(500),
+                   [&] { return stop_ || plan_id_ != seen || remote_->tablesWanted(); });
       if (stop_) return;
       cells = next_;
       wanted = wanted_;
       road = road_n_;
       seen = id = plan_id_;
     }
-    const uint64_t budget = remote_->stats().cache_bytes_max / 2;
-    uint64_t planned = 0;
-    for (const uint32_t c : cells) {
-      if (remote_->mode() != remote::LinkMode::Online || remote_->changed()) break;
-      {
-        std::lock_guard<std::mutex> lock(mu_);
-        if (stop_ || plan_id_ != id) break;  // the vehicle moved on: plan again from its cell
+    // Table pages a frame read and did not wait for first: the frames after it wait for them.
+    for (uint64_t offset, size; remote_->takeWantedTables(&offset, &size);)
+      if (remote_->ensureTables(offset, size, err) != core::Status::Ok) {
+        remote_->clearWantedTables();  // the link failed: the frames ask again
+        break;
       }
-      if (std::find(wanted.begin(), wanted.end(), c) != wanted.end()) continue;  // the loader fetches it
-      city_.cellBlobs(c, nullptr, 0, scratch);
-      for (const uint32_t b : scratch) planned += remote_->blobInfo(b).size;
-      if (planned > budget) break;
-      if (remote_->fetchBlobs(scratch.data(), scratch.size(), err, true) != core::Status::Ok) break;  // the link: later
-      cached_ahead_m_.store(measureAhead(cells, road, scratch), std::memory_order_relaxed);
+    try {
+      fetchAhead(cells, wanted, road, id, scratch, err);
+    } catch (const core::Error&) {
+      // A table page the link could not bring (offline, down): later.
     }
-    cached_ahead_m_.store(measureAhead(cells, road, scratch), std::memory_order_relaxed);
     const uint64_t requests = remote_->stats().link.requests;
+    const double idle = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_request).count();
+    const bool online = remote_->mode() == remote::LinkMode::Online && !remote_->changed();
     if (requests != last_requests) {
       last_requests = requests, last_request = std::chrono::steady_clock::now();
-    } else if (remote_->mode() == remote::LinkMode::Online && !remote_->changed() &&
-               std::chrono::steady_clock::now() - last_request > std::chrono::duration<double>(kRevalidateS)) {
+    } else if (online && !remote_->tablesComplete() && idle > kFillTablesIdleS) {
+      remote_->fillTables(err, [&] {
+        std::lock_guard<std::mutex> lock(mu_);
+        return stop_ || plan_id_ != id;
+      });
+    } else if (online && idle > kRevalidateS) {
       remote_->revalidate(err);
       last_request = std::chrono::steady_clock::now();
     }

@@ -15,8 +15,13 @@
 // first frames); the fetching on a thread of its
 // own, which yields the link to the loader's requests (RemotePackage's
 // foreground first). Online only: metered and offline fetch nothing here.
-// Online with nothing fetched for kRevalidateS, it asks the server whether
-// the package is still the same one (RemotePackage::revalidate).
+// It also fetches the table pages a frame found missing (a frame never
+// waits for the link: RemotePackage::ensureTables without waiting), first.
+// Online with nothing fetched for kFillTablesIdleS, it completes the table
+// mirror of a package whose tables arrive a page at a time (what the first
+// frames did not read: RemotePackage::fillTables), so that a drive on without
+// the link has its map; with nothing fetched for kRevalidateS, it asks the
+// server whether the package is still the same one (RemotePackage::revalidate).
 #pragma once
 #include <atomic>
 #include <condition_variable>
@@ -36,6 +41,7 @@ class LinkPrefetch {
   static constexpr double kMinAheadM = 400.0; // with no speed known (host-set poses)
   static constexpr size_t kMaxCells = 512;
   static constexpr double kRevalidateS = 60.0;  // online with nothing to fetch: is the package still this one?
+  static constexpr double kFillTablesIdleS = 5.0;  // online with nothing to fetch: the rest of the tables
 
   explicit LinkPrefetch(const stream::City& city);  // a thread only for a package on a server
   ~LinkPrefetch();
@@ -52,6 +58,9 @@ class LinkPrefetch {
 
  private:
   void run();
+  void planFrom(uint32_t cell, const stream::Residency& residency, double speed_mps);
+  void fetchAhead(const std::vector<uint32_t>& cells, const std::vector<uint32_t>& wanted, size_t road, uint64_t id,
+                  std::vector<uint32_t>& scratch, std::string& err);
   void addWaysAhead(uint32_t cell, double horizon);
   // Metres of cells[0 .. road) cached in a row from the first.
   double measureAhead(const std::vector<uint32_t>& cells, size_t road, std::vector<uint32_t>& scratch) const;

@@ -30,7 +30,11 @@ void CellSlots::pinWanted(const stream::Residency& residency) {
   pinned_cells_.assign(w, w + n);
   pin_scratch_.clear();
   for (const uint32_t c : pinned_cells_) {
-    city_.cellBlobs(c, nullptr, 0, blob_scratch_);
+    try {
+      city_.cellBlobs(c, nullptr, 0, blob_scratch_);
+    } catch (const core::Error&) {
+      continue;  // its table pages are not there (offline): nothing of it is cached to keep
+    }
     pin_scratch_.insert(pin_scratch_.end(), blob_scratch_.begin(), blob_scratch_.end());
   }
   rp->pin(pin_scratch_);

@@ -43,6 +43,27 @@ CellNeed cellNeed(const stream::City& city, uint32_t cell, stream::LayerInfo* la
   return n;
 }
 
+// The slab and staging from the header's pool sizing alone, for tables that
+// come over the link a page at a time (reading every cell would fetch them
+// all). A sum of the header's maxima bounds the most any one cell needs;
+// textures' mip chains at most 4/3 of their level 0 plus, per layer, a row
+// and a column of rounding (8 × (w + h) + 128 bytes); 64 bytes of alignment
+// per mesh. A cell past the header is refused by the loader's checks.
+static void planFromHeader(const stream::City& city, MemoryPlan& p) {
+  const package::PackageHeader& h = city.header();
+  const uint64_t v = uint64_t(h.max_cell_local_vertices) + h.max_cell_impostor_vertices;
+  const uint64_t t = uint64_t(h.max_cell_local_triangles) + h.max_cell_impostor_triangles;
+  const uint32_t meshes = h.max_cell_local_blocks * graph::kMaxBlockLods + h.max_cell_impostor_layers;
+  const uint64_t rounding = 8ull * (h.max_impostor_texture_width + h.max_impostor_texture_height) + 128;
+  p.slab.vertex_bytes = v * render::kVertexBytes;
+  p.slab.index_bytes = t * 3 * 4 + 3ull * meshes;
+  p.slab.meshes = meshes;
+  p.slab.textures = h.max_cell_impostor_layers;
+  p.staging_arena_bytes = p.slab.vertex_bytes + t * 3 * 4 + h.max_cell_impostor_texture_bytes * 4 / 3 +
+                          h.max_cell_impostor_layers * rounding + 64ull * meshes;
+  p.largest_cell = graph::kNone;
+}
+
 uint64_t stagingTableBytes(uint32_t meshes) { return uint64_t(meshes) * sizeof(StagedMesh); }
 
 MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
@@ -57,7 +78,8 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
     throw core::Error(core::Status::Corrupt, city.package().name() + ": header pool sizing is below the tables: " + what);
   };
   std::vector<stream::LayerInfo> layers(city.maxCellLayers());
-  for (uint32_t c = 0; c < city.streets().cellCount(); ++c) {
+  if (city.tablesOverLink()) planFromHeader(city, p);
+  for (uint32_t c = 0; !city.tablesOverLink() && c < city.streets().cellCount(); ++c) {
     if (city.streets().localBlocks(c).size() > p.max_local_blocks)
       corrupt("cell " + std::to_string(c) + " has more local blocks than the header says");
     const CellNeed n = cellNeed(city, c, layers.data());

@@ -154,23 +154,37 @@ void Runtime::setRoute(const uint32_t* cells, size_t n) {
                                         "exceeds route_capacity (" + std::to_string(desc_.route_capacity) + ")");
 }
 
+bool Runtime::mapMissing(const core::Error& e) const {
+  return e.status() == Status::Unavailable && city_.remote() && !referenceMode();
+}
+
+// Waits as frames would stream: the same steps, until the cell is resident
+// and every table page they read has arrived.
 void Runtime::waitResident(double timeout_ms) {
   if (!(timeout_ms >= 0)) throw Error(Status::InvalidArg, "blvd_wait_resident: timeout_ms must be >= 0");
   if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
   if (referenceMode()) return draw_->ensureReferenceBlocks(*renderer_);
-  double arc_m, speed;
-  const uint32_t cell = currentCell(arc_m, speed);
-  if (cell == graph::kNone) return;
   const auto t0 = std::chrono::steady_clock::now();
+  const stream::City::NoLinkWait no_wait;  // the map of where the vehicle is, waited for below
   const uint64_t errors = slots_->counters().load_errors;
   for (;;) {
-    slots_->stream(*residency_, cell, arc_m, speed, 1e9);  // waiting: no per-frame upload budget
-    if (slots_->resident(cell)) return;
+    uint32_t cell = graph::kNone;
+    std::string missing;
+    try {
+      double arc_m;
+      cell = streamSteps(arc_m, 1e9);  // waiting: no per-frame upload budget
+      if (cell == graph::kNone || slots_->resident(cell)) return;
+    } catch (const Error& e) {
+      if (!mapMissing(e)) throw;
+      missing = e.what();
+    }
     if (slots_->counters().load_errors != errors) throw Error(Status::Corrupt, slots_->lastError());
     if (msSince(t0) > timeout_ms)
-      throw Error(Status::Timeout, "cell " + std::to_string(cell) + " not resident after " +
-                                       std::to_string(timeout_ms) + " ms" +
-                                       (slots_->counters().link_waits ? ": " + slots_->lastError() : ""));
+      throw Error(Status::Timeout, (missing.empty() ? "cell " + std::to_string(cell) : std::string("the map")) +
+                                       " not resident after " + std::to_string(timeout_ms) + " ms" +
+                                       (!missing.empty()              ? ": " + missing
+                                        : slots_->counters().link_waits ? ": " + slots_->lastError()
+                                                                        : ""));
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
 }
@@ -204,7 +218,7 @@ void Runtime::stats(blvd_stats* out) const {
   s.prefetch_share_wait_ms = loader_->shareWaitMs();
   s.loader_cpu_ms = loader_->cpuMs(false);
   s.prefetch_cpu_ms = loader_->cpuMs(true);
-  s.link_waits = c.link_waits;
+  s.link_waits = c.link_waits + map_waits_;
   if (const remote::RemotePackage* r = city_.remote()) {
     const remote::RemoteStats rs = r->stats();
     s.link_requests = rs.link.requests;
@@ -216,6 +230,9 @@ void Runtime::stats(blvd_stats* out) const {
     s.package_changed = rs.changed ? 1 : 0;
     s.cached_ahead_m = link_prefetch_->cachedAheadM();
     s.prefetch_horizon_m = link_prefetch_->horizonM();
+    s.cached_ahead_s = speed_mps_ > 0.5 ? s.cached_ahead_m / speed_mps_ : 0.0;
+    s.link_table_bytes = rs.table_bytes;
+    s.cache_evictions = rs.cache.evictions;
   }
   std::memcpy(out, &s, std::min<size_t>(s.struct_size, sizeof s));
 }

@@ -75,6 +75,10 @@ class Runtime {
   void logPageCaches() const;
   // The camera from the tracker when it drives, then the current cell.
   uint32_t currentCell(double& arc_m, double& speed_mps);
+  uint32_t streamCell(double& arc_m);  // streamSteps, degraded when the map has not arrived (frame.cpp)
+  uint32_t streamSteps(double& arc_m, double upload_budget_ms);  // currentCell, its slots streamed, the link planned
+  // Whether `e` says the map (table pages of a package on a server) has not arrived.
+  bool mapMissing(const core::Error& e) const;
   void noteFeed(double t);
   bool referenceMode() const { return mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS; }
   // frame.cpp
@@ -86,6 +90,9 @@ class Runtime {
 
   blvd_runtime_desc desc_;
   stream::City city_;
+  bool map_missing_ = false;  // this frame's map (table pages) had not arrived: degraded
+  uint64_t map_waits_ = 0;    // frames that were (counted in blvd_stats.link_waits)
+  double speed_mps_ = 0;      // the last frame's vehicle speed (blvd_stats.cached_ahead_s)
   MemoryPlan plan_;
   std::unique_ptr<CellLoader> loader_;
   std::unique_ptr<render::Context> ctx_;

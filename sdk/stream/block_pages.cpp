@@ -1,17 +1,20 @@
 #include "stream/block_pages.h"
 
+#include <algorithm>
 #include <vector>
 
 namespace blvd::stream {
 
 core::Status BlockPages::open(const package::PackageReader& reader, uint32_t pages, uint32_t page_bytes,
-                              std::string& err) {
+                              std::string& err, const PageSource* source) {
   *this = BlockPages{};
   package::Span s;
-  core::Status st = reader.checkedSection(package::kSectionBlocks, s, err);
+  core::Status st = tableSection(reader, source, package::kSectionBlocks, s, err);
   if (st != core::Status::Ok) return st;
   blobs_ = reader.blobCount();
+  name_ = reader.name();
   try {
+    if (source) source->ensure(s.offset, std::min<uint64_t>(s.size, 12));  // version, record size, count
     shape_ = graph::parseBlockTableShape(s.data, s.size, s.offset);
     if (shape_.record_size > kMaxRecordBytes) {
       reader.dropPages(s);
@@ -20,7 +23,7 @@ core::Status BlockPages::open(const package::PackageReader& reader, uint32_t pag
       return core::Status::Unsupported;
     }
     graph::BlockRecord b;
-    for (uint32_t i = 0; i < shape_.count; ++i) {
+    for (uint32_t i = 0; !source && i < shape_.count; ++i) {
       const size_t at = shape_.records_at + size_t(i) * shape_.record_size;
       const std::string why = graph::parseBlockRecord(s.data + at, blobs_, b);
       if (!why.empty()) {
@@ -36,8 +39,9 @@ core::Status BlockPages::open(const package::PackageReader& reader, uint32_t pag
   }
   reader.dropPages(s);
   if (st != core::Status::Ok) return st;
-  cache_ = std::make_unique<PageCache>(reader, pages, page_bytes);
+  cache_ = std::make_unique<PageCache>(reader, pages, page_bytes, source);
   table_ = cache_->addTable(s.data + shape_.records_at, shape_.count, shape_.record_size);
+  records_offset_ = s.offset + shape_.records_at;
   return core::Status::Ok;
 }
 
@@ -46,7 +50,11 @@ graph::BlockRecord BlockPages::record(uint32_t b) const {
   uint8_t rec[kMaxRecordBytes];
   cache_->readRange(table_, b, 1, rec);
   graph::BlockRecord r;
-  graph::parseBlockRecord(rec, blobs_, r);  // checked at open
+  const std::string why = graph::parseBlockRecord(rec, blobs_, r);  // checked at open, unless paged over a link
+  if (!why.empty())
+    throw core::Error(core::Status::Corrupt, name_ + ": block section BLCK at offset " +
+                                                 std::to_string(records_offset_ + uint64_t(b) * shape_.record_size) +
+                                                 ": block " + std::to_string(b) + ": " + why);
   return r;
 }
 

@@ -19,7 +19,11 @@ class BlockPages {
   // Checks every record as parseBlocks does, in one pass, and keeps nothing
   // of the table but the cache. Corrupt naming the file and offset; NotFound
   // without a BLCK section. The reader must outlive this.
-  core::Status open(const package::PackageReader& reader, uint32_t pages, uint32_t page_bytes, std::string& err);
+  // With a source (table pages that arrive over the link) only the table's
+  // shape is read here, and record() checks each record it reads instead,
+  // throwing core::Error(Corrupt) naming it.
+  core::Status open(const package::PackageReader& reader, uint32_t pages, uint32_t page_bytes, std::string& err,
+                    const PageSource* source = nullptr);
 
   uint32_t count() const { return shape_.count; }
   graph::BlockRecord record(uint32_t b) const;  // b < count()
@@ -31,6 +35,8 @@ class BlockPages {
   std::unique_ptr<PageCache> cache_;
   graph::BlockTableShape shape_;
   uint32_t blobs_ = 0, table_ = 0;
+  uint64_t records_offset_ = 0;  // in the file, for messages
+  std::string name_;
 };
 
 }  // namespace blvd::stream

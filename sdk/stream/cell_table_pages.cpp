@@ -21,20 +21,42 @@ T at(const uint8_t* p) {
 }  // namespace
 
 core::Status CellTablePages::open(const package::PackageReader& reader, const graph::GraphSource& streets,
-                                  uint32_t blocks, uint32_t pages, uint32_t page_bytes, std::string& err) {
+                                  uint32_t blocks, uint32_t pages, uint32_t page_bytes, std::string& err,
+                                  const PageSource* source, uint32_t max_layers) {
   *this = CellTablePages{};
   package::Span vis, imp, index;
   for (auto [tag, span] : {std::pair{package::kSectionVisibility, &vis}, std::pair{package::kSectionImpostors, &imp},
                            std::pair{package::kSectionCellTableIndex, &index}}) {
-    const core::Status st = reader.checkedSection(tag, *span, err);
+    const core::Status st = tableSection(reader, source, tag, *span, err);
     if (st != core::Status::Ok) return st;
   }
-  const core::Status st = check(reader, streets, blocks, vis, imp, index, err);
-  reader.dropPages(vis);
-  reader.dropPages(imp);
-  reader.dropPages(index);
-  if (st != core::Status::Ok) return st;
-  cache_ = std::make_unique<PageCache>(reader, pages, page_bytes);
+  if (source) {
+    streets_ = &streets;
+    name_ = reader.name();
+    blocks_ = blocks;
+    blobs_ = reader.blobCount();
+    cells_ = streets.cellCount();
+    max_layers_ = max_layers;
+    vis_ = vis;
+    imp_ = imp;
+    try {
+      source->ensure(index.offset, std::min<uint64_t>(index.size, 8));
+      source->ensure(vis.offset, std::min<uint64_t>(vis.size, 8));
+      source->ensure(imp.offset, std::min<uint64_t>(imp.size, 20));
+      const core::Status st = openLazy(reader, vis, imp, index, err);
+      if (st != core::Status::Ok) return st;
+    } catch (const core::Error& e) {
+      err = e.what();
+      return e.status();
+    }
+  } else {
+    const core::Status st = check(reader, streets, blocks, vis, imp, index, err);
+    reader.dropPages(vis);
+    reader.dropPages(imp);
+    reader.dropPages(index);
+    if (st != core::Status::Ok) return st;
+  }
+  cache_ = std::make_unique<PageCache>(reader, pages, page_bytes, source);
   t_index_ = cache_->addTable(index.data + graph::kCellTableIndexHeader, streets.cellCount(),
                               graph::kCellTableIndexEntry);
   t_vis_ = cache_->addTable(vis.data, vis.size, 1);
@@ -42,12 +64,8 @@ core::Status CellTablePages::open(const package::PackageReader& reader, const gr
   return core::Status::Ok;
 }
 
-// The whole parse's checks a cell at a time, and the index against where
-// each cell's records start.
-core::Status CellTablePages::check(const package::PackageReader& reader, const graph::GraphSource& streets,
-                                   uint32_t blocks, const package::Span& vis, const package::Span& imp,
-                                   const package::Span& index, std::string& err) {
-  const uint32_t cells = streets.cellCount();
+core::Status CellTablePages::checkIndexHeader(const package::PackageReader& reader, uint32_t cells,
+                                              const package::Span& index, std::string& err) const {
   const uint64_t want = graph::kCellTableIndexHeader + uint64_t(cells) * graph::kCellTableIndexEntry;
   if (index.size != want || at<uint32_t>(index.data) != graph::kCellTableIndexVersion ||
       at<uint32_t>(index.data + 4) != cells) {
@@ -56,6 +74,64 @@ core::Status CellTablePages::check(const package::PackageReader& reader, const g
           " bytes; a version 1 index of " + std::to_string(cells) + " cells has " + std::to_string(want);
     return core::Status::Corrupt;
   }
+  return core::Status::Ok;
+}
+
+// The headers only (the index's, PVSA's, IMPO's): cells are checked as read.
+core::Status CellTablePages::openLazy(const package::PackageReader& reader, const package::Span& vis,
+                                      const package::Span& imp, const package::Span& index, std::string& err) {
+  const core::Status st = checkIndexHeader(reader, cells_, index, err);
+  if (st != core::Status::Ok) return st;
+  core::ByteReader rv(vis.data, vis.size, "visibility section PVSA", vis.offset);
+  core::ByteReader ri(imp.data, imp.size, "impostor section IMPO", imp.offset);
+  graph::CellTables display;
+  graph::parseVisibilityHeader(rv, cells_);
+  graph::parseImpostorsHeader(ri, cells_, display);
+  return core::Status::Ok;
+}
+
+// A cell's records end where the next cell's start (the index says so, and
+// the whole check holds it to that); the last cell's at its section's end.
+void CellTablePages::checkCell(uint32_t cell) const {
+  try {
+    checkCellRecords(cell);
+  } catch (const core::Error& e) {
+    throw core::Error(e.status(), name_ + ": " + e.what());
+  }
+}
+
+void CellTablePages::checkCellRecords(uint32_t cell) const {
+  thread_local std::vector<uint8_t> bytes;
+  thread_local graph::CellVisibility v;
+  thread_local graph::CellImpostors c;
+  for (int which = 0; which < 2; ++which) {
+    const package::Span& s = which ? imp_ : vis_;
+    const uint64_t b = entry(cell, which), e = cell + 1 < cells_ ? entry(cell + 1, which) : s.size;
+    const char* name = which ? "impostor section IMPO" : "visibility section PVSA";
+    if (e < b || e > s.size)
+      throw core::Error(core::Status::Corrupt, std::string("cell table index CTIX: cell ") + std::to_string(cell) +
+                                                   "'s records in " + name + " end before they start or past the section");
+    bytes.resize(size_t(e - b));
+    cache_->readRange(which ? t_imp_ : t_vis_, b, uint32_t(e - b), bytes.data());
+    core::ByteReader r(bytes.data(), bytes.size(), name, s.offset + b);
+    if (which == 0) {
+      graph::parseCellVisibility(r, blocks_, v);
+    } else {
+      graph::parseCellImpostors(r, blocks_, blobs_, streets_->halfedge(cell).length, c);
+      if (c.layered.size() + c.single.size() > max_layers_)
+        r.fail("cell " + std::to_string(cell) + " has more impostor layers than the header's pool sizing says");
+    }
+    if (cell + 1 < cells_ && r.remaining() != 0) r.fail("cell " + std::to_string(cell) + "'s records end early");
+  }
+}
+
+// The whole parse's checks a cell at a time, and the index against where
+// each cell's records start.
+core::Status CellTablePages::check(const package::PackageReader& reader, const graph::GraphSource& streets,
+                                   uint32_t blocks, const package::Span& vis, const package::Span& imp,
+                                   const package::Span& index, std::string& err) {
+  const uint32_t cells = streets.cellCount();
+  if (const core::Status st = checkIndexHeader(reader, cells, index, err); st != core::Status::Ok) return st;
   try {
     core::ByteReader rv(vis.data, vis.size, "visibility section PVSA", vis.offset);
     core::ByteReader ri(imp.data, imp.size, "impostor section IMPO", imp.offset);
@@ -89,6 +165,7 @@ uint64_t CellTablePages::entry(uint32_t cell, int which) const {
 }
 
 void CellTablePages::layers(uint32_t cell, LayerInfo* out, uint32_t cap, uint32_t* layered, uint32_t* single) const {
+  if (streets_) checkCell(cell);
   uint64_t off = entry(cell, 1);
   uint32_t written = 0;
   for (uint32_t* count : {layered, single}) {
@@ -114,6 +191,7 @@ void CellTablePages::layers(uint32_t cell, LayerInfo* out, uint32_t cap, uint32_
 }
 
 float CellTablePages::coverage(uint32_t cell, uint32_t block) const {
+  if (streets_) checkCell(cell);
   const uint64_t off = entry(cell, 0);
   uint32_t k = 0;
   cache_->readRange(t_vis_, off, 4, &k);

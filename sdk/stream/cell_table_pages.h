@@ -30,8 +30,15 @@ class CellTablePages {
   // records start. Keeps nothing of them but a cache of `pages` pages of
   // `page_bytes`. Corrupt naming the file, section and offset. The reader and
   // the graph must outlive this.
+  //
+  // With a source (table pages that arrive over the link) open checks the
+  // index's and the tables' headers only, maxLayers() is `max_layers` (the
+  // package header's pool sizing), and layers() and coverage() check the
+  // cell's records with the same parse before they read them, throwing
+  // core::Error(Corrupt) naming the section and offset.
   core::Status open(const package::PackageReader& reader, const graph::GraphSource& streets, uint32_t blocks,
-                    uint32_t pages, uint32_t page_bytes, std::string& err);
+                    uint32_t pages, uint32_t page_bytes, std::string& err, const PageSource* source = nullptr,
+                    uint32_t max_layers = 0);
 
   // Layers of the cell with the most (layered and single together).
   uint32_t maxLayers() const { return max_layers_; }
@@ -48,10 +55,21 @@ class CellTablePages {
   core::Status check(const package::PackageReader& reader, const graph::GraphSource& streets, uint32_t blocks,
                      const package::Span& vis, const package::Span& imp, const package::Span& index, std::string& err);
   uint64_t entry(uint32_t cell, int which) const;  // 0: PVSA offset, 1: IMPO offset
+  core::Status checkIndexHeader(const package::PackageReader& reader, uint32_t cells, const package::Span& index,
+                                std::string& err) const;
+  core::Status openLazy(const package::PackageReader& reader, const package::Span& vis, const package::Span& imp,
+                        const package::Span& index, std::string& err);
+  void checkCell(uint32_t cell) const;  // lazy: the cell's records, parsed; throws naming the file
+  void checkCellRecords(uint32_t cell) const;
 
   std::unique_ptr<PageCache> cache_;
   uint32_t t_index_ = 0, t_vis_ = 0, t_imp_ = 0;
   uint32_t max_layers_ = 0;
+  // Lazy (a source): what checkCell() needs.
+  const graph::GraphSource* streets_ = nullptr;
+  uint32_t blocks_ = 0, blobs_ = 0, cells_ = 0;
+  package::Span vis_, imp_;
+  std::string name_;
 };
 
 }  // namespace blvd::stream

@@ -16,6 +16,8 @@ constexpr uint32_t kCellTablePages = 64, kCellTablePageBytes = 2048;
 // The block table's: 88-byte records, a cell's local blocks a few pages.
 constexpr uint32_t kBlockPages = 32, kBlockPageBytes = 2048;
 
+thread_local bool t_no_link_wait = false;
+
 std::vector<float> cellLengths(const graph::GraphSource& g) {
   std::vector<float> v(g.cellCount());
   for (uint32_t h = 0; h < g.cellCount(); ++h) v[h] = g.halfedge(h).length;
@@ -59,6 +61,7 @@ core::Status City::openUrl(const std::string& url, const remote::RemoteOptions& 
   if (remote.cache_path.empty()) return err = url + ": a package on a server needs a cache folder", core::Status::InvalidArg;
   for (int attempt = 0;; ++attempt) {
     remote_ = std::make_unique<remote::RemotePackage>();
+    link_pages_.remote = remote_.get();
     core::Status st = remote_->open(url, remote, err);
     if (st == core::Status::Ok) st = open(remote_->mirrorPath(), err, tables, graph, paging);
     if (st == core::Status::Ok) return st;
@@ -89,7 +92,11 @@ void City::cellBlobs(uint32_t cell, const uint32_t* skip, uint32_t skip_count, s
 
 bool City::cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const {
   if (!remote_) return true;
-  cellBlobs(cell, nullptr, 0, scratch);
+  try {
+    cellBlobs(cell, nullptr, 0, scratch);
+  } catch (const core::Error&) {
+    return false;  // its table pages are not there and the link cannot bring them
+  }
   return std::all_of(scratch.begin(), scratch.end(), [&](uint32_t b) { return remote_->cached(b); });
 }
 
@@ -99,6 +106,21 @@ core::Status City::blobBytes(uint32_t i, package::Span& s, std::vector<uint8_t>&
   if (st != core::Status::Ok) return st;
   s = package::Span{hold.data(), hold.size(), remote_->blobInfo(i).offset};
   return st;
+}
+
+City::NoLinkWait::NoLinkWait() : was_(t_no_link_wait) { t_no_link_wait = true; }
+City::NoLinkWait::~NoLinkWait() { t_no_link_wait = was_; }
+
+void City::LinkPages::ensure(uint64_t offset, uint64_t size) const {
+  std::string err;
+  const core::Status st = remote->ensureTables(offset, size, err, !t_no_link_wait);
+  if (st != core::Status::Ok) throw core::Error(st, err);
+}
+
+core::Status City::ensureSection(uint32_t tag, std::string& err) const {
+  const package::Span s = reader_.section(tag);
+  if (!source() || !s.data) return core::Status::Ok;
+  return remote_->ensureTables(s.offset, s.size, err);
 }
 
 core::Status City::openWhole(std::string& err) {
@@ -122,14 +144,16 @@ core::Status City::openWhole(std::string& err) {
 
 core::Status City::openPaged(const PagedGraphDesc& paging, std::string& err) {
   paged_ = std::make_unique<PagedGraph>();
-  const core::Status st = paged_->open(reader_, err, paging);
+  const core::Status st = paged_->open(reader_, err, paging, source());
   if (st != core::Status::Ok) return st;
   streets_ = paged_.get();
   return core::Status::Ok;
 }
 
 core::Status City::requiredSection(uint32_t tag, package::Span& s, std::string& err) const {
-  const core::Status st = reader_.checkedSection(tag, s, err);
+  core::Status st = ensureSection(tag, err);
+  if (st != core::Status::Ok) return st;
+  st = reader_.checkedSection(tag, s, err);
   if (st == core::Status::NotFound) {
     err = reader_.name() + ": missing section " + package::tagToString(tag);
     return core::Status::Corrupt;
@@ -146,7 +170,7 @@ core::Status City::openRenderTables(std::string& err) {
     core::Status st = core::Status::Ok;
     if (paged_) {
       block_pages_ = std::make_unique<BlockPages>();
-      st = block_pages_->open(reader_, kBlockPages, kBlockPageBytes, err);
+      st = block_pages_->open(reader_, kBlockPages, kBlockPageBytes, err, source());
       if (st == core::Status::NotFound) err = reader_.name() + ": missing section BLCK", st = core::Status::Corrupt;
     } else if ((st = requiredSection(package::kSectionBlocks, s, err)) == core::Status::Ok) {
       graph::parseBlocks(s.data, s.size, s.offset, reader_.blobCount(), blocks_);
@@ -161,13 +185,15 @@ core::Status City::openRenderTables(std::string& err) {
     }
     if (paged_ && reader_.hasSection(package::kSectionCellTableIndex)) {
       cell_pages_ = std::make_unique<CellTablePages>();
-      st = cell_pages_->open(reader_, *streets_, nblocks, kCellTablePages, kCellTablePageBytes, err);
+      st = cell_pages_->open(reader_, *streets_, nblocks, kCellTablePages, kCellTablePageBytes, err, source(),
+                             header().max_cell_impostor_layers);
       if (st != core::Status::Ok) return st;
       max_cell_layers_ = cell_pages_->maxLayers();
       return core::Status::Ok;
     }
     for (uint32_t tag : {package::kSectionVisibility, package::kSectionImpostors}) {
       if (!reader_.hasSection(tag)) continue;
+      if ((st = ensureSection(tag, err)) != core::Status::Ok) return st;
       if ((st = reader_.checkedSection(tag, s, err)) != core::Status::Ok) return st;
       if (tag == package::kSectionVisibility) graph::parseVisibility(s.data, s.size, s.offset, cells, nblocks, tables_);
       else graph::parseImpostors(s.data, s.size, s.offset, cellLengths(*streets_), nblocks, reader_.blobCount(), tables_);

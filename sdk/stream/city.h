@@ -48,17 +48,36 @@ class City {
   // as from a local package; blobs come through the disk cache
   // (remote/remote_package.h). A mirror that fails its checks is fetched
   // again, once (never offline). Unavailable offline without a mirror.
+  // A package with table page CRCs (3.2) mirrors its tables a page at a
+  // time as they are read: a read of the tables may then wait for the link,
+  // and throws core::Error (Unavailable offline, Corrupt for a bad record)
+  // where a local package's cannot fail; open reads their headers only.
   core::Status openUrl(const std::string& url, const remote::RemoteOptions& remote, std::string& err,
                        Tables tables = Tables::All, GraphTables graph = GraphTables::Paged,
                        const PagedGraphDesc& paging = {});
   static bool isUrl(const std::string& path);
+  // While one lives on a thread, that thread's reads of tables arriving over
+  // the link never wait for it: a missing page is asked for (the link
+  // prefetch's thread fetches it) and the read throws core::Error
+  // (Unavailable). The render thread, whose frame draws what is resident instead.
+  class NoLinkWait {
+   public:
+    NoLinkWait();
+    ~NoLinkWait();
+    NoLinkWait(const NoLinkWait&) = delete;
+    NoLinkWait& operator=(const NoLinkWait&) = delete;
+
+   private:
+    bool was_;
+  };
   // The package on a server, or nullptr for a local one.
   remote::RemotePackage* remote() const { return remote_.get(); }
   // Blobs cell `cell` draws (its non-empty local blocks but skip[0 ..
   // skip_count), its impostor layers) into out (cleared first).
   void cellBlobs(uint32_t cell, const uint32_t* skip, uint32_t skip_count, std::vector<uint32_t>& out) const;
   // Whether every blob `cell` draws is in the disk cache (always, for a
-  // local package). `scratch` holds its blobs after.
+  // local package; never when its table pages cannot be read). `scratch`
+  // holds its blobs after.
   bool cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const;
 
   const package::PackageReader& package() const { return reader_; }
@@ -66,6 +85,14 @@ class City {
   const graph::StreetGraph& graph() const { return graph_; }  // empty when paged
   const graph::GraphSource& streets() const { return *streets_; }
   bool paged() const { return paged_ != nullptr; }
+  // Whether a table page that is not here may still arrive: the package is
+  // on a server, online or metered, the link up and the package unchanged.
+  bool linkMayBringTables() const {
+    return remote_ && remote_->mode() != remote::LinkMode::Offline && !remote_->linkDown() && !remote_->changed();
+  }
+  // Whether the tables arrive a page at a time over the link (their records
+  // are checked as read, not at open).
+  bool tablesOverLink() const { return source() != nullptr; }
   // The page cache's counts (zero when the graph is whole).
   PageCacheStats graphPageStats() const { return paged_ ? paged_->stats() : PageCacheStats{}; }
   uint64_t graphCacheBytes() const { return paged_ ? paged_->bytes() : 0; }
@@ -154,6 +181,15 @@ class City {
   core::Status openPaged(const PagedGraphDesc& paging, std::string& err);
   core::Status openRenderTables(std::string& err);
   core::Status requiredSection(uint32_t tag, package::Span& s, std::string& err) const;  // Corrupt when absent
+  // A section's pages all fetched (a whole-table parse of a package on a server).
+  core::Status ensureSection(uint32_t tag, std::string& err) const;
+  // Table pages over the link, for a package on a server with table page CRCs.
+  struct LinkPages final : PageSource {
+    remote::RemotePackage* remote = nullptr;
+    void ensure(uint64_t offset, uint64_t size) const override;
+  };
+  const PageSource* source() const { return remote_ && remote_->lazyTables() ? &link_pages_ : nullptr; }
+  LinkPages link_pages_;
   // Blob i's bytes: a span of the mapping, or of `hold` fetched through remote_.
   core::Status blobBytes(uint32_t i, package::Span& s, std::vector<uint8_t>& hold, std::string& err) const;
   std::unique_ptr<remote::RemotePackage> remote_;

@@ -9,6 +9,7 @@ namespace {
 // Record sizes of the GRPH, CELL and SIDX tables (docs/package-format.md).
 constexpr uint32_t kVertexBytes = 24, kHalfEdgeBytes = 44, kFaceBytes = 16, kPointBytes = 16;
 constexpr uint32_t kGraphVersion = 1;
+const char* const kListNames[3] = {"successors", "predecessors", "local blocks"};
 
 uint32_t readU32(const uint8_t* p) {
   uint32_t v;
@@ -20,11 +21,13 @@ uint32_t readU32(const uint8_t* p) {
 struct Cursor {
   const package::Span& s;
   const char* section;
+  const PageSource* source;
   size_t at = 0;
   std::string error;
 
   bool count(uint32_t* n, uint64_t record, const char* what) {
     if (at + 4 > s.size) return fail(std::string(what) + ": count truncated");
+    if (source) source->ensure(s.offset + at, 4);
     *n = readU32(s.data + at);
     at += 4;
     if (record * *n > s.size - at) return fail(std::string(what) + ": " + std::to_string(*n) + " records overrun the section");
@@ -43,10 +46,10 @@ struct Cursor {
 
 }  // namespace
 
-core::Status PagedGraph::locate(const package::PackageReader& reader, std::string& err) {
+core::Status PagedGraph::locate(const package::PackageReader& reader, const PageSource* source, std::string& err) {
   package::Span g, c;
   for (auto [tag, span] : {std::pair{package::kSectionGraph, &g}, std::pair{package::kSectionCells, &c}}) {
-    const core::Status st = reader.checkedSection(tag, *span, err);
+    const core::Status st = tableSection(reader, source, tag, *span, err);
     if (st == core::Status::NotFound) {
       err = reader.name() + ": missing section " + package::tagToString(tag);
       return core::Status::Corrupt;
@@ -55,7 +58,7 @@ core::Status PagedGraph::locate(const package::PackageReader& reader, std::strin
   }
   grph_ = g;
   cell_ = c;
-  Cursor gc{g, "graph section GRPH", 0, {}};
+  Cursor gc{g, "graph section GRPH", source, 0, {}};
   uint32_t version = 0;
   bool ok = gc.count(&version, 0, "version") && (version == kGraphVersion || gc.fail("unknown graph version")) &&
             gc.count(&vertices_, kVertexBytes, "vertices") && gc.skip(uint64_t(vertices_) * kVertexBytes) &&
@@ -63,19 +66,18 @@ core::Status PagedGraph::locate(const package::PackageReader& reader, std::strin
             (at_halfedges_ = gc.skip(uint64_t(halfedges_) * kHalfEdgeBytes)) && gc.count(&faces_, kFaceBytes, "faces") &&
             gc.skip(uint64_t(faces_) * kFaceBytes) && gc.count(&points_, kPointBytes, "points") &&
             (at_points_ = gc.skip(uint64_t(points_) * kPointBytes));
-  Cursor cc{c, "cell section CELL", 0, {}};
+  Cursor cc{c, "cell section CELL", source, 0, {}};
   uint32_t cells = 0;
   ok = ok && cc.count(&version, 0, "version") && (version == kGraphVersion || cc.fail("unknown cell version")) &&
        cc.count(&cells, 0, "cells") && (cells == halfedges_ || cc.fail("cell count does not match the graph's half-edges"));
-  static const char* kNames[3] = {"successors", "predecessors", "local blocks"};
   for (int l = 0; ok && l < 3; ++l) {
-    ok = cc.count(&lists_[l].count, 0, kNames[l]) && (uint64_t(cells) + 1) * 4 <= c.size - cc.at;
+    ok = cc.count(&lists_[l].count, 0, kListNames[l]) && (uint64_t(cells) + 1) * 4 <= c.size - cc.at;
     if (!ok) {
-      cc.fail(std::string(kNames[l]) + ": offsets truncated");
+      cc.fail(std::string(kListNames[l]) + ": offsets truncated");
       break;
     }
     at_lists_[l][0] = cc.skip((uint64_t(cells) + 1) * 4);
-    ok = uint64_t(lists_[l].count) * 4 <= c.size - cc.at || cc.fail(std::string(kNames[l]) + ": items truncated");
+    ok = uint64_t(lists_[l].count) * 4 <= c.size - cc.at || cc.fail(std::string(kListNames[l]) + ": items truncated");
     if (ok) at_lists_[l][1] = cc.skip(uint64_t(lists_[l].count) * 4);
   }
   if (!ok) {
@@ -87,36 +89,45 @@ core::Status PagedGraph::locate(const package::PackageReader& reader, std::strin
   return core::Status::Ok;
 }
 
-core::Status PagedGraph::open(const package::PackageReader& reader, std::string& err, const PagedGraphDesc& desc) {
-  *this = PagedGraph{};
-  core::Status st = locate(reader, err);
+core::Status PagedGraph::openGrid(const package::PackageReader& reader, const PageSource* source,
+                                  package::Span& sidx, std::string& err) {
+  const core::Status st = tableSection(reader, source, package::kSectionSpatialIndex, sidx, err);
   if (st != core::Status::Ok) return st;
+  if (source) source->ensure(sidx.offset, std::min<uint64_t>(sidx.size, graph::kGridHeaderBytes));
+  stored_ = graph::parseGridShape(sidx.data, sidx.size, sidx.offset);
+  reader.dropPages(sidx);
+  return core::Status::Ok;
+}
+
+core::Status PagedGraph::open(const package::PackageReader& reader, std::string& err, const PagedGraphDesc& desc,
+                              const PageSource* source) {
+  *this = PagedGraph{};
+  name_ = reader.name();
   package::Span sidx;
   const bool has_grid = reader.hasSection(package::kSectionSpatialIndex);
-  if (has_grid) {
-    if ((st = reader.checkedSection(package::kSectionSpatialIndex, sidx, err)) != core::Status::Ok) return st;
-    try {
-      stored_ = graph::parseGridShape(sidx.data, sidx.size, sidx.offset);
-    } catch (const core::Error& e) {
-      err = reader.name() + ": " + e.what();
-      return e.status();
+  try {
+    core::Status st = locate(reader, source, err);
+    if (st == core::Status::Ok && has_grid) st = openGrid(reader, source, sidx, err);
+    if (st != core::Status::Ok) return st;
+    cache_ = std::make_unique<PageCache>(reader, desc.pages ? desc.pages : PagedGraphDesc::kDefaultPages,
+                                         desc.page_bytes ? desc.page_bytes : PagedGraphDesc::kDefaultPageBytes, source);
+    t_halfedges_ = cache_->addTable(at_halfedges_, halfedges_, kHalfEdgeBytes);
+    t_points_ = cache_->addTable(at_points_, points_, kPointBytes);
+    for (int l = 0; l < 3; ++l) {
+      lists_[l].offsets = cache_->addTable(at_lists_[l][0], halfedges_ + 1, 4);
+      lists_[l].items = cache_->addTable(at_lists_[l][1], lists_[l].count, 4);
     }
-    reader.dropPages(sidx);
+    if (has_grid) {
+      t_grid_offsets_ = cache_->addTable(sidx.data + stored_.offsets_at, uint32_t(stored_.shape.cellCount() + 1), 4);
+      t_grid_entries_ = cache_->addTable(sidx.data + stored_.entries_at, stored_.entries, 8);
+    }
+    if (source) return core::Status::Ok;  // each read checks its record
+    check();
+    if (has_grid) checkGrid();
+  } catch (const core::Error& e) {
+    err = e.what();
+    return e.status();
   }
-  cache_ = std::make_unique<PageCache>(reader, desc.pages ? desc.pages : PagedGraphDesc::kDefaultPages,
-                                       desc.page_bytes ? desc.page_bytes : PagedGraphDesc::kDefaultPageBytes);
-  t_halfedges_ = cache_->addTable(at_halfedges_, halfedges_, kHalfEdgeBytes);
-  t_points_ = cache_->addTable(at_points_, points_, kPointBytes);
-  for (int l = 0; l < 3; ++l) {
-    lists_[l].offsets = cache_->addTable(at_lists_[l][0], halfedges_ + 1, 4);
-    lists_[l].items = cache_->addTable(at_lists_[l][1], lists_[l].count, 4);
-  }
-  if (has_grid) {
-    t_grid_offsets_ = cache_->addTable(sidx.data + stored_.offsets_at, uint32_t(stored_.shape.cellCount() + 1), 4);
-    t_grid_entries_ = cache_->addTable(sidx.data + stored_.entries_at, stored_.entries, 8);
-  }
-  if ((st = check(reader.name(), err)) != core::Status::Ok) return st;
-  if (has_grid && (st = checkGrid(reader.name(), err)) != core::Status::Ok) return st;
   if (!has_grid) {
     grid_ = std::make_unique<graph::SegmentGrid>();
     grid_->build(*this);
@@ -129,63 +140,49 @@ uint64_t PagedGraph::fileOffset(const uint8_t* p) const {
   return s.offset + static_cast<uint64_t>(p - s.data);
 }
 
-// One pass over every record the runtime reads, with parseGraph's and
-// parseCells's checks; the cache bounds what the pass holds.
-core::Status PagedGraph::check(const std::string& file, std::string& err) const {
-  auto bad = [&](const uint8_t* table, uint64_t record, uint32_t i, const std::string& why) {
-    err = file + ": " + why + " (record " + std::to_string(i) + " at file offset " +
-          std::to_string(fileOffset(table) + record * i) + ")";
-    return core::Status::Corrupt;
-  };
-  for (uint32_t h = 0; h < halfedges_; ++h) {
-    const graph::HalfEdge e = halfedge(h);
-    if (e.origin >= vertices_ || e.twin >= halfedges_ || e.next >= halfedges_ || e.face >= faces_ || e.pts_count < 2 ||
-        e.pts_begin > points_ || e.pts_count > points_ - e.pts_begin)
-      return bad(at_halfedges_, kHalfEdgeBytes, h, "graph section GRPH: half-edge index out of range");
-    if (static_cast<uint8_t>(e.road_class) > static_cast<uint8_t>(graph::RoadClass::Other))
-      return bad(at_halfedges_, kHalfEdgeBytes, h, "graph section GRPH: bad road class");
-  }
-  for (uint32_t i = 0; i < points_; ++i) {
-    const glm::dvec2 p = point(i);
-    if (!std::isfinite(p.x) || !std::isfinite(p.y)) return bad(at_points_, kPointBytes, i, "graph section GRPH: non-finite point");
-  }
-  static const char* kNames[3] = {"successors", "predecessors", "local blocks"};
+void PagedGraph::bad(const uint8_t* table, uint64_t record, uint64_t i, const std::string& why) const {
+  throw core::Error(core::Status::Corrupt, name_ + ": " + why + " (record " + std::to_string(i) + " at file offset " +
+                                               std::to_string(fileOffset(table) + record * i) + ")");
+}
+
+// One pass over every record the runtime reads: halfedge(), point() and
+// item() check theirs (parseGraph's and parseCells's checks), this adds that
+// each list's offsets span its items; the cache bounds what the pass holds.
+void PagedGraph::check() const {
+  for (uint32_t h = 0; h < halfedges_; ++h) halfedge(h);
+  for (uint32_t i = 0; i < points_; ++i) point(i);
   for (int l = 0; l < 3; ++l) {
-    const uint32_t limit = l == 2 ? faces_ : halfedges_;
     uint32_t prev = 0;
     for (uint32_t h = 0; h <= halfedges_; ++h) {
       const uint32_t o = u32(lists_[l].offsets, h);
       if ((h == 0 && o != 0) || o < prev || (h == halfedges_ && o != lists_[l].count))
-        return bad(at_lists_[l][0], 4, h, std::string("cell section CELL: ") + kNames[l] + ": offsets do not span the items");
+        bad(at_lists_[l][0], 4, h, std::string("cell section CELL: ") + kListNames[l] + ": offsets do not span the items");
       prev = o;
     }
-    for (uint32_t i = 0; i < lists_[l].count; ++i)
-      if (u32(lists_[l].items, i) >= limit)
-        return bad(at_lists_[l][1], 4, i, std::string("cell section CELL: ") + kNames[l] + ": item out of range");
+    for (uint32_t i = 0; i < lists_[l].count; ++i) item(static_cast<graph::CellList>(l), i);
   }
-  return core::Status::Ok;
 }
 
-core::Status PagedGraph::checkGrid(const std::string& file, std::string& err) const {
-  if (stored_.shape.nx == 0 && stored_.entries == 0) return core::Status::Ok;
-  auto bad = [&](const std::string& why) {
-    err = file + ": spatial index SIDX: " + why;
-    return core::Status::Corrupt;
-  };
+void PagedGraph::checkGrid() const {
+  if (stored_.shape.nx == 0 && stored_.entries == 0) return;
   const uint32_t cells = static_cast<uint32_t>(stored_.shape.cellCount());
   uint32_t prev = 0;
   for (uint32_t c = 0; c <= cells; ++c) {
     const uint32_t o = u32(t_grid_offsets_, c);
     if ((c == 0 && o != 0) || o < prev || (c == cells && o != stored_.entries))
-      return bad("offsets do not span the entries at grid cell " + std::to_string(c));
+      throw core::Error(core::Status::Corrupt, name_ + ": spatial index SIDX: offsets do not span the entries at grid cell " +
+                                                   std::to_string(c));
     prev = o;
   }
-  for (uint32_t i = 0; i < stored_.entries; ++i) {
-    graph::SegmentGrid::Entry e;
-    cache_->read(t_grid_entries_, i, &e);
-    if (e.halfedge >= halfedges_ || e.point + 1 >= points_) return bad("entry " + std::to_string(i) + " out of range");
-  }
-  return core::Status::Ok;
+  for (uint32_t i = 0; i < stored_.entries; ++i) gridEntry(i);
+}
+
+graph::SegmentGrid::Entry PagedGraph::gridEntry(uint32_t i) const {
+  graph::SegmentGrid::Entry e;
+  cache_->read(t_grid_entries_, i, &e);
+  if (e.halfedge >= halfedges_ || e.point + 1 >= points_)
+    throw core::Error(core::Status::Corrupt, name_ + ": spatial index SIDX: entry " + std::to_string(i) + " out of range");
+  return e;
 }
 
 uint32_t PagedGraph::u32(uint32_t table, uint32_t i) const {
@@ -210,21 +207,37 @@ graph::HalfEdge PagedGraph::halfedge(uint32_t h) const {
   e.flags = b[33];
   e.layer = static_cast<int8_t>(b[34]);
   std::memcpy(&e.osm_way, b + 36, 8);
+  if (e.origin >= vertices_ || e.twin >= halfedges_ || e.next >= halfedges_ || e.face >= faces_ || e.pts_count < 2 ||
+      e.pts_begin > points_ || e.pts_count > points_ - e.pts_begin)
+    bad(at_halfedges_, kHalfEdgeBytes, h, "graph section GRPH: half-edge index out of range");
+  if (static_cast<uint8_t>(e.road_class) > static_cast<uint8_t>(graph::RoadClass::Other))
+    bad(at_halfedges_, kHalfEdgeBytes, h, "graph section GRPH: bad road class");
   return e;
 }
 
 glm::dvec2 PagedGraph::point(uint32_t i) const {
   double p[2];
   cache_->read(t_points_, i, p);
+  if (!std::isfinite(p[0]) || !std::isfinite(p[1])) bad(at_points_, kPointBytes, i, "graph section GRPH: non-finite point");
   return {p[0], p[1]};
 }
 
 void PagedGraph::listBounds(graph::CellList list, uint32_t h, uint32_t* first, uint32_t* last) const {
-  *first = u32(lists(list).offsets, h);
-  *last = u32(lists(list).offsets, h + 1);
+  const Lists& l = lists(list);
+  *first = u32(l.offsets, h);
+  *last = u32(l.offsets, h + 1);
+  if (*first > *last || *last > l.count)
+    bad(at_lists_[static_cast<int>(list)][0], 4, h,
+        std::string("cell section CELL: ") + kListNames[static_cast<int>(list)] + ": offsets do not span the items");
 }
 
-uint32_t PagedGraph::item(graph::CellList list, uint32_t i) const { return u32(lists(list).items, i); }
+uint32_t PagedGraph::item(graph::CellList list, uint32_t i) const {
+  const uint32_t v = u32(lists(list).items, i);
+  if (v >= (list == graph::CellList::LocalBlocks ? faces_ : halfedges_))
+    bad(at_lists_[static_cast<int>(list)][1], 4, i,
+        std::string("cell section CELL: ") + kListNames[static_cast<int>(list)] + ": item out of range");
+  return v;
+}
 
 uint32_t PagedGraph::gridEntryCount() const {
   return grid_ ? static_cast<uint32_t>(grid_->entryCount()) : stored_.entries;
@@ -241,11 +254,7 @@ void PagedGraph::segmentsNear(double x, double y, double r, EntryFn fn, void* ct
     for (int gx = x0; gx <= x1; ++gx) {
       const uint32_t c = static_cast<uint32_t>(gy) * stored_.shape.nx + gx;
       const uint32_t last = u32(t_grid_offsets_, c + 1);
-      for (uint32_t i = u32(t_grid_offsets_, c); i < last; ++i) {
-        graph::SegmentGrid::Entry e;
-        cache_->read(t_grid_entries_, i, &e);
-        fn(e, ctx);
-      }
+      for (uint32_t i = u32(t_grid_offsets_, c); i < last; ++i) fn(gridEntry(i), ctx);
     }
 }
 

@@ -8,6 +8,11 @@
 // points, offsets that do not decrease), so that no later read can hand out an
 // index past its table. A package without SIDX (format 3.0) gets its grid
 // built in memory from the paged tables: it grows with the city.
+//
+// With a PageSource (a package on a server whose tables arrive a page at a
+// time) open reads only the tables' counts, and each read checks its record
+// instead (the same checks): a bad one throws core::Error(Corrupt) naming the
+// record and its offset, as does a page the source cannot bring (Unavailable).
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -31,7 +36,8 @@ class PagedGraph final : public graph::GraphSource {
  public:
   // Corrupt naming the file, section and offset when a table is cut short or a
   // record is out of range. The reader must outlive the graph.
-  core::Status open(const package::PackageReader& reader, std::string& err, const PagedGraphDesc& desc = {});
+  core::Status open(const package::PackageReader& reader, std::string& err, const PagedGraphDesc& desc = {},
+                    const PageSource* source = nullptr);
 
   uint32_t cellCount() const override { return halfedges_; }
   uint32_t pointCount() const override { return points_; }
@@ -54,9 +60,13 @@ class PagedGraph final : public graph::GraphSource {
     uint32_t offsets = 0, items = 0;  // page cache table ids
     uint32_t count = 0;               // items
   };
-  core::Status locate(const package::PackageReader& reader, std::string& err);
-  core::Status check(const std::string& file, std::string& err) const;
-  core::Status checkGrid(const std::string& file, std::string& err) const;
+  core::Status locate(const package::PackageReader& reader, const PageSource* source, std::string& err);
+  core::Status openGrid(const package::PackageReader& reader, const PageSource* source, package::Span& sidx,
+                        std::string& err);
+  [[noreturn]] void bad(const uint8_t* table, uint64_t record, uint64_t i, const std::string& why) const;
+  void check() const;  // every record; throws core::Error(Corrupt) for a bad one
+  void checkGrid() const;
+  graph::SegmentGrid::Entry gridEntry(uint32_t i) const;
   const Lists& lists(graph::CellList l) const { return lists_[static_cast<int>(l)]; }
   uint32_t u32(uint32_t table, uint32_t i) const;
 
@@ -74,6 +84,7 @@ class PagedGraph final : public graph::GraphSource {
   // File offset of a byte of the GRPH or CELL section (for messages).
   uint64_t fileOffset(const uint8_t* p) const;
   package::Span grph_, cell_;
+  std::string name_;  // the package's, for messages
 };
 
 }  // namespace blvd::stream

@@ -101,7 +101,7 @@ TEST(Package, RoundTrip) {
   ASSERT_EQ(got.size(), 20u);
   for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].value, want[i].value) << got[i].name;
 
-  // Sections: contents, alignment, directory order (user sections, BIDX, BDAT).
+  // Sections: contents, alignment, directory order (user sections, TPCR, BIDX, BDAT).
   const uint32_t tags[] = {kSectionGraph, kSectionCells, kSectionBlocks};
   const uint8_t seeds[] = {1, 2, 3};
   const size_t sizes[] = {101, 64, 37};
@@ -114,9 +114,19 @@ TEST(Package, RoundTrip) {
     EXPECT_EQ(r.checkedSection(tags[i], c, err), Status::Ok) << err;
     EXPECT_EQ(c.data, s.data);
   }
-  ASSERT_EQ(r.sections().size(), 5u);
-  EXPECT_EQ(r.sections()[3].tag, kSectionBlobIndex);
-  EXPECT_EQ(r.sections()[4].tag, kSectionBlobData);
+  ASSERT_EQ(r.sections().size(), 6u);
+  EXPECT_EQ(r.sections()[3].tag, kSectionTablePages);
+  EXPECT_EQ(r.sections()[4].tag, kSectionBlobIndex);
+  EXPECT_EQ(r.sections()[5].tag, kSectionBlobData);
+  ASSERT_NE(r.tablePages(), nullptr);
+  ASSERT_EQ(r.tablePages()->runs.size(), 3u);  // one per section given, a page each
+  for (int i = 0; i < 3; ++i) {
+    const TablePageRun& run = r.tablePages()->runs[i];
+    EXPECT_EQ(run.tag, tags[i]);
+    EXPECT_EQ(run.pages, 1u);
+    const std::vector<uint8_t> p = pattern(sizes[i], seeds[i]);
+    EXPECT_EQ(tablePageCrc(r.section(kSectionTablePages).data, run, 0), crc32c(p.data(), p.size()));
+  }
   EXPECT_FALSE(r.hasSection(kSectionMeta));
   EXPECT_TRUE(r.section(kSectionMeta).empty());
   EXPECT_EQ(r.section(kSectionMeta).data, nullptr);
@@ -352,6 +362,36 @@ TEST(Package, FlippedSectionAndPaddingBytes) {
   ASSERT_EQ(PackageReader::openMemory(b.data(), b.size(), "pad.blvd", r, err), Status::Ok);
   EXPECT_EQ(r.verify(err), Status::Corrupt);
   EXPECT_TRUE(contains(err, "pad.blvd: padding at offset " + std::to_string(pad))) << err;
+}
+
+// TPCR's own CRC right, one of its page CRCs wrong: verify() names the
+// section, the page and its offset; a run whose page count does not fit its
+// section is refused at open.
+TEST(Package, TablePageCrcsAreCheckedByVerifyAndTheirShapeAtOpen) {
+  std::vector<uint8_t> b = sampleWriter().toBytes();
+  PackageReader r;
+  std::string err;
+  ASSERT_EQ(PackageReader::openMemory(b.data(), b.size(), "tp.blvd", r, err), Status::Ok) << err;
+  const Span t = r.section(kSectionTablePages);
+  const uint64_t cells_at = r.section(kSectionCells).offset;
+  const TablePageRun cells = r.tablePages()->runs[1];
+  r.close();
+  const size_t entry = testutil::dirEntryOffset(b, kSectionTablePages);
+  auto reseal = [&] {
+    detail::put<uint32_t>(b.data() + entry + detail::dir::kCrc, crc32c(b.data() + t.offset, t.size));
+    resealChecksums(b);
+  };
+  detail::put<uint32_t>(b.data() + t.offset + cells.crcs_at, 0xdeadbeefu);
+  reseal();
+  ASSERT_EQ(PackageReader::openMemory(b.data(), b.size(), "tp.blvd", r, err), Status::Ok) << err;
+  EXPECT_EQ(r.verify(err), Status::Corrupt);
+  EXPECT_TRUE(contains(err, "tp.blvd: section CELL page 0 at offset " + std::to_string(cells_at))) << err;
+  r.close();
+  detail::put<uint32_t>(b.data() + t.offset + 12 + 8 + 4, 2);  // CELL's run: 2 pages for 64 bytes
+  reseal();
+  EXPECT_EQ(PackageReader::openMemory(b.data(), b.size(), "tp.blvd", r, err), Status::Corrupt);
+  EXPECT_TRUE(contains(err, "table page CRCs TPCR at offset")) << err;
+  EXPECT_TRUE(contains(err, "section CELL of 64 bytes has 1 pages, not 2")) << err;
 }
 
 // Files whose checksums are right but whose structure is not: what a buggy

@@ -134,11 +134,51 @@ TEST(PagedGraph, RefusesAHalfEdgeOutOfRangeNamingItsOffset) {
   EXPECT_NE(err.find("record 5 at file offset " + std::to_string(rec)), std::string::npos) << err;
 }
 
+// Tables that arrive a page at a time (a PageSource): open reads the counts
+// only, each page is asked of the source before it is read, and a bad record
+// is refused when read, with its offset, as open refuses it otherwise.
+TEST(PagedGraph, OverASourceChecksEachRecordAsItIsRead) {
+  std::vector<uint8_t> b = readFile(BLVD_TEST_PACKAGE);
+  size_t entry = 0;
+  const size_t rec = firstHalfEdge(b, &entry) + 5 * 44;
+  package::detail::put<uint32_t>(b.data() + rec + 4, 0x7fffffffu);  // half-edge 5's twin
+  resealSection(b, entry);
+  const std::string path = ::testing::TempDir() + "/paged_lazy_bad_twin.blvd";
+  writeFile(path, b);
+  struct Asked final : stream::PageSource {
+    mutable std::vector<std::pair<uint64_t, uint64_t>> ranges;
+    void ensure(uint64_t offset, uint64_t size) const override { ranges.emplace_back(offset, size); }
+  } asked;
+  package::PackageReader reader;
+  std::string err;
+  ASSERT_EQ(package::PackageReader::open(path, reader, err), core::Status::Ok) << err;
+  stream::PagedGraph g;
+  ASSERT_EQ(g.open(reader, err, kSmallCache, &asked), core::Status::Ok) << err;
+  const uint64_t at_open = asked.ranges.size();
+  EXPECT_LE(at_open, 16u);  // the tables' counts, not their records
+  EXPECT_EQ(g.halfedge(4).twin, whole().streets().halfedge(4).twin);
+  ASSERT_GT(asked.ranges.size(), at_open);
+  const auto [offset, size] = asked.ranges.back();
+  EXPECT_LE(offset, uint64_t(rec));  // the page holding half-edge 4 (and 5)
+  EXPECT_GT(offset + size, uint64_t(rec));
+  try {
+    g.halfedge(5);
+    ADD_FAILURE() << "half-edge 5 read";
+  } catch (const core::Error& e) {
+    EXPECT_EQ(e.status(), core::Status::Corrupt);
+    EXPECT_NE(std::string(e.what()).find("record 5 at file offset " + std::to_string(rec)), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(g.halfedge(g.cellCount()), core::Error);  // past the table
+}
+
 // A 3.0 package has no SIDX: the paged graph builds the grid from its pages.
 TEST(PagedGraph, BuildsTheGridForAPackageWithoutOne) {
   std::vector<uint8_t> b = readFile(BLVD_TEST_PACKAGE);
-  const size_t entry = package::testutil::dirEntryOffset(b, package::kSectionSpatialIndex);
-  package::detail::put<uint32_t>(b.data() + entry + package::detail::dir::kTag, package::fourcc('X', 'S', 'I', 'D'));
+  for (uint32_t tag : {package::kSectionSpatialIndex, package::kSectionTablePages}) {  // 3.0 had neither
+    const size_t entry = package::testutil::dirEntryOffset(b, tag);
+    package::detail::put<uint32_t>(b.data() + entry + package::detail::dir::kTag, package::fourcc('X', 'X', 'X', char('0' + (tag & 7))));
+  }
   resealChecksums(b);
   const std::string path = ::testing::TempDir() + "/paged_no_sidx.blvd";
   writeFile(path, b);

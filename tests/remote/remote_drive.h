@@ -72,6 +72,15 @@ inline std::vector<uint8_t> wholeFrame(blvd_runtime* rt, const DrivePose& p, con
   return wholeFrame(rt, p.x, p.y, p.heading_deg, d.width, d.height);
 }
 
+// One frame at the pose, as it comes (degraded or not).
+inline blvd_frame_stats render(blvd_runtime* rt, const DrivePose& p) {
+  EXPECT_EQ(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), BLVD_OK);
+  blvd_frame_stats fs{};
+  fs.struct_size = sizeof fs;
+  EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
+  return fs;
+}
+
 // Pixels whose colour differs between two frames.
 inline size_t differingPixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   size_t n = 0;

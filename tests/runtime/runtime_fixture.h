@@ -46,7 +46,7 @@ inline std::vector<uint8_t> wholeFrame(blvd_runtime* rt, double x, double y, dou
     EXPECT_EQ(blvd_wait_resident(rt, timeout_ms), BLVD_OK) << blvd_last_error(rt);
     EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
   }
-  EXPECT_EQ(fs.flags & BLVD_FRAME_DEGRADED, 0u);
+  EXPECT_EQ(fs.flags & BLVD_FRAME_DEGRADED, 0u) << blvd_last_error(rt);
   std::vector<uint8_t> px(size_t(width) * height * 4);
   EXPECT_EQ(blvd_read_pixels(rt, px.data(), px.size()), BLVD_OK) << blvd_last_error(rt);
   return px;
