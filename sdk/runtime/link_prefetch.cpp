@@ -136,6 +136,7 @@ void LinkPrefetch::fetchAhead(const std::vector<uint32_t>& cells, const std::vec
       std::lock_guard<std::mutex> lock(mu_);
       if (stop_ || plan_id_ != id) break;  // the vehicle moved on: plan again from its cell
     }
+    city_.warmCell(c);  // what a frame there reads of the tables to choose its cell
     if (std::find(wanted.begin(), wanted.end(), c) != wanted.end()) continue;  // the loader fetches it
     city_.cellBlobs(c, nullptr, 0, scratch);
     for (const uint32_t b : scratch) planned += remote_->blobInfo(b).size;

@@ -15,7 +15,9 @@
 // first frames); the fetching on a thread of its
 // own, which yields the link to the loader's requests (RemotePackage's
 // foreground first). Online only: metered and offline fetch nothing here.
-// It also fetches the table pages a frame found missing (a frame never
+// For a package whose tables arrive a page at a time it reads, for each cell
+// ahead, what a frame there reads to choose its cell (City::warmCell), so the
+// link brings those pages first. It also fetches the table pages a frame found missing (a frame never
 // waits for the link: RemotePackage::ensureTables without waiting), first.
 // Online with nothing fetched for kFillTablesIdleS, it completes the table
 // mirror of a package whose tables arrive a page at a time (what the first

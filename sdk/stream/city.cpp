@@ -385,6 +385,21 @@ double City::cellCost(uint32_t cell, glm::dvec2 p, double heading_deg, double* a
   return best;
 }
 
+void City::warmCell(uint32_t cell) const {
+  const graph::HalfEdge e = streets_->halfedge(cell);
+  double arc = 0;
+  for (uint32_t i = e.pts_begin; i + 1 < e.pts_begin + e.pts_count; ++i) {
+    const glm::dvec2 a = streets_->point(i), b = streets_->point(i + 1);
+    const double len = glm::length(b - a);
+    const double heading = glm::degrees(std::atan2(b.x - a.x, b.y - a.y));
+    for (double t = 0; t < len; t += 10.0)
+      for (const double h : {heading, heading + 180.0}) nearestCell(a + (b - a) * (t / len), h, &arc);
+  }
+  const glm::dvec2 end = streets_->point(e.pts_begin + e.pts_count - 1);
+  bool at_end = false;
+  for (const uint32_t s : streets_->successors(cell)) cellCost(s, end, 0.0, &arc, &at_end);
+}
+
 uint32_t City::nearestCell(glm::dvec2 p, double heading_deg, double* arc_m, double* cost_out) const {
   const glm::dvec2 dir = headingDir(heading_deg);
   double best = 1e300;

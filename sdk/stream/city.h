@@ -85,6 +85,12 @@ class City {
   const graph::StreetGraph& graph() const { return graph_; }  // empty when paged
   const graph::GraphSource& streets() const { return *streets_; }
   bool paged() const { return paged_ != nullptr; }
+  // Reads what a frame at any pose along `cell` reads of the tables to choose
+  // its cell (the nearest cell every 10 m along it, heading both ways, and
+  // the cost of each successor): for a package on a server, the link
+  // prefetch's thread brings those pages before the vehicle gets there, so
+  // the frames there do not ask for them. Throws as the reads do.
+  void warmCell(uint32_t cell) const;
   // Whether a table page that is not here may still arrive: the package is
   // on a server, online or metered, the link up and the package unchanged.
   bool linkMayBringTables() const {
