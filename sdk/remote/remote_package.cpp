@@ -157,7 +157,6 @@ core::Status RemotePackage::fetchTablePages(const TablePageRun& run, uint32_t k0
     return err = mirror_ + ": cannot write " + std::to_string(bytes.size()) + " bytes at offset " +
                  std::to_string(begin) + ": " + std::strerror(errno),
            core::Status::Io;
-  table_pages_fetched_.fetch_add(k1 - k0, std::memory_order_relaxed);
   table_bytes_.fetch_add(bytes.size(), std::memory_order_relaxed);
   return core::Status::Ok;
 }

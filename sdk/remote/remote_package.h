@@ -125,8 +125,6 @@ class RemotePackage {
   core::Status fillTables(std::string& err, const std::function<bool()>& stop);
   // Whether fillTables() found every table page there (an eager mirror always).
   bool tablesComplete() const { return mirror_fd_ < 0 || tables_complete_.load(std::memory_order_relaxed); }
-  // Table pages fetched since open.
-  uint64_t tablePagesFetched() const { return table_pages_fetched_.load(std::memory_order_relaxed); }
 
   // A section's bytes, CRC-checked (NotFound when the package has none).
   core::Status section(uint32_t tag, std::vector<uint8_t>& out, std::string& err);
@@ -199,7 +197,7 @@ class RemotePackage {
   std::atomic<int64_t> link_down_until_{0};  // steady_clock ticks
   void markLinkDown();
   static constexpr uint32_t kFillPages = 4;  // 16 KiB a request: 2.3 s of a 56 kbit/s link in front of a frame's page
-  std::atomic<uint64_t> table_pages_fetched_{0}, table_bytes_{0};
+  std::atomic<uint64_t> table_bytes_{0};
   bool offline_start_ = false;
   mutable std::mutex cache_mu_, link_mu_;  // cache_ and client_; when both, cache_mu_ first
   mutable std::mutex stats_mu_;            // the snapshot below

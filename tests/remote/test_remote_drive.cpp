@@ -41,6 +41,20 @@ uint64_t cellBlobBytes(uint32_t cell, std::vector<uint32_t>& blobs) {
   return n;
 }
 
+// Bytes of the blobs `cells` draw, each blob once, plus `per_blob` for each.
+uint64_t uniqueBlobBytes(const std::vector<uint32_t>& cells, uint64_t per_blob = 0) {
+  std::vector<uint32_t> all, blobs;
+  for (const uint32_t c : cells) {
+    cellBlobBytes(c, blobs);
+    all.insert(all.end(), blobs.begin(), blobs.end());
+  }
+  std::sort(all.begin(), all.end());
+  all.erase(std::unique(all.begin(), all.end()), all.end());
+  uint64_t n = 0;
+  for (const uint32_t b : all) n += localCity().package().blobInfo(b).size + per_blob;
+  return n;
+}
+
 // A runtime on `url` with a 64 MiB cache in `cache`, `route` set or not, its
 // first pose drawn whole.
 struct FirstFrame {
@@ -163,15 +177,7 @@ TEST_F(RemoteDriveTest, ADriveDrawsWhatTheLocalFileDrawsInACacheThatNeverGrowsPa
   EXPECT_GT(s.cache_hits, 0u);
   // More blob bytes than every blob of the route once: blobs were evicted and fetched again.
   EXPECT_GT(s.cache_evictions, 0u);
-  std::vector<uint32_t> all, blobs;
-  for (const uint32_t c : dr.cells) {
-    cellBlobBytes(c, blobs);
-    all.insert(all.end(), blobs.begin(), blobs.end());
-  }
-  std::sort(all.begin(), all.end());
-  all.erase(std::unique(all.begin(), all.end()), all.end());
-  uint64_t once = 0;
-  for (const uint32_t b : all) once += localCity().package().blobInfo(b).size;
+  const uint64_t once = uniqueBlobBytes(dr.cells);
   EXPECT_GT(s.link_bytes - s.link_table_bytes, once);
 }
 
@@ -296,17 +302,10 @@ TEST_F(RemoteDriveTest, MeteredFetchesTheCurrentAndTheNextCellOnly) {
     ::usleep(20000);
   }
   const blvd_stats s = stats(r.rt);
-  std::vector<uint32_t> two, blobs;
+  const std::vector<uint32_t> two(dr.cells.begin(), dr.cells.begin() + 2);
   double two_m = 0;
-  for (int k = 0; k < 2; ++k) {
-    cellBlobBytes(dr.cells[k], blobs);
-    two.insert(two.end(), blobs.begin(), blobs.end());
-    two_m += localCity().streets().halfedge(dr.cells[k]).length;
-  }
-  std::sort(two.begin(), two.end());
-  two.erase(std::unique(two.begin(), two.end()), two.end());
-  uint64_t allowed = 0;
-  for (const uint32_t b : two) allowed += localCity().package().blobInfo(b).size + 4096;  // and a gap each
+  for (const uint32_t c : two) two_m += localCity().streets().halfedge(c).length;
+  const uint64_t allowed = uniqueBlobBytes(two, 4096);  // and a gap each
   EXPECT_GT(s.link_bytes - s.link_table_bytes, 0u);
   EXPECT_LE(s.link_bytes - s.link_table_bytes, allowed);
   EXPECT_LE(s.cached_ahead_m, two_m + 1.0);
