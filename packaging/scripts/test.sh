@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The whole test suite, as CI runs it: install dependencies, build with
 # warnings as errors, run the parser/corruption and runtime-failure tests
-# under ASan+UBSan, the threaded tests under ThreadSanitizer, then every test. The last line printed is CTest's summary.
+# under ASan+UBSan, the threaded tests under ThreadSanitizer, the arm64
+# cross-build's tests under qemu, then every other test. The last line printed is CTest's summary.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bash packaging/scripts/deps.sh
@@ -34,10 +35,16 @@ cp build/test-monaco.blvd build-tsan/test-monaco.blvd
 (cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
   ctest --output-on-failure -j"$jobs" -L tsan -FS monaco_package)
 
-# 4. Every test.
+# 4. arm64: libblvd and the tests of what a vehicle runs, cross-built with
+#    Debian's multiarch toolchain and run under qemu-aarch64 (label arm64),
+#    on the package step 1's build baked.
+bash packaging/scripts/arm64.sh build build-arm64
+
+# 5. Every test but the Debian packages' (label packaging: a second full build
+#    and a clean root; `ctest -L packaging` in build runs them).
 cd build
 set +e
-ctest --output-on-failure -j"$jobs" --timeout 900 2>&1 | tee ctest.log
+ctest --output-on-failure -j"$jobs" --timeout 900 -LE '^packaging$' 2>&1 | tee ctest.log
 rc=${PIPESTATUS[0]}
 # CTest prints skipped tests after its summary; repeat the summary so it is the last line.
 grep -E "tests passed|tests failed" ctest.log | tail -n 1

@@ -55,7 +55,9 @@ INCLUDES = {
 INCLUDE_DIRS = ["sdk", "adapters", "include"]
 
 # Files under these prefixes may be met by that PACKAGECONFIG's dependencies.
-OPTIONAL = {"samples/": "samples"}
+OPTIONAL = {"samples/": "samples", "sdk/bake/": "tools"}
+# A find_package inside if(OPTION) ... endif() may be met by that PACKAGECONFIG's.
+OPTION_PACKAGECONFIG = {"BLVD_BUILD_TOOLS": "tools", "BLVD_WITH_OSMESA": "osmesa", "BLVD_BUILD_SAMPLES": "samples"}
 
 SKIP_DIRS = {".git", "out"}  # and build*/
 PKG_KEYWORDS = {"REQUIRED", "QUIET", "IMPORTED_TARGET", "GLOBAL", "NO_CMAKE_PATH",
@@ -88,8 +90,22 @@ def strip_cmake_comments(text):
     return "\n".join(out)
 
 
+def option_at(text, pos):
+    """The PACKAGECONFIG of the innermost if(OPTION) block around text[pos], or None."""
+    stack = []
+    for m in re.finditer(r"\b(if|else|elseif|endif)\s*\(([^)]*)\)", text[:pos], re.I):
+        word, cond = m.group(1).lower(), m.group(2).strip()
+        if word == "if":
+            stack.append(OPTION_PACKAGECONFIG.get(cond))
+        elif word == "endif" and stack:
+            stack.pop()
+        elif stack:  # else / elseif: not the option's branch
+            stack[-1] = None
+    return next((pc for pc in reversed(stack) if pc), None)
+
+
 def cmake_needs(root):
-    """[(key, file)] for every package a CMake file asks for."""
+    """[(key, file, PACKAGECONFIG or None)] for every package a CMake file asks for."""
     needs = []
     call = re.compile(r"\b(find_package|find_dependency|pkg_check_modules|pkg_search_module)\s*\(([^)]*)\)", re.I)
     for path in cmake_files(root):
@@ -108,14 +124,14 @@ def cmake_needs(root):
                 if "COMPONENTS" in args:
                     comps = [a for a in args[args.index("COMPONENTS") + 1:] if a.isidentifier()]
                 for key in ([f"{name}:{c}" for c in comps] or [name]):
-                    needs.append((key, rel))
+                    needs.append((key, rel, option_at(text, m.start())))
             else:
                 for mod in args[1:]:
                     if mod.upper() in PKG_KEYWORDS:
                         continue
                     mod = re.split(r"[<>=]", mod)[0]
                     if mod and mod not in EXCLUDED:
-                        needs.append(("pkg:" + mod, rel))
+                        needs.append(("pkg:" + mod, rel, option_at(text, m.start())))
     return needs
 
 
@@ -132,7 +148,7 @@ def include_needs(root):
                     headers = inc.findall(fh.read())
                 for prefix in INCLUDES:
                     if any(h.startswith(prefix) for h in headers):
-                        needs.append(("include:" + prefix, os.path.relpath(path, root)))
+                        needs.append(("include:" + prefix, os.path.relpath(path, root), None))
     return needs
 
 
@@ -198,13 +214,14 @@ def main():
     fails = []
 
     depends, pkgconfig, default_pc, packages, files = parse_recipe(recipe)
+    # What the build always asks for must be in DEPENDS, not in a PACKAGECONFIG
+    # (even a default one): a recipe with that PACKAGECONFIG off must still build.
     always = set(depends)
-    for name in default_pc:
-        always |= set(pkgconfig.get(name, []))
+    fails += [f"PACKAGECONFIG ??= names {n}, which has no PACKAGECONFIG[{n}]" for n in default_pc if n not in pkgconfig]
 
     needs = cmake_needs(root) + include_needs(root)
     required = set()
-    for key, where in needs:
+    for key, where, option_pc in needs:
         if key.startswith("include:"):
             recipes = INCLUDES[key[len("include:"):]][0]
         elif key in RECIPES:
@@ -213,6 +230,8 @@ def main():
             fails.append(f"{key} ({where}) has no recipe in check_recipe.py's RECIPES: map it or exclude it with a reason")
             continue
         have = set(always)
+        if option_pc:
+            have |= set(pkgconfig.get(option_pc, []))
         for prefix, pc in OPTIONAL.items():
             if where.startswith(prefix):
                 have |= set(pkgconfig.get(pc, []))
@@ -235,7 +254,7 @@ def main():
     if len({cmake_v, deb_v.split("-")[0], bb_v}) != 1:
         fails.append(f"versions differ: CMakeLists.txt {cmake_v}, debian/changelog {deb_v}, recipe {bb_v}")
 
-    keys = sorted({k for k, _ in needs})
+    keys = sorted({k for k, _, _ in needs})
     print(f"check_recipe: {len(keys)} CMake/pkg-config/include names -> {len(required)} recipes; "
           f"recipe DEPENDS {len(depends)}; packages {' '.join(sorted(packages))}; version {cmake_v}")
     if extra:

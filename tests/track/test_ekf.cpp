@@ -77,7 +77,11 @@ DriveResult drive(const DriveSpec& s, const EkfDesc& desc = EkfDesc{}, const Odo
       next_fix += s.gnss_period;
       const bool outage = t >= s.outage_begin && t < s.outage_end;
       if (!outage) {
-        r.ekf.updatePosition(t, x.e + s.gnss_sigma * noise(), x.n + s.gnss_sigma * noise(),
+        // One draw per statement: the order of a call's arguments is unspecified
+        // (GCC draws them in another order on arm64), and the drive must be the same everywhere.
+        const double noise_n = noise();
+        const double noise_e = noise();
+        r.ekf.updatePosition(t, x.e + s.gnss_sigma * noise_e, x.n + s.gnss_sigma * noise_n,
                              s.report_sigma ? s.gnss_sigma : 0.0);
         if (s.gnss_speed) {
           const double ve = x.v * std::sin(x.psi) + 0.2 * noise(), vn = x.v * std::cos(x.psi) + 0.2 * noise();

@@ -32,42 +32,25 @@ DEPENDS += "draco"
 DEPENDS += "meshoptimizer"
 # geographiclib (find_package GeographicLib): this layer (meta-ros has one)
 DEPENDS += "geographiclib"
-# cgal (find_package CGAL, the bake): this layer
-DEPENDS += "cgal"
-# gmp, mpfr, boost (what CGAL needs): openembedded-core
-DEPENDS += "gmp"
-DEPENDS += "mpfr"
-DEPENDS += "boost"
-# libosmium, protozero (header-only, no find_package; sdk/bake includes them): this layer
-DEPENDS += "libosmium"
-DEPENDS += "protozero"
 # zstd (find_package zstd): openembedded-core
 DEPENDS += "zstd"
 # nlohmann-json (find_package nlohmann_json): meta-oe
 DEPENDS += "nlohmann-json"
 # cli11 (find_package CLI11): meta-oe
 DEPENDS += "cli11"
-# zlib, bzip2, expat (find_package ZLIB, BZip2, EXPAT): openembedded-core
+# zlib (find_package ZLIB): openembedded-core
 DEPENDS += "zlib"
-DEPENDS += "bzip2"
-DEPENDS += "expat"
-# openssl (find_package OpenSSL): openembedded-core
-DEPENDS += "openssl"
 # curl (find_package CURL): openembedded-core
 DEPENDS += "curl"
 # virtual/egl (find_package OpenGL COMPONENTS EGL): openembedded-core (mesa) or the BSP
 DEPENDS += "virtual/egl"
 # virtual/libgles2 (GLES3/gl3.h in sdk/render): openembedded-core (mesa) or the BSP
 DEPENDS += "virtual/libgles2"
-# mesa (pkg-config osmesa; needs PACKAGECONFIG:append:pn-mesa = " osmesa"): openembedded-core
-DEPENDS += "mesa"
 # stb (pkg-config stb): this layer (meta-imx has one, without stb.pc)
 DEPENDS += "stb"
 # libwebp (pkg-config libwebp): openembedded-core
 DEPENDS += "libwebp"
 
-# CMakeLists.txt has no switch for EGL, OSMesa or the tool (all are built
-# always), so there is no PACKAGECONFIG for them: see README.md.
 EXTRA_OECMAKE = "\
     -DCMAKE_BUILD_TYPE=Release \
     -DBLVD_BUILD_TESTS=OFF \
@@ -79,7 +62,18 @@ EXTRA_OECMAKE = "\
 # CMAKE_MODULE_PATH; the sysroot's FindGeographicLib.cmake (installed there by
 # this layer's geographiclib) comes first.
 
-PACKAGECONFIG ??= ""
+# tools: the bake and /usr/bin/blvd (package blvd-tools), on a build host or a
+#   development image; a vehicle image needs only libblvd0. Its dependencies:
+#   cgal (this layer) with gmp, mpfr, boost (openembedded-core); libosmium and
+#   protozero (header-only, this layer); bzip2, expat, openssl (openembedded-core).
+# osmesa: the software backend; mesa (openembedded-core) built with
+#   PACKAGECONFIG:append:pn-mesa = " osmesa". Without it, the osmesa backend
+#   fails at create and Auto uses EGL only.
+# EGL has no switch: it is the runtime's backend (virtual/egl above), and the
+# host-context path gets its GL functions through it.
+PACKAGECONFIG ??= "tools osmesa"
+PACKAGECONFIG[tools] = "-DBLVD_BUILD_TOOLS=ON,-DBLVD_BUILD_TOOLS=OFF,cgal gmp mpfr boost libosmium protozero bzip2 expat openssl"
+PACKAGECONFIG[osmesa] = "-DBLVD_WITH_OSMESA=ON,-DBLVD_WITH_OSMESA=OFF,mesa"
 PACKAGECONFIG[werror] = "-DBLVD_WERROR=ON,-DBLVD_WERROR=OFF"
 # The samples build only (none is installed); host_context needs glesv2.
 PACKAGECONFIG[samples] = "-DBLVD_BUILD_SAMPLES=ON,-DBLVD_BUILD_SAMPLES=OFF,virtual/libgles2"
