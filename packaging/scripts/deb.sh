@@ -17,6 +17,7 @@ work=$(realpath -m "${1:?usage: deb.sh WORKDIR PACKAGE}")
 pkg=$(realpath "${2:?usage: deb.sh WORKDIR PACKAGE}")
 bash packaging/scripts/deps_deb.sh
 arch=$(dpkg --print-architecture)
+multiarch=$(dpkg-architecture -qDEB_HOST_MULTIARCH)
 version=$(dpkg-parsechangelog -l packaging/debian/changelog -S Version)
 tree=$work/blvd-$version
 rm -rf "$work"
@@ -58,7 +59,7 @@ step root mmdebstrap --mode=root --variant=apt --skip=download/empty --skip=clea
   --setup-hook='mkdir -p "$1"/var/cache/apt/archives && cp -al /var/cache/apt/archives/*.deb "$1"/var/cache/apt/archives/' \
   --customize-hook="copy-in $work/in /" \
   --customize-hook='chroot "$1" sh -c "cd /in && DEBIAN_FRONTEND=noninteractive apt-get install -y -q ./*.deb"' \
-  --customize-hook='chroot "$1" /in/src/samples/check_installed_sdk.sh /usr /usr/lib/$(dpkg --print-architecture | sed "s/amd64/x86_64-linux-gnu/;s/arm64/aarch64-linux-gnu/") /in/src /in/test-monaco.blvd /in/check' \
+  --customize-hook="chroot \"\$1\" /in/src/samples/check_installed_sdk.sh /usr /usr/lib/$multiarch /in/src /in/test-monaco.blvd /in/check" \
   bookworm "$root"
 t2=$(date +%s)
 test -f "$root/in/check/frame.png" || { echo "FAIL: no frame rendered in the clean root" >&2; exit 1; }
