@@ -4,7 +4,7 @@
 # 1. the checkout (tracked and untracked files, no build folders) copied to
 #    WORKDIR/blvd-VERSION, with packaging/debian as debian/;
 # 2. dpkg-buildpackage -us -uc -b (dpkg-gensymbols checks libblvd0.symbols);
-# 3. lintian: no error, and every warning's tag explained in packaging/debian/README;
+# 3. lintian: no error, and every warning's tag explained in packaging/debian/README (lint.sh);
 # 4. a clean Debian 12 root made by mmdebstrap (packages from the local apt
 #    cache where it has them), where `apt-get install ./*.deb` installs the
 #    packages and samples/check_installed_sdk.sh builds the samples against
@@ -27,8 +27,7 @@ mkdir -p "$tree"
 source samples/step.sh
 
 # 1-2. Build.
-git ls-files -co --exclude-standard -z | tar --null -T - -cf - | tar -xf - -C "$tree"
-cp -r packaging/debian "$tree/debian"
+bash packaging/scripts/deb_source.sh "$tree"
 t0=$(date +%s)
 step build env -C "$tree" DEB_BUILD_OPTIONS="parallel=$(nproc) nocheck" dpkg-buildpackage -us -uc -b
 t1=$(date +%s)
@@ -40,12 +39,7 @@ for p in $(sed -n 's/^Package: //p' packaging/debian/control); do
 done
 
 # 3. lintian: errors fail; each warning's tag is named in the README's Lintian section.
-step lintian lintian --fail-on error --tag-display-limit 0 "$work/blvd_${version}_${arch}.changes"
-readme=packaging/debian/README
-for tag in $(sed -n 's/^W: [^:]*: \([a-z0-9-]*\).*/\1/p' "$work/lintian.log" | sort -u); do
-  grep -q -- "^- $tag:" "$readme" || { echo "FAIL: lintian warning $tag is not explained in $readme" >&2;
-    grep -- ": $tag" "$work/lintian.log" >&2; exit 1; }
-done
+bash packaging/scripts/lint.sh "$work/blvd_${version}_${arch}.changes" "$work/lintian.log"
 
 # 4. A clean root: the packages from apt, the samples from this checkout.
 root=$work/root
@@ -55,7 +49,7 @@ cp "$pkg" "$work/in/test-monaco.blvd"
 cp -r samples "$work/in/src/samples"
 cp -r tests/data/can/dbc "$work/in/src/tests/data/can/dbc"
 step root mmdebstrap --mode=root --variant=apt --skip=download/empty --skip=cleanup/apt \
-  --include=build-essential,cmake,pkg-config,libcli11-dev,libgles-dev \
+  --include=build-essential,cmake,pkg-config,libcli11-dev,libstb-dev,libgles-dev,libopengl-dev \
   --setup-hook='mkdir -p "$1"/var/cache/apt/archives && cp -al /var/cache/apt/archives/*.deb "$1"/var/cache/apt/archives/' \
   --customize-hook="copy-in $work/in /" \
   --customize-hook='chroot "$1" sh -c "cd /in && DEBIAN_FRONTEND=noninteractive apt-get install -y -q ./*.deb"' \

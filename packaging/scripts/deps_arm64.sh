@@ -9,7 +9,7 @@
 set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
 geo_rt=$(apt-cache depends libgeographiclib-dev | awk '/Depends: libgeographiclib[0-9]/ {print $2; exit}')
-pkgs=(crossbuild-essential-arm64 qemu-user
+pkgs=(crossbuild-essential-arm64 qemu-user pkgconf:arm64
   libgtest-dev:arm64 libgmock-dev:arm64 libdraco-dev:arm64 libmeshoptimizer-dev:arm64 libwebp-dev:arm64
   libstb-dev:arm64 libosmesa6-dev:arm64 libegl-dev:arm64 libgles-dev:arm64 libopengl-dev:arm64 libgl-dev:arm64 libcurl4-openssl-dev:arm64
   zlib1g-dev:arm64 libzstd-dev:arm64 "${geo_rt}:arm64" libegl-mesa0:arm64 libgl1-mesa-dri:arm64)

@@ -321,8 +321,9 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
   if (!bpos) throw core::Error(Status::Internal, "encodeGlb: Draco lost the POSITION attribute");
   std::array<float, 3> lo{0, 0, 0}, hi{0, 0, 0};
   for (draco::PointIndex i(0); i < back->num_points(); ++i) {
-    float v[3];
-    bpos->ConvertValue<float>(bpos->mapped_index(i), 3, v);
+    float v[3] = {0, 0, 0};
+    if (!bpos->ConvertValue<float>(bpos->mapped_index(i), 3, v))
+      throw core::Error(Status::Internal, "encodeGlb: Draco's decoded POSITION is not 3 floats");
     for (int k = 0; k < 3; ++k) {
       if (i.value() == 0 || v[k] < lo[k]) lo[k] = v[k];
       if (i.value() == 0 || v[k] > hi[k]) hi[k] = v[k];

@@ -90,7 +90,7 @@ FILES:libblvd-dev = "\
     ${libdir}/cmake/blvd/blvdTargets*.cmake \
     ${libdir}/pkgconfig/blvd.pc \
 "
-FILES:blvd-tools = "${bindir}/blvd ${datadir}/blvd"
+FILES:blvd-tools = "${bindir}/blvd ${datadir}/blvd ${mandir}/man1/blvd.1"
 FILES:libblvd-adapters-dev = "\
     ${includedir}/blvd/adapters \
     ${includedir}/blvd/internal \
