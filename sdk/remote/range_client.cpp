@@ -226,8 +226,10 @@ core::Status RangeClient::fetchRange(uint64_t offset, uint64_t size, std::vector
     double wait_s = 0;
     st = core::Status::Io;
     const Outcome o = attempt(offset, size, out, wait_s, st, why);
+    if (o == Outcome::Done) ++stats_.fetches;
+    if (o == Outcome::Retry && k < opt_.max_attempts) ++stats_.retries;
+    if (on_attempt_) on_attempt_(stats_);
     if (o == Outcome::Done) {
-      ++stats_.fetches;
       stats_.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
       return core::Status::Ok;
     }
@@ -236,7 +238,6 @@ core::Status RangeClient::fetchRange(uint64_t offset, uint64_t size, std::vector
       gave_up = true;
       break;
     }
-    ++stats_.retries;
     std::this_thread::sleep_for(std::chrono::duration<double>(std::max(wait_s, backoff)));
     backoff = std::min(2 * backoff, opt_.backoff_max_s);
   }

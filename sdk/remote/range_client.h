@@ -18,6 +18,7 @@
 // its connection reused across fetches.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -66,6 +67,9 @@ class RangeClient {
   uint64_t resourceBytes() const { return total_; }   // from Content-Range (0 until known)
   bool changed() const { return changed_; }
   const LinkStats& stats() const { return stats_; }
+  // Called on the fetching thread after every attempt with the stats so far,
+  // so that a fetch retrying through a tunnel shows its requests as they go.
+  void onAttempt(std::function<void(const LinkStats&)> f) { on_attempt_ = std::move(f); }
 
  private:
   struct Attempt;
@@ -82,6 +86,7 @@ class RangeClient {
   bool changed_ = false;
   bool allow_short_ = false;  // fetchUpTo: a range past the end is served to the end
   LinkStats stats_;
+  std::function<void(const LinkStats&)> on_attempt_;
 };
 
 }  // namespace blvd::remote

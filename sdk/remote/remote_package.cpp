@@ -285,6 +285,10 @@ core::Status RemotePackage::open(const std::string& url, const RemoteOptions& op
   if (mirror_fd_ >= 0) ::close(mirror_fd_);
   mirror_fd_ = -1;
   client_ = std::make_unique<RangeClient>(url, opt.link);
+  client_->onAttempt([this](const LinkStats& s) {  // the fetching thread holds link_mu_ or is open()'s
+    std::lock_guard<std::mutex> lock(stats_mu_);
+    link_stats_ = s;
+  });
   cache_.reset();
   std::vector<uint8_t> head;
   uint64_t file_size = 0;

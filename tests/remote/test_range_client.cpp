@@ -164,11 +164,17 @@ TEST_F(Remote, RetryAfterIsHonoured) {
 
 TEST_F(Remote, AStalledLinkTimesOutAndIsRetried) {
   remote::RangeClient c(faults_->url("/stall/city.blvd"), quick());
+  std::vector<remote::LinkStats> seen;  // each attempt's stats, as the fetch goes on
+  c.onAttempt([&](const remote::LinkStats& s) { seen.push_back(s); });
   std::vector<uint8_t> out;
   std::string err;
   ASSERT_EQ(c.fetch(0, 1000, out, err), core::Status::Ok) << err;
   EXPECT_EQ(out, slice(0, 1000));
   EXPECT_GE(c.stats().retries, 1u);
+  ASSERT_EQ(seen.size(), c.stats().requests);
+  for (size_t k = 0; k < seen.size(); ++k) EXPECT_EQ(seen[k].requests, k + 1);
+  EXPECT_EQ(seen.front().retries, 1u);  // the stall: known as a retry before the next attempt starts
+  EXPECT_EQ(seen.back().fetches, 1u);
 }
 
 TEST_F(Remote, AnEtagThatChangesMidDriveIsAChangedPackage) {
