@@ -656,7 +656,12 @@ typedef struct blvd_can_profile_desc {
   const char* dbc_path;        /* required: the vehicle's DBC file; read once by create */
   blvd_can_speed_source speed; /* 0 means BLVD_CAN_SPEED_AUTO */
   float wheel_stale_s;         /* AUTO falls back to the vehicle speed after this long; 0 means 0.5 */
+  uint32_t flags;              /* BLVD_CAN_PROFILE_*; 0: a DBC message the decoder cannot use is skipped */
 } blvd_can_profile_desc;
+
+/* Bits of blvd_can_profile_desc.flags. */
+#define BLVD_CAN_PROFILE_STRICT_DBC 0x1u /* such a message fails create instead (BLVD_ERR_CORRUPT, or
+                                          * BLVD_ERR_UNSUPPORTED for valid DBC this decoder does not follow) */
 
 /* The vehicle named "toyota", "vw_mqb" or "hyundai". Any thread.
  * Errors: BLVD_ERR_INVALID_ARG for NULL; BLVD_ERR_NOT_FOUND for another name. */
@@ -666,11 +671,17 @@ BLVD_API blvd_status blvd_vehicle_from_name(const char* name, blvd_vehicle* out)
  * *out with blvd_can_profile_destroy. Thread: any. Memory: allocates the parsed
  * DBC here, nothing afterwards. Errors (*out NULL, blvd_last_error(NULL) says
  * why, naming the file and line or each missing message and signal):
- * BLVD_ERR_INVALID_ARG, BLVD_ERR_IO, BLVD_ERR_CORRUPT, BLVD_ERR_NOT_FOUND. */
+ * BLVD_ERR_INVALID_ARG (also for unknown flags), BLVD_ERR_IO, BLVD_ERR_CORRUPT,
+ * BLVD_ERR_UNSUPPORTED (strict only), BLVD_ERR_NOT_FOUND. */
 BLVD_API blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_profile** out);
 
 /* Frees a profile. NULL is a no-op. No feed may be using it. */
 BLVD_API void blvd_can_profile_destroy(blvd_can_profile* profile);
+
+/* The index-th warning of reading the profile's DBC, "file:line: text" (a message
+ * skipped, and why; a signal left out), or NULL past the last one. The text lives
+ * as long as the profile. Any thread; no allocation. */
+BLVD_API const char* blvd_can_profile_warning(const blvd_can_profile* profile, uint32_t index);
 
 /* Bits of blvd_can_frame.flags. */
 #define BLVD_CAN_EXTENDED 0x1u /* 29-bit identifier */

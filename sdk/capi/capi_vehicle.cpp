@@ -124,10 +124,14 @@ blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_
                 "blvd_can_profile_create: unknown speed source " + std::to_string(rawEnum(d.speed)));
   if (!(d.wheel_stale_s >= 0 && d.wheel_stale_s < 3600))
     return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: wheel_stale_s out of range");
+  if (d.flags & ~BLVD_CAN_PROFILE_STRICT_DBC)
+    return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: unknown flags " + std::to_string(d.flags));
   try {
     auto* p = new blvd_can_profile;
     std::string err;
-    blvd::core::Status st = p->dbc.load(d.dbc_path, err);
+    vehicle::DbcOptions dbc_opt;
+    dbc_opt.strict = (d.flags & BLVD_CAN_PROFILE_STRICT_DBC) != 0;
+    blvd::core::Status st = p->dbc.load(d.dbc_path, err, dbc_opt);
     if (st == blvd::core::Status::Ok) {
       vehicle::ProfileDesc pd;
       pd.vehicle = static_cast<vehicle::Vehicle>(d.vehicle);
@@ -151,6 +155,11 @@ blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_
 }
 
 void blvd_can_profile_destroy(blvd_can_profile* profile) { delete profile; }
+
+const char* blvd_can_profile_warning(const blvd_can_profile* profile, uint32_t index) {
+  if (!profile || index >= profile->dbc.diagnostics().size()) return nullptr;
+  return profile->dbc.diagnostics()[index].c_str();
+}
 
 blvd_status blvd_can_profile_decode(blvd_can_profile* profile, const blvd_can_frame* frame, blvd_odometry* odo) {
   if (!profile) return BLVD_ERR_MISUSE;

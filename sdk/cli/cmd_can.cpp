@@ -1,11 +1,16 @@
 // `blvd can ...`: inspect candump logs with a DBC.
 //
-//   blvd can decode LOG --dbc DBC [--json] [--iface can0] [-o FILE]
+//   blvd can decode LOG --dbc DBC [--json] [--strict] [--iface can0] [-o FILE]
 //     one line per frame whose id the DBC knows; with --json one object per line:
-//     {"t":46408.584959,"id":37,"iface":"can0","name":"STEER_ANGLE_SENSOR","signals":{"STEER_ANGLE":0,...}}
-//     ("extended":true follows "id" for 29-bit ids; t is the log's timestamp text, exactly)
-//   blvd can odometry LOG --dbc DBC --vehicle toyota|vw_mqb|hyundai [--json] [--iface can0] [-o FILE]
+//     {"t":46408.584959,"id":37,"iface":"can0","name":"STEER_ANGLE_SENSOR","signals":{"STEER_ANGLE":0,...},
+//      "named":{"GEAR":"P"}}
+//     ("extended":true follows "id" for 29-bit ids; t is the log's timestamp text, exactly; "named" holds
+//     the VAL_ description of each signal whose value has one, and is left out when none has)
+//   blvd can odometry LOG --dbc DBC --vehicle toyota|vw_mqb|hyundai [--json] [--strict] [--iface can0] [-o FILE]
 //     one line per Odometry update of the vehicle profile.
+//
+// A DBC message the decoder cannot use is skipped with a warning on stderr
+// ("DBC:LINE: message X skipped: reason"); --strict makes it fail the command.
 //
 // Frames with ids the DBC lacks are skipped and counted; the counts go to stderr
 // at the end. Bad log lines are reported as "LOG:LINE: reason" on stderr and
@@ -30,7 +35,7 @@ namespace {
 
 struct CanOptions {
   std::string log, dbc, iface, output, vehicle = "toyota", speed = "auto";
-  bool json = false;
+  bool json = false, strict = false;
 };
 
 // Buffered output to stdout or a file.
@@ -80,6 +85,21 @@ void putJsonString(std::string& s, const std::string& v) {
   s.push_back('"');
 }
 
+// ,"named":{"SIGNAL":"description",...} for the signals whose raw value VAL_ describes; nothing when none.
+void putNamed(std::string& s, const std::vector<vehicle::DecodedSignal>& sig) {
+  bool any = false;
+  for (const auto& d : sig) {
+    const std::string* text = d.signal->describe(static_cast<int64_t>(d.raw));
+    if (!text) continue;
+    s += any ? "," : ",\"named\":{";
+    any = true;
+    putJsonString(s, d.signal->name);
+    s.push_back(':');
+    putJsonString(s, *text);
+  }
+  if (any) s.push_back('}');
+}
+
 // The timestamp exactly as the log wrote it.
 void putTime(std::string& s, const can::Record& r) {
   char buf[48];
@@ -89,7 +109,9 @@ void putTime(std::string& s, const can::Record& r) {
 
 bool openInputs(const CanOptions& o, vehicle::Database& db, can::CandumpReader& reader, Out& out, int& code) {
   std::string err;
-  if (db.load(o.dbc, err) != core::Status::Ok) {
+  vehicle::DbcOptions opt;
+  opt.strict = o.strict;
+  if (db.load(o.dbc, err, opt) != core::Status::Ok) {
     std::fprintf(stderr, "blvd can: %s\n", err.c_str());
     code = 2;
     return false;
@@ -164,7 +186,9 @@ int decodeLog(const CanOptions& o) {
         line.push_back(':');
         putNumber(line, sig[i].value, true);
       }
-      line += "}}\n";
+      line.push_back('}');
+      putNamed(line, sig);
+      line += "}\n";
     } else {
       putTime(line, rec);
       line += " " + f.iface + " " + can::formatFrame(f) + " " + m->name;
@@ -275,7 +299,8 @@ void addCan(CLI::App& app, Runner& run) {
   auto* dec = can->add_subcommand("decode", "print the DBC signals of every frame whose id the DBC knows");
   dec->add_option("log", o->log, "candump -l log ('-' for stdin)")->required();
   dec->add_option("--dbc", o->dbc, "DBC file")->required();
-  dec->add_flag("--json", o->json, "one JSON object per line: t, id, iface, name, signals");
+  dec->add_flag("--json", o->json, "one JSON object per line: t, id, iface, name, signals, named");
+  dec->add_flag("--strict", o->strict, "fail on a DBC message the decoder cannot use instead of skipping it");
   dec->add_option("--iface", o->iface, "only frames from this interface (e.g. can0)");
   dec->add_option("-o,--output", o->output, "write to this file instead of stdout");
   dec->callback([&run, o] { run = [o] { return decodeLog(*o); }; });
@@ -286,6 +311,7 @@ void addCan(CLI::App& app, Runner& run) {
   odo->add_option("--vehicle", o->vehicle, "toyota, vw_mqb or hyundai")->capture_default_str();
   odo->add_option("--speed", o->speed, "speed source: auto, wheels or vehicle")->capture_default_str();
   odo->add_flag("--json", o->json, "one JSON object per line");
+  odo->add_flag("--strict", o->strict, "fail on a DBC message the decoder cannot use instead of skipping it");
   odo->add_option("--iface", o->iface, "only frames from this interface (e.g. can0)");
   odo->add_option("-o,--output", o->output, "write to this file instead of stdout");
   odo->callback([&run, o] { run = [o] { return odometryLog(*o); }; });

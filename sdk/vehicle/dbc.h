@@ -1,19 +1,21 @@
 // A subset of the Vector DBC format, enough to decode and encode the signals of
 // a vehicle's messages: BO_ (messages) and SG_ (signals) with Intel (@1) and
 // Motorola (@0) byte order, signed (-) and unsigned (+) values, factor/offset,
-// [min|max], unit and receivers. VAL_ (value descriptions) and SIG_VALTYPE_
-// (IEEE float signals) are read when present; CM_ and every other statement are
+// [min|max], unit and receivers; simple multiplexing (one `M` signal per
+// message, `mN` signals decoded only while it holds N). VAL_ (value
+// descriptions) and SIG_VALTYPE_ (IEEE float signals) are read when present;
+// CM_, BA_DEF_, BA_, SIG_GROUP_, VAL_TABLE_ and every other statement are
 // skipped, including multi-line quoted strings.
 //
-// Multiplexing is not supported. A multiplexed signal (`m12`, `m12M`) does not
-// make the load fail: the rest of the file is usable, the signal is kept with
-// supported == false and the message "unsupported: multiplexed signal X in
-// message Y (line N)", listed in Database::diagnostics(), and decode() leaves it
-// out. The multiplexor itself (`M`) is an ordinary field and is decoded. Set
-// DbcOptions::reject_unsupported to make such a file fail to load instead.
-//
-// A syntax error in BO_ or SG_ fails the load with "file:line: reason": a
-// decoder that silently lost one signal would be worse than one that refuses the file.
+// Files as real projects ship them (opendbc's, for one) hold messages no decoder
+// can use: ids above 0x7FF without the extended bit, extended multiplexing
+// (`mNM`, SG_MUL_VAL_), sizes past 64 bytes, a malformed signal line. By default
+// such a message is skipped whole, never in part: Database::skipped() and
+// diagnostics() name file, line and reason ("f.dbc:12: message X skipped: ..."),
+// and the rest of the file loads. DbcOptions::strict makes the first of them
+// fail the load instead, with "file:line: reason" (core::Status::Corrupt for a
+// syntax error, Unsupported for what is valid DBC but not decoded). A file in
+// which no message could be used fails either way.
 //
 // Bit numbering is the DBC's: bit b is bit (b % 8) of byte (b / 8). An Intel
 // signal's start bit is its least significant bit, and it grows towards higher
@@ -48,7 +50,7 @@ struct Signal {
   std::string unit;
   std::vector<std::string> receivers;
   bool multiplexor = false;        // 'M'
-  int32_t multiplex_value = -1;    // 'm12' -> 12; -1 when not multiplexed
+  int32_t multiplex_value = -1;    // 'm12' -> 12: present while the multiplexor's raw value is 12; -1 always
   bool supported = true;
   std::string unsupported;         // why, when !supported
   uint32_t line = 0;
@@ -66,9 +68,17 @@ struct Message {
   uint32_t size = 0;  // bytes
   std::string transmitter;
   std::vector<Signal> signals;
+  int32_t multiplexor = -1;  // index in signals of the 'M' signal; -1 without multiplexing
   uint32_t line = 0;
 
   const Signal* signal(std::string_view signal_name) const;
+};
+
+// A message the decoder cannot use, left out of the database.
+struct SkippedMessage {
+  std::string name;  // "" when the BO_ line did not give one
+  uint32_t line = 0;   // where the reason lies (the BO_, SG_ or SG_MUL_VAL_ line)
+  std::string reason;
 };
 
 struct DecodedSignal {
@@ -78,7 +88,7 @@ struct DecodedSignal {
 };
 
 struct DbcOptions {
-  bool reject_unsupported = false;  // fail the load (core::Status::Unsupported) at the first multiplexed signal
+  bool strict = false;  // fail the load at the first message or signal that would be skipped or left out
 };
 
 class Database {
@@ -94,8 +104,10 @@ class Database {
   const Message* find(uint32_t id, bool extended) const;
   const Message* find(const Frame& f) const { return f.error || f.rtr ? nullptr : find(f.id, f.extended); }
   const Message* findByName(std::string_view name) const;
-  // Non-fatal findings, one line each, "source:line: text" (unsupported signals first among them).
+  // Non-fatal findings, one line each, "source:line: text", in file order.
   const std::vector<std::string>& diagnostics() const { return diagnostics_; }
+  // The messages left out, in file order (each also has its line in diagnostics()).
+  const std::vector<SkippedMessage>& skipped() const { return skipped_; }
   const std::string& source() const { return source_; }
 
  private:
@@ -103,6 +115,7 @@ class Database {
   std::vector<Message> messages_;
   std::unordered_map<uint32_t, size_t> by_id_;  // id | 0x80000000 for extended ids
   std::vector<std::string> diagnostics_;
+  std::vector<SkippedMessage> skipped_;
   std::string source_;
 };
 
@@ -118,7 +131,8 @@ bool toRaw(const Signal& s, double value, uint64_t& raw);
 
 // Decodes the supported signals of `m` that lie inside f's payload (a frame
 // shorter than the message loses only the signals past its end) into `out`
-// (cleared first). Returns the number decoded.
+// (cleared first): of the multiplexed ones, those the multiplexor's value
+// selects (none when the multiplexor lies past the end). Returns the number decoded.
 size_t decode(const Message& m, const Frame& f, std::vector<DecodedSignal>& out);
 
 // Writes the given signals into `f`: sets f's id, extended flag and (when it is
@@ -126,8 +140,10 @@ size_t decode(const Message& m, const Frame& f, std::vector<DecodedSignal>& out)
 // encode(m, decode(m, f), f2) reproduces every signal bit of f in f2.
 // Each entry's `signal` must point into m.signals (else core::Status::Misuse). `value` is
 // encoded; when it is exactly the value `raw` decodes to, `raw` is written as is.
-// core::Status::InvalidArg with `err` naming the signal when a value does not fit;
-// core::Status::Unsupported for a multiplexed signal.
+// Multiplexed signals set the multiplexor to their value; given with the
+// multiplexor, they must agree with it and with each other.
+// core::Status::InvalidArg with `err` naming the signal when a value does not fit
+// or the multiplexor values disagree; core::Status::Unsupported for a signal left out at load.
 core::Status encode(const Message& m, const std::vector<DecodedSignal>& values, Frame& f, std::string& err);
 // The same, signals given by name. core::Status::NotFound for a name m lacks.
 core::Status encode(const Message& m, const std::vector<std::pair<std::string, double>>& values, Frame& f,

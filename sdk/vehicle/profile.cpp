@@ -163,8 +163,10 @@ core::Status Profile::create(const ProfileDesc& desc, const Database& dbc, std::
   const auto lookup = [&](const Message* m, const char* name, bool required) -> const Signal* {
     if (!name || !m) return nullptr;
     const Signal* s = m->signal(name);
-    if ((!s || !s->supported) && required) noteMissing(m->name + "." + name + (s ? " (unsupported)" : ""));
-    return s && s->supported ? s : nullptr;
+    const bool usable = s && s->supported && s->multiplex_value < 0;  // a profile reads plain signals
+    if (!usable && required)
+      noteMissing(m->name + "." + name + (!s ? "" : s->supported ? " (multiplexed)" : " (unsupported)"));
+    return usable ? s : nullptr;
   };
   for (const Spec* s = begin; s != begin + n; ++s) {
     const Message* m = dbc.findByName(s->message);

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <thread>
 #include <vector>
@@ -135,6 +137,43 @@ TEST(CapiCan, RefusesBadFramesAndDescriptors) {
   EXPECT_EQ(blvd_can_profile_decode(h.p, &f, &odo), BLVD_ERR_INVALID_ARG);
   EXPECT_EQ(blvd_can_profile_decode(h.p, nullptr, &odo), BLVD_ERR_INVALID_ARG);
   EXPECT_EQ(blvd_feed_can_frame(nullptr, h.p, &f), BLVD_ERR_MISUSE);
+}
+
+// A DBC as projects ship it (the Toyota file plus a message above 0x7FF without
+// the extended bit): the profile loads and says what it skipped; strict refuses it.
+TEST(CapiCan, ADbcWithAMessageItCannotUseLoadsUnlessStrict) {
+  const std::string path = std::string(BLVD_BINARY_DIR) + "/test_capi_can_field.dbc";
+  std::string text;
+  {
+    std::ifstream in(kToyotaDbc, std::ios::binary);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const size_t line = size_t(std::count(text.begin(), text.end(), '\n')) + 2;
+  std::ofstream(path, std::ios::binary) << text << "\nBO_ 13274 LKAS_HUD_A: 5 ADAS\n SG_ X : 7|8@0+ (1,0) [0|255] \"\" XXX\n";
+  blvd_can_profile_desc d{};
+  d.struct_size = sizeof d;
+  d.dbc_path = path.c_str();
+  ProfileHandle h;
+  ASSERT_EQ(blvd_can_profile_create(&d, &h.p), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_NE(blvd_can_profile_warning(h.p, 0), nullptr);
+  EXPECT_EQ(std::string(blvd_can_profile_warning(h.p, 0)),
+            path + ":" + std::to_string(line) + ": message LKAS_HUD_A skipped: id 13274 exceeds 0x7FF (extended ids set bit 31)");
+  EXPECT_EQ(blvd_can_profile_warning(h.p, 1), nullptr);
+  EXPECT_EQ(blvd_can_profile_warning(nullptr, 0), nullptr);
+  d.flags = BLVD_CAN_PROFILE_STRICT_DBC;
+  blvd_can_profile* p = nullptr;
+  EXPECT_EQ(blvd_can_profile_create(&d, &p), BLVD_ERR_CORRUPT);
+  EXPECT_EQ(p, nullptr);
+  EXPECT_NE(std::string(blvd_last_error(nullptr)).find(path + ":" + std::to_string(line) + ": message LKAS_HUD_A"),
+            std::string::npos)
+      << blvd_last_error(nullptr);
+  d.flags = 0x80;
+  EXPECT_EQ(blvd_can_profile_create(&d, &p), BLVD_ERR_INVALID_ARG);
+  // Strict on a clean file loads as before.
+  d.dbc_path = kToyotaDbc.c_str();
+  d.flags = BLVD_CAN_PROFILE_STRICT_DBC;
+  ProfileHandle clean;
+  EXPECT_EQ(blvd_can_profile_create(&d, &clean.p), BLVD_OK) << blvd_last_error(nullptr);
 }
 
 // The ids a host filters its socket on: every message the Toyota profile

@@ -4,7 +4,8 @@
 // must reproduce every signal bit (encode(decode(frame)) == frame).
 //
 // Seeds: set BLVD_FUZZ_SEED_DIR and the target writes a small DBC with every
-// supported construct there; add tests/data/can/dbc (the three opendbc files).
+// supported construct there; add tests/data/can/dbc (the opendbc files) and
+// tests/data/can/dbc_cases (messages that are skipped, multiplexing).
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -40,10 +41,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   for (const auto& d : db.diagnostics())
     if (d.rfind("fuzz.dbc:", 0) != 0) std::abort();
+  for (const auto& s : db.skipped())
+    if (s.line == 0 || s.reason.empty()) std::abort();
   blvd::vehicle::DbcOptions strict;
-  strict.reject_unsupported = true;
+  strict.strict = true;
   blvd::vehicle::Database db2;
-  (void)db2.parse(text, "fuzz.dbc", err, strict);
+  // Strict loads exactly when nothing was skipped or left out.
+  const bool strict_ok = db2.parse(text, "fuzz.dbc", err, strict) == blvd::core::Status::Ok;
+  if (strict_ok && !db.skipped().empty()) std::abort();
 
   std::vector<blvd::vehicle::DecodedSignal> values;
   size_t n = 0;

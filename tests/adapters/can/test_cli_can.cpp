@@ -66,6 +66,26 @@ TEST(CanCli, DecodeJson) {
   EXPECT_EQ(lines(out)[1], "46408.584954 can0 0B4#000000001D0B7A5E SPEED ENCODER=29 SPEED=29.38 km/h CHECKSUM=94");
 }
 
+// A DBC as projects ship it: the messages the decoder cannot use are skipped
+// (--strict refuses the file); a multiplexed message decodes, with its named values.
+TEST(CanCli, FieldDbcSkipsOrRefusesAndNamesValues) {
+  const std::string log = tempPath("field.log");
+  {
+    std::ofstream f(log);
+    f << "(1.000000) can0 400#0250123400000000\n"  // RADAR_TRACK, track 2
+         "(1.000001) can0 401#0229\n";             // RADAR_STATUS: tracking, 1 degC
+  }
+  const std::string out = tempPath("field.jsonl"), dbc = test::dataPath("dbc_cases/multiplexed.dbc");
+  ASSERT_EQ(runCli({"can", "decode", log, "--dbc", dbc, "--json", "-o", out}), 0);
+  const auto l = lines(out);
+  ASSERT_EQ(l.size(), 2u);
+  EXPECT_EQ(l[0], "{\"t\":1.000000,\"id\":1024,\"iface\":\"can0\",\"name\":\"RADAR_TRACK\",\"signals\":"
+                  "{\"TRACK_ID\":2,\"STATUS\":5,\"RANGE_2\":46.6}}");
+  EXPECT_EQ(l[1], "{\"t\":1.000001,\"id\":1025,\"iface\":\"can0\",\"name\":\"RADAR_STATUS\",\"signals\":"
+                  "{\"MODE\":2,\"TEMPERATURE\":1},\"named\":{\"MODE\":\"tracking\"}}");
+  EXPECT_EQ(runCli({"can", "decode", log, "--dbc", dbc, "--strict", "-o", out}), 2);
+}
+
 TEST(CanCli, BadLinesAndBadDbc) {
   const std::string out = tempPath("bad.jsonl");
   EXPECT_EQ(runCli({"can", "decode", test::dataPath("candump/bad_lines.log"), "--dbc",
