@@ -83,6 +83,7 @@ typedef enum blvd_status {
   BLVD_ERR_NOT_FOUND = 10,  /* the requested item does not exist */
   BLVD_ERR_TIMEOUT = 11,    /* a wait ended before its condition held */
   BLVD_ERR_UNAVAILABLE = 12,/* data not here now: offline, or the link is down; try again later */
+  BLVD_ERR_OFF_MAP = 13,    /* a pose farther than BLVD_MAP_MARGIN_M outside the package's streets */
   BLVD_STATUS_FORCE_32 = 0x7fffffff
 } blvd_status;
 
@@ -307,10 +308,17 @@ typedef enum blvd_camera_source {
  * an unknown source. */
 BLVD_API blvd_status blvd_set_camera_source(blvd_runtime* rt, blvd_camera_source source);
 
+/* How far outside the bounding box of its streets a pose still counts as on the
+ * package's map: a vehicle a block or two past the baked area still sees it. */
+#define BLVD_MAP_MARGIN_M 250.0
+
 /* Places the eye at lat/lon (WGS84 degrees), eye_height_m above the street,
  * looking along heading_deg (clockwise from north), pitched by pitch_deg.
  * Render thread. Errors: BLVD_ERR_INVALID_ARG for non-finite or out-of-range
- * values; BLVD_ERR_MISUSE while the camera source is BLVD_CAMERA_TRACKED. */
+ * values; BLVD_ERR_MISUSE while the camera source is BLVD_CAMERA_TRACKED;
+ * BLVD_ERR_OFF_MAP for a pose off the map (the message says how far): the
+ * camera is then nowhere, and frames draw sky and ground only, flagged
+ * BLVD_FRAME_OFF_MAP, until a pose on the map is set. */
 BLVD_API blvd_status blvd_set_pose_geo(blvd_runtime* rt, double lat, double lon, float heading_deg,
                                        float pitch_deg);
 
@@ -335,6 +343,7 @@ typedef struct blvd_frame_stats {
 
 /* Bits of blvd_frame_stats.flags. */
 #define BLVD_FRAME_DEGRADED 0x01u /* the current cell was not resident yet: drew what was */
+#define BLVD_FRAME_OFF_MAP 0x02u  /* the pose is off the map: sky and ground only, cell BLVD_NO_CELL */
 
 typedef struct blvd_pool_stats {
   uint64_t capacity_bytes;   /* carved at create */
@@ -535,6 +544,7 @@ typedef struct blvd_odometry {
 #define BLVD_POSE_HEADING_VALID 0x02u
 #define BLVD_POSE_MATCHED 0x04u
 #define BLVD_POSE_DEAD_RECKONING 0x08u
+#define BLVD_POSE_OFF_MAP 0x10u /* the fused position is off the map (BLVD_MAP_MARGIN_M): no cell, no match */
 
 typedef struct blvd_pose {
   uint32_t struct_size;      /* set by the caller */

@@ -30,7 +30,7 @@ const char* blvd_version_string(void) {
 }
 
 const char* blvd_status_string(blvd_status s) {
-  if (s < 0 || s > BLVD_ERR_UNAVAILABLE) return "unknown status";
+  if (s < 0 || s > BLVD_ERR_OFF_MAP) return "unknown status";
   return blvd::core::statusString(static_cast<blvd::core::Status>(s));
 }
 

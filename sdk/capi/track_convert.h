@@ -27,7 +27,7 @@ static_assert(BLVD_ODO_SPEED == track::kOdoSpeed && BLVD_ODO_YAW_RATE == track::
               "odometry flag bits");
 static_assert(BLVD_POSE_VALID == track::kPoseValid && BLVD_POSE_MATCHED == track::kPoseMatched &&
                   BLVD_POSE_DEAD_RECKONING == track::kPoseDeadReckoning &&
-                  BLVD_POSE_HEADING_VALID == track::kPoseHeadingValid,
+                  BLVD_POSE_HEADING_VALID == track::kPoseHeadingValid && BLVD_POSE_OFF_MAP == track::kPoseOffMap,
               "pose flag bits");
 
 inline track::GnssFix toTrack(const blvd_gnss_fix& in) {

@@ -17,6 +17,7 @@ const char* statusString(Status s) {
     case Status::NotFound: return "not found";
     case Status::Timeout: return "timed out";
     case Status::Unavailable: return "not available now (offline or link down)";
+    case Status::OffMap: return "pose off the map";
   }
   return "unknown status";
 }

@@ -20,6 +20,7 @@ enum class Status : int {
   NotFound = 10,    // a requested item does not exist
   Timeout = 11,     // a wait ended before its condition held
   Unavailable = 12, // data not here now: offline, or the link is down; try again later
+  OffMap = 13,      // a pose outside the package's streets plus graph::kMapMarginM
 };
 
 const char* statusString(Status s);

@@ -1,6 +1,8 @@
 #include "graph/graph_source.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace blvd::graph {
 
@@ -31,6 +33,18 @@ glm::dvec2 cellDirection(const GraphSource& g, uint32_t h, bool at_end) {
   const glm::dvec2 d = g.point(i + 1) - g.point(i);
   const double l = std::sqrt(d.x * d.x + d.y * d.y);
   return l > 0 ? d / l : glm::dvec2(1, 0);
+}
+
+}  // namespace blvd::graph
+
+namespace blvd::graph {
+
+double outsideStreets(const GraphSource& g, double x, double y) {
+  const GridShape s = g.gridShape();
+  if (s.nx <= 0 || s.ny <= 0) return std::numeric_limits<double>::infinity();  // no street: nowhere is on it
+  const double dx = std::max({s.ox - x, 0.0, x - (s.ox + s.nx * s.cell)});
+  const double dy = std::max({s.oy - y, 0.0, y - (s.oy + s.ny * s.cell)});
+  return std::hypot(dx, dy);
 }
 
 }  // namespace blvd::graph

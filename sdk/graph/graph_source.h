@@ -38,7 +38,7 @@ class GraphSource {
   // square of half-size r around (x, y) (graph/segment_grid.h has the rules).
   using EntryFn = void (*)(const SegmentGrid::Entry&, void* ctx);
   virtual void segmentsNear(double x, double y, double r, EntryFn fn, void* ctx) const = 0;
-  virtual GridShape gridShape() const = 0;
+  virtual GridShape gridShape() const = 0;  // its extent is the box of every street point
   virtual uint32_t gridEntryCount() const = 0;
   template <class Fn>
   void forSegmentsNear(double x, double y, double r, Fn&& fn) const {
@@ -113,5 +113,15 @@ class MemoryGraph final : public GraphSource {
 // Unit direction of cell h's polyline at its start or end, as
 // cellDirection(const StreetGraph&, ...) gives it.
 glm::dvec2 cellDirection(const GraphSource& g, uint32_t h, bool at_end);
+
+// How far outside the box of its streets a pose still counts as on the map: a
+// vehicle a block or two past the baked area still sees it; farther out a pose
+// is refused (host poses) or reported off the map (tracking), never given the
+// nearest cell, which could lie hundreds of kilometres away. blvd.h: BLVD_MAP_MARGIN_M.
+inline constexpr double kMapMarginM = 250.0;
+
+// How far (x, y) lies outside the box of g's streets (0 inside it).
+double outsideStreets(const GraphSource& g, double x, double y);
+inline bool onMap(const GraphSource& g, double x, double y) { return outsideStreets(g, x, y) <= kMapMarginM; }
 
 }  // namespace blvd::graph

@@ -95,12 +95,16 @@ void DrawList::addCell(blvd_render_mode mode, const CellSlot& slot, uint32_t cel
   }
 }
 
-void DrawList::build(blvd_render_mode mode, float radius_m, uint32_t cell, double arc_m, const render::Camera& cam,
-                     const CellSlots& slots, const stream::FrameBudget* budget) {
+void DrawList::clear() {
   draw_.clear();
   draw_items_.clear();
   impostors_ = 0;
   degraded_ = false;
+}
+
+void DrawList::build(blvd_render_mode mode, float radius_m, uint32_t cell, double arc_m, const render::Camera& cam,
+                     const CellSlots& slots, const stream::FrameBudget* budget) {
+  clear();
   if (mode == BLVD_MODE_FULL) {
     for (uint32_t b = 0; b < reference_blocks_.size(); ++b) addBlock(b);
     return;

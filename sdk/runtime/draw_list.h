@@ -41,6 +41,7 @@ class DrawList {
   uint32_t impostors() const { return impostors_; }
   uint32_t blocks() const { return uint32_t(draw_.size()) - impostors_; }
   bool degraded() const { return degraded_; }
+  void clear();  // nothing to draw (the sky and ground remain)
   uint32_t lastDrawnCell() const { return last_drawn_cell_; }
   uint64_t misses() const { return misses_; }
   // The local blocks' triangles at their chosen levels, and at their

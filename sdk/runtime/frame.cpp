@@ -23,7 +23,10 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   loader_->keepOffCpu(::sched_getcpu());
   double arc_m = 0;
   const uint32_t cell = streamCell(arc_m);
-  draw_->build(mode_, radius_m_, cell, arc_m, cam_, *slots_, budget_.get());
+  if (off_map_)
+    draw_->clear();  // sky and ground, in every mode
+  else
+    draw_->build(mode_, radius_m_, cell, arc_m, cam_, *slots_, budget_.get());
   render::FrameStats fs;
   render::RenderOptions ro;
   ro.scale = budget_ ? budget_->scale() : 1.0;
@@ -145,7 +148,7 @@ void Runtime::writeFrameStats(blvd_frame_stats* out, const render::FrameStats& f
   s.cell = cell;
   s.impostor_layers = draw_->impostors();
   s.blocks_drawn = draw_->blocks();
-  s.flags = draw_->degraded() || map_missing_ ? BLVD_FRAME_DEGRADED : 0;
+  s.flags = (draw_->degraded() || map_missing_ ? BLVD_FRAME_DEGRADED : 0) | (off_map_ ? BLVD_FRAME_OFF_MAP : 0);
   std::memcpy(out, &s, std::min<size_t>(size, sizeof s));
 }
 

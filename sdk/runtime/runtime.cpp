@@ -1,6 +1,7 @@
 #include "runtime/runtime.h"
 
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <cstring>
 #include <thread>
@@ -113,6 +114,11 @@ void Runtime::setCameraSource(blvd_camera_source source) {
 }
 
 void Runtime::setPoseLocal(double x, double y, double heading_deg, double pitch_deg) {
+  placeCamera(x, y, heading_deg, pitch_deg, nullptr);
+}
+
+// The host's pose; `lat_lon` (or null) names it in the off-map error.
+void Runtime::placeCamera(double x, double y, double heading_deg, double pitch_deg, const double* lat_lon) {
   if (camera_source_ == BLVD_CAMERA_TRACKED)
     throw Error(Status::Misuse, "blvd_set_pose_*: the camera follows the tracked pose (BLVD_CAMERA_TRACKED); "
                                 "blvd_set_camera_source(rt, BLVD_CAMERA_HOST) first");
@@ -122,13 +128,27 @@ void Runtime::setPoseLocal(double x, double y, double heading_deg, double pitch_
   cam_.eye_enu = {x, y, desc_.eye_height_m};
   cam_.heading_deg = std::fmod(heading_deg, 360.0);
   cam_.pitch_deg = pitch_deg;
+  const double out = graph::outsideStreets(city_.streets(), x, y);
+  host_off_map_ = !(out <= graph::kMapMarginM);
+  if (!host_off_map_) return;
+  char where[96];
+  if (lat_lon)
+    std::snprintf(where, sizeof where, "lat %.6f, lon %.6f", lat_lon[0], lat_lon[1]);
+  else
+    std::snprintf(where, sizeof where, "x %.1f m, y %.1f m", x, y);
+  char far[48];
+  std::snprintf(far, sizeof far, out >= 10000 ? "%.0f km" : "%.0f m", out >= 10000 ? out / 1000 : out);
+  throw Error(Status::OffMap, std::string("pose off the map: ") + where + " lies " + far +
+                                  " outside the package's streets (the margin is " +
+                                  std::to_string(int(graph::kMapMarginM)) + " m); frames draw sky and ground");
 }
 
 void Runtime::setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg) {
   if (!(lat >= -90 && lat <= 90) || !(lon >= -180 && lon <= 180))
     throw Error(Status::InvalidArg, "latitude/longitude out of range");
   const geo::Enu p = city_.frame().forward(lat, lon, 0);
-  setPoseLocal(p.e, p.n, heading_deg, pitch_deg);
+  const double lat_lon[2] = {lat, lon};
+  placeCamera(p.e, p.n, heading_deg, pitch_deg, lat_lon);
 }
 
 void Runtime::setMode(blvd_render_mode mode, float radius_m) {

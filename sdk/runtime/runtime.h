@@ -45,6 +45,7 @@ class Runtime {
   // Misuse while the tracker does.
   void setPoseLocal(double x, double y, double heading_deg, double pitch_deg);
   void setPoseGeo(double lat, double lon, double heading_deg, double pitch_deg);
+  // Both: Status::OffMap for a pose off the map, which then draws sky and ground until the next pose.
   void setMode(blvd_render_mode mode, float radius_m);
   void setLinkMode(blvd_link_mode mode);
   void setRoute(const uint32_t* cells, size_t n);
@@ -87,10 +88,13 @@ class Runtime {
   render::Camera viewCamera(const blvd_view& v, uint32_t i) const;
   void afterFrame(double frame_ms, const render::FrameStats& fs, uint64_t full_pixels, double scale);
   void writeFrameStats(blvd_frame_stats* out, const render::FrameStats& fs, uint32_t cell) const;
+  void placeCamera(double x, double y, double heading_deg, double pitch_deg, const double* lat_lon);
 
   blvd_runtime_desc desc_;
   stream::City city_;
   bool map_missing_ = false;  // this frame's map (table pages) had not arrived: degraded
+  bool host_off_map_ = false; // the last host pose was refused as off the map (graph::onMap)
+  bool off_map_ = false;      // this frame's camera is off the map: sky and ground only
   uint64_t map_waits_ = 0;    // frames that were (counted in blvd_stats.link_waits)
   double speed_mps_ = 0;      // the last frame's vehicle speed (blvd_stats.cached_ahead_s)
   MemoryPlan plan_;

@@ -39,6 +39,7 @@ bool Runtime::setStartPose(const track::StartPose& sp) {
 uint32_t Runtime::currentCell(double& arc_m, double& speed) {
   uint32_t cell = graph::kNone;
   arc_m = speed = 0;
+  off_map_ = false;
   if (camera_source_ == BLVD_CAMERA_TRACKED) {
     // Tracking drives the camera: the pose at the newest fed time.
     const track::Pose& p = tracker_->update(last_feed_t_.load());
@@ -47,8 +48,15 @@ uint32_t Runtime::currentCell(double& arc_m, double& speed) {
       cam_.heading_deg = p.camera.heading_deg;
       cam_.pitch_deg = p.camera.pitch_deg;
       speed = p.speed_mps;
+      host_off_map_ = false;  // the host's pose is no longer where the camera is
+      off_map_ = (p.flags & track::kPoseOffMap) != 0;
       if (p.flags & track::kPoseMatched) cell = p.cell, arc_m = p.arc_m;
     }
+  }
+  off_map_ = off_map_ || host_off_map_;
+  if (off_map_) {  // never the nearest cell: it may be hundreds of kilometres away
+    choice_->forget();
+    return graph::kNone;
   }
   if (cell != graph::kNone) {
     choice_->forget();

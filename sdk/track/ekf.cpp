@@ -11,6 +11,10 @@ using core::kPi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kMaxSubstep = 0.1;       // seconds per integration step
 constexpr double kAnchorMinDist = 10.0;   // metres between fixes for a heading from displacement
+// Faster than any road vehicle (about 400 km/h): such a displacement is a jump
+// of the fixes (an outlier, a receiver reset, a pose off the map), not motion,
+// and goes through the outlier gate instead of giving a heading and a speed.
+constexpr double kMaxDisplacementSpeed = 110.0;
 constexpr uint32_t kScalarResetAfter = 25;  // consecutive gated speed/heading updates that force the value
 
 double orDefault(double v, double d) { return v > 0 ? v : d; }
@@ -253,9 +257,10 @@ bool Ekf::updatePosition(double t_fix, double ze, double zn, double sigma_in) {
     const double de = ze - anchor_e_, dn = zn - anchor_n_;
     const double dist = std::hypot(de, dn);
     const double noise = std::hypot(sigma_m, anchor_sigma_);
-    if (dist > std::max(kAnchorMinDist, 3 * noise)) {
+    const double dt = t_fix - anchor_t_;
+    const bool jump = !(dist - 3 * noise <= kMaxDisplacementSpeed * std::max(dt, 0.0));
+    if (dist > std::max(kAnchorMinDist, 3 * noise) && !jump) {
       initHeading(std::atan2(de, dn), std::max(5 * kDeg, std::atan2(2 * noise, dist)));
-      const double dt = t_fix - anchor_t_;
       if (dt > 0 && P_[kV][kV] > 1.0) {
         x_[kV] = dist / dt;
         P_[kV][kV] = (noise / dt) * (noise / dt) + 1.0;

@@ -416,6 +416,12 @@ const Pose& Tracker::update(double t) {
   p.heading_sigma_deg = psi_sigma / kDeg;
   if (ekf_.time() - last_fix_t_ > d_.outage_s) p.flags |= kPoseDeadReckoning;
 
+  // Off the map (graph::onMap), the nearest street may be hundreds of
+  // kilometres away: no match, and matching starts afresh on the way back.
+  if (graph_ && !graph::onMap(*graph_, p.e, p.n)) {
+    p.flags |= kPoseOffMap;
+    cur_ = CellPoint{};
+  }
   // follow() picks successors by heading only while moving.
   const double hsig = std::fabs(x[Ekf::kV]) > 1.0 ? psi_sigma : 0.0;
   if (matcher_ && cur_.cell != graph::kNone) {

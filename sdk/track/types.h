@@ -99,6 +99,7 @@ enum PoseFlag : uint32_t {
   kPoseHeadingValid = 1u << 1,   // heading has been observed (GNSS track, motion, or an absolute heading)
   kPoseMatched = 1u << 2,        // cell / arc_m / lateral_m hold a map match
   kPoseDeadReckoning = 1u << 3,  // no GNSS fix accepted for TrackerDesc::outage_s
+  kPoseOffMap = 1u << 4,         // the fused position is off the map (graph::onMap): no cell, no match
 };
 
 struct Pose {

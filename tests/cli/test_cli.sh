@@ -88,6 +88,13 @@ assert b[:8] == b"\x89PNG\r\n\x1a\n"
 w, h = struct.unpack(">II", b[16:24])
 assert (w, h) == (320, 200), (w, h)
 PY
+# view: a pose 700 km from the package is refused, naming it, and writes no frame.
+set +e
+err=$("$blvd" view "$pkg" --lat 50 --lon 7.4246 --heading 304 --size 160x96 -o "$work/far.png" 2>&1); rc=$?
+set -e
+[ "$rc" != 0 ] && grep -q "off the map: lat 50.000000, lon 7.424600 lies [0-9]* km outside" <<< "$err" ||
+  fail "view off the map: rc $rc: $err"
+[ ! -e "$work/far.png" ] || fail "view off the map wrote a frame"
 # pack cell: one cell as JSON; a cell that does not exist is named.
 "$blvd" pack cell "$pkg" 0 | python3 -c 'import json,sys; j=json.load(sys.stdin); assert j["cell"] == 0 and "local_blocks" in j and j["length_m"] > 0, j'
 set +e

@@ -287,6 +287,27 @@ TEST(Ekf, GatesAnOutlierAndResetsAfterAJump) {
   EXPECT_NEAR(f.e(), e0 + 200, 1e-6);
 }
 
+// Before any heading, a fix far faster away than a vehicle moves (a receiver
+// jump, a fix off the map) is no motion: no heading from it, no speed; it is
+// gated like any outlier, and believed after the run of rejections.
+TEST(Ekf, AJumpBeforeAnyHeadingGivesNoHeadingAndNoSpeed) {
+  Ekf f(EkfDesc{});
+  for (int k = 0; k < 3; ++k) f.updatePosition(100.0 + k, 0, 0, 3);
+  ASSERT_FALSE(f.headingValid());
+  EXPECT_FALSE(f.updatePosition(103.0, 0, 700e3, 3));  // 700 km north in a second
+  EXPECT_FALSE(f.headingValid());
+  const uint32_t runs = ekfDefaults(EkfDesc{}).reset_after_rejects;
+  for (uint32_t i = 1; i < runs; ++i) f.updatePosition(103.0 + i, 0, 700e3, 3);
+  EXPECT_EQ(f.resets(), 1u);
+  EXPECT_NEAR(f.n(), 700e3, 1e-6);
+  EXPECT_FALSE(f.headingValid());
+  EXPECT_LT(std::fabs(f.speed()), 1.0);
+  // Moving on from there at a vehicle's pace gives a heading again.
+  for (int k = 1; k <= 5; ++k) f.updatePosition(103.0 + runs + k, 10.0 * k, 700e3, 3);
+  EXPECT_TRUE(f.headingValid());
+  EXPECT_NEAR(f.heading(), 90 * kDeg, 10 * kDeg);
+}
+
 TEST(Ekf, WeighsFixesByTheirAccuracy) {
   DriveSpec s;
   s.duration = 30;
