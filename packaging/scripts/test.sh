@@ -14,10 +14,11 @@ cmake --build build -j"$jobs"
 
 # 2. Sanitizers on the code that reads untrusted bytes (packages, GLB, graph,
 #    NMEA, CAN) and on the runtime's create-time failure paths (budget, host
-#    allocator failing at each call: LeakSanitizer checks that nothing leaks).
+#    allocator failing at each call; every allocation of a package open, a
+#    tracker and a CAN profile failing in turn: LeakSanitizer checks that nothing leaks).
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DBLVD_SANITIZE=ON -DBLVD_WERROR=ON > /dev/null
 cmake --build build-asan -j"$jobs" --target test_package test_graph_serialize test_gnss test_can \
-  fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc fuzz_can_frame fuzz_shard_manifest fuzz_cache_entry test_runtime_fault
+  fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc fuzz_can_frame fuzz_shard_manifest fuzz_cache_entry test_runtime_fault test_create_nomem
 # The runtime test needs the Monaco package: the fixture's own bake, run with
 # step 1's build (a sanitized CGAL bake would take many minutes).
 (cd build && ctest --output-on-failure -R '^bake\.monaco_geofabrik$')

@@ -10,6 +10,7 @@ bool recordFrame(RenderStats& stats, const blvd_frame_stats& fs, const unsigned 
                  uint32_t height, const std::string& dir, std::string& err) {
   stats.frame_ms.push_back(fs.frame_ms);
   if (fs.flags & BLVD_FRAME_DEGRADED) ++stats.degraded;
+  if (fs.flags & BLVD_FRAME_OFF_MAP) ++stats.off_map;
   if (isBlank(rgba, width, height, fs.triangles)) ++stats.blank;
   else if (isUniform(rgba, width, height)) ++stats.uniform;
   if (!dir.empty()) {

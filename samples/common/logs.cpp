@@ -71,6 +71,7 @@ void addRenderStats(nlohmann::json& j, const RenderStats& r) {
   j["blank_frames"] = r.blank;
   j["uniform_frames"] = r.uniform;
   j["degraded_frames"] = r.degraded;
+  j["off_map_frames"] = r.off_map;
   j["png_written"] = r.written;
   j["frame_ms_p50"] = percentile(r.frame_ms, 50);
   j["frame_ms_p95"] = percentile(r.frame_ms, 95);

@@ -44,10 +44,11 @@ struct RenderStats {
   // tight corner: flat-shaded walls have no texture); PNGs written.
   uint64_t frames = 0, blank = 0, uniform = 0, written = 0;
   uint64_t degraded = 0;                        // BLVD_FRAME_DEGRADED: the current cell was not resident yet
+  uint64_t off_map = 0;                         // BLVD_FRAME_OFF_MAP: the pose was off the map (sky and ground)
   std::vector<double> frame_ms;
 };
 
-// rendered_frames, blank_frames, degraded_frames, png_written, frame_ms_p50/p95/p99 into `j`.
+// rendered_frames, blank_frames, degraded_frames, off_map_frames, png_written, frame_ms_p50/p95/p99 into `j`.
 void addRenderStats(nlohmann::json& j, const RenderStats& r);
 // Writes `j` (indented) to `path`; "" writes nothing. False when the write failed.
 bool writeStats(const std::string& path, const nlohmann::json& j);

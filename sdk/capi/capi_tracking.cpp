@@ -160,12 +160,9 @@ blvd_status blvd_tracker_create(const blvd_tracker_desc* desc, blvd_tracker** ou
     return badTrackerDesc("without a package, origin_lat must lie within 90 and origin_lon within 180 degrees");
   if (!(d.eye_height_m >= 0 && d.eye_height_m < 1000)) return badTrackerDesc("eye_height_m out of range");
   if (d.ring_capacity > (1u << 20)) return badTrackerDesc("ring_capacity is above 1048576");
-  auto tr = std::unique_ptr<blvd_tracker>(new (std::nothrow) blvd_tracker);
-  if (!tr) {
-    t_create_error = "out of memory";
-    return BLVD_ERR_NOMEM;
-  }
+  std::unique_ptr<blvd_tracker> tr;
   const blvd_status st = guarded(nullptr, [&] {
+    tr = std::make_unique<blvd_tracker>();  // its members allocate too (the local frame)
     track::TrackerDesc td;
     td.eye_height_m = d.eye_height_m > 0 ? d.eye_height_m : 1.5;
     td.ring_capacity = d.ring_capacity ? d.ring_capacity : 512;

@@ -5,8 +5,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <sstream>
+#include <cstdio>
+#include <memory>
 
 namespace blvd::vehicle {
 namespace {
@@ -126,6 +126,17 @@ bool forEachBitMsbFirst(const Signal& s, F&& f) {
   return true;
 }
 
+// The whole file. Not through iostreams: they turn a failed allocation into a
+// short read, and part of a file would load as if it were all of it.
+core::Status readAll(const std::string& path, std::string& text, std::string& err) {
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f) return err = path + ": cannot open: " + std::strerror(errno), core::Status::Io;
+  char buf[16384];
+  for (size_t n; (n = std::fread(buf, 1, sizeof buf, f.get())) > 0;) text.append(buf, n);
+  if (std::ferror(f.get())) return err = path + ": read error", core::Status::Io;
+  return core::Status::Ok;
+}
+
 std::string at(const std::string& source, uint32_t line) { return source + ":" + std::to_string(line) + ": "; }
 
 struct PendingVal {
@@ -196,18 +207,9 @@ core::Status Database::load(const std::string& path, std::string& err, const Dbc
   by_id_.clear();
   diagnostics_.clear();
   skipped_.clear();
-  std::ifstream f(path, std::ios::binary);
-  if (!f) {
-    err = path + ": cannot open: " + std::strerror(errno);
-    return core::Status::Io;
-  }
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  if (f.bad()) {
-    err = path + ": read error";
-    return core::Status::Io;
-  }
-  return parse(ss.str(), path, err, opt);
+  std::string text;
+  if (const core::Status st = readAll(path, text, err); st != core::Status::Ok) return st;
+  return parse(text, path, err, opt);
 }
 
 // One DBC text being read, a line at a time: the statements' state between
