@@ -24,7 +24,8 @@ class CellChoice {
 
   CellChoice(const stream::City& city, const stream::Residency& residency) : city_(city), residency_(residency) {}
   // The cell of a host-set pose at `p` heading `heading_deg`, and the arc
-  // length along it; kNone off the map. The same pose asked again (a
+  // length along it; kNone only for a map without streets (the caller keeps
+  // poses off the map away: Runtime::currentCell). The same pose asked again (a
   // degraded frame drawn again after blvd_wait_resident) gets the same
   // answer: a second step from the answer itself would move on a cell.
   uint32_t choose(glm::dvec2 p, double heading_deg, double& arc_m);
