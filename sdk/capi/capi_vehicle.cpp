@@ -4,6 +4,7 @@
 // docs/decisions/0005-can-profiles-in-sdk.md.
 #include <algorithm>
 #include <cstring>
+#include <memory>
 #include <mutex>
 #include <new>
 #include <string>
@@ -127,7 +128,7 @@ blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_
   if (d.flags & ~BLVD_CAN_PROFILE_STRICT_DBC)
     return fail(BLVD_ERR_INVALID_ARG, "blvd_can_profile_create: unknown flags " + std::to_string(d.flags));
   try {
-    auto* p = new blvd_can_profile;
+    auto p = std::make_unique<blvd_can_profile>();  // freed on every error, bad_alloc included
     std::string err;
     vehicle::DbcOptions dbc_opt;
     dbc_opt.strict = (d.flags & BLVD_CAN_PROFILE_STRICT_DBC) != 0;
@@ -140,11 +141,8 @@ blvd_status blvd_can_profile_create(const blvd_can_profile_desc* desc, blvd_can_
       st = p->profile.create(pd, p->dbc, err);
     }
     if (st == blvd::core::Status::Ok) p->ids = messageIds(p->profile);
-    if (st != blvd::core::Status::Ok) {
-      delete p;
-      return fail(blvd::capi::toStatus(st), "blvd_can_profile_create: " + err);
-    }
-    *out = p;
+    if (st != blvd::core::Status::Ok) return fail(blvd::capi::toStatus(st), "blvd_can_profile_create: " + err);
+    *out = p.release();
     blvd::capi::t_create_error.clear();
     return BLVD_OK;
   } catch (const std::bad_alloc&) {
