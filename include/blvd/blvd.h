@@ -628,9 +628,39 @@ typedef struct blvd_start_pose {
  * what was fed and not yet processed is kept); the camera follows it with BLVD_CAMERA_TRACKED.
  * Fixes that disagree with it (the car was moved while parked) are rejected at first and, after
  * five in a row, taken instead. Render thread. Errors: BLVD_ERR_INVALID_ARG for a latitude or
- * longitude out of range, a negative sigma, a non-finite field or a nonzero struct_size that does
- * not cover heading_sigma_deg; nothing changes then. */
+ * longitude out of range, a negative sigma or one over 10 km, a heading beyond 720 degrees, a
+ * non-finite field or a nonzero struct_size that does not cover heading_sigma_deg; nothing
+ * changes then. */
 BLVD_API blvd_status blvd_set_start_pose(blvd_runtime* rt, const blvd_start_pose* sp);
+
+/* What tracking made of its input since create: each fault a drive meets is counted here while
+ * the drive goes on (a GNSS outage is dead reckoned, a jump gated out, fixes out of order used
+ * late, a repeated epoch counted once, a clock that went back restarts from the pose). */
+typedef struct blvd_tracking_stats {
+  uint32_t struct_size;      /* set by the caller; 0: the whole struct */
+  uint64_t gnss_fed;         /* fixes queued by the feeds ... */
+  uint64_t odometry_fed;     /* ... and odometry samples (a CAN frame's decoded sample counts once) */
+  uint64_t queue_dropped;    /* lost to a full queue, the oldest first (blvd_tracker_desc.ring_capacity) */
+  uint64_t gnss_used;        /* positions the filter took */
+  uint64_t gnss_rejected;    /* positions gated out: too far from where the filter expects (a jump,
+                              * multipath); five in a row reset the position to the fixes' */
+  uint64_t gnss_ignored;     /* no fix, no position, or a value out of range */
+  uint64_t gnss_duplicates;  /* further reports of an epoch already processed (the same t, as gpsd sends
+                              * a report per sentence): the position counts once; a speed or course the
+                              * first report lacked is used */
+  uint64_t odometry_ignored; /* a time that is not finite */
+  uint64_t late;             /* fixes and samples older than the filter when processed (out of order) */
+  uint64_t clock_steps;      /* input stamped 30 s or more before the filter (the host clock went back)
+                              * or 600 s or more after it (a gap no prediction spans): tracking went
+                              * on from the pose under the new time */
+  uint64_t filter_resets;    /* positions reset to the fixes after a run of rejected ones */
+  uint64_t outages;          /* times dead reckoning began (BLVD_POSE_DEAD_RECKONING) after a fix */
+  double longest_outage_s;   /* the longest time without a usable fix, once dead reckoning began */
+} blvd_tracking_stats;
+
+/* Fills *stats up to stats->struct_size. Render thread, as blvd_get_pose (it counts what
+ * blvd_get_pose or blvd_render last processed). Errors: BLVD_ERR_INVALID_ARG for a NULL stats. */
+BLVD_API blvd_status blvd_get_tracking_stats(blvd_runtime* rt, blvd_tracking_stats* stats);
 
 /* ---- CAN frames through a vehicle profile ---------------------------------------
  * A profile reads one vehicle's CAN signals, as its DBC file describes them
@@ -807,6 +837,9 @@ BLVD_API blvd_status blvd_tracker_get_pose(blvd_tracker* tr, double t, blvd_pose
 BLVD_API blvd_status blvd_tracker_get_odometry_calibration(blvd_tracker* tr, blvd_odometry_calibration* cal);
 BLVD_API blvd_status blvd_tracker_set_odometry_calibration(blvd_tracker* tr, const blvd_odometry_calibration* cal);
 BLVD_API blvd_status blvd_tracker_set_start_pose(blvd_tracker* tr, const blvd_start_pose* sp);
+
+/* As blvd_get_tracking_stats, on a tracker. Tracking thread. */
+BLVD_API blvd_status blvd_tracker_get_stats(blvd_tracker* tr, blvd_tracking_stats* stats);
 
 #ifdef __cplusplus
 } /* extern "C" */

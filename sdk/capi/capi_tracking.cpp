@@ -57,10 +57,11 @@ template <typename Start>
 void setStartPose(const char* fn, const blvd_start_pose& sp, Start&& start) {
   needStructSize(fn, sp.struct_size, offsetof(blvd_start_pose, heading_sigma_deg) + sizeof(double));
   if (start(blvd::capi::toTrack(sp))) return;
-  char msg[256];
+  char msg[320];
   std::snprintf(msg, sizeof msg,
                 "%s: t %g, lat %g, lon %g, heading %g deg, sigma %g m, heading sigma %g deg: every field must be "
-                "finite, lat within 90, lon within 180, the sigmas not negative",
+                "finite, lat within 90, lon within 180, the heading within 720, the sigmas not negative and the "
+                "position's at most 10 km",
                 fn, sp.t, sp.lat, sp.lon, sp.heading_deg, sp.sigma_m, sp.heading_sigma_deg);
   throw core::Error(core::Status::InvalidArg, msg);
 }
@@ -139,6 +140,12 @@ blvd_status blvd_set_start_pose(blvd_runtime* rt, const blvd_start_pose* sp) {
   return guarded(rt, [&] {
     setStartPose("blvd_set_start_pose", *sp, [&](const track::StartPose& s) { return rt->impl->setStartPose(s); });
   });
+}
+
+blvd_status blvd_get_tracking_stats(blvd_runtime* rt, blvd_tracking_stats* stats) {
+  if (!rt) return misuse(nullptr, "blvd_get_tracking_stats: rt is NULL");
+  if (!stats) return nullArg(rt, "blvd_get_tracking_stats: stats is NULL");
+  return guarded(rt, [&] { blvd::capi::toBlvd(rt->impl->tracker().stats(), stats); });
 }
 
 // ---- On a tracker.
@@ -237,6 +244,12 @@ blvd_status blvd_tracker_set_start_pose(blvd_tracker* tr, const blvd_start_pose*
     setStartPose("blvd_tracker_set_start_pose", *sp,
                  [&](const track::StartPose& s) { return tr->tracker->setStartPose(s); });
   });
+}
+
+blvd_status blvd_tracker_get_stats(blvd_tracker* tr, blvd_tracking_stats* stats) {
+  if (!tr) return BLVD_ERR_MISUSE;
+  if (!stats) return BLVD_ERR_INVALID_ARG;
+  return trackerGuarded(tr, [&] { blvd::capi::toBlvd(tr->tracker->stats(), stats); });
 }
 
 }  // extern "C"

@@ -120,4 +120,24 @@ inline void toBlvd(const track::OdometryCalibration& c, blvd_odometry_calibratio
   std::memcpy(out, &r, r.struct_size);
 }
 
+// The tracker's statistics, written up to out->struct_size bytes (0: the whole struct).
+inline void toBlvd(const track::TrackerStats& st, blvd_tracking_stats* out) {
+  blvd_tracking_stats r{};
+  r.struct_size = out->struct_size && out->struct_size < sizeof r ? out->struct_size : sizeof r;
+  r.gnss_fed = st.gnss_fed;
+  r.odometry_fed = st.odometry_fed;
+  r.queue_dropped = st.ring_dropped;
+  r.gnss_used = st.gnss_used;
+  r.gnss_rejected = st.gnss_rejected;
+  r.gnss_ignored = st.gnss_ignored;
+  r.gnss_duplicates = st.gnss_duplicates;
+  r.odometry_ignored = st.odometry_ignored;
+  r.late = st.late_events;
+  r.clock_steps = st.clock_steps;
+  r.filter_resets = st.filter_resets;
+  r.outages = st.outages;
+  r.longest_outage_s = st.longest_outage_s;
+  std::memcpy(out, &r, r.struct_size);
+}
+
 }  // namespace blvd::capi

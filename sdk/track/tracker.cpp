@@ -13,6 +13,15 @@ constexpr double kDeg = kPi / 180.0;
 constexpr double kSqrtHalf = 0.70710678118654752440;
 
 double orDefault(double v, double d) { return v > 0 ? v : d; }
+// Values no vehicle or receiver gives, ignored as the header's contract says
+// (a 10^33 m accuracy or speed overflows the filter's covariance).
+constexpr double kMaxFixSigmaM = 1e4;     // a fix this vague holds no position
+constexpr double kMaxSpeedMps = 1e3;
+constexpr double kMaxYawRateDps = 1e3;
+constexpr double kMaxAngleDeg = 720;      // headings and courses, before wrapping
+bool plausibleAngle(double deg) { return std::fabs(deg) <= kMaxAngleDeg; }
+// What a fix epoch has given the filter so far (Tracker::epoch_parts_).
+enum EpochPart : uint32_t { kEpochSpeed = 1u << 0, kEpochTrack = 1u << 1 };
 bool finite(double v) { return std::isfinite(v); }
 }  // namespace
 
@@ -110,12 +119,34 @@ void Tracker::forgetDrive() {
   agreement_fixes_ = 0;
   street_agrees_ = false;
   last_step_t_ = last_fix_t_ = last_fix_event_t_ = last_gyro_t_ = last_odo_speed_t_ = -1e300;
+  epoch_parts_ = 0;
+  in_outage_ = false;
+}
+
+bool Tracker::clockStepped(double t) {
+  if (!ekf_.initialized() || (t > ekf_.time() - kClockStepS && t < ekf_.time() + kMaxGapS)) return false;
+  ++st_.clock_steps;
+  carried_resets_ += ekf_.resets();
+  const OdometryCalibration cal = ekf_.calibration();
+  // Where the filter is now is where the vehicle was at the last event of the
+  // old clock; the new clock's first event comes some unknown time later (at
+  // most the gap a GNSS outage is declared after, or it would not be a step).
+  StartPose sp;
+  sp.t = t;
+  double h = 0;
+  frame_.reverse(geo::Enu{ekf_.e(), ekf_.n(), 0}, sp.lat, sp.lon, h);
+  sp.heading_deg = ekf_.heading() / kDeg;
+  sp.heading_sigma_deg = ekf_.headingValid() ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi))) / kDeg : 180;
+  sp.sigma_m = ekf_.positionSigma() + std::fabs(ekf_.speed()) * d_.outage_s;
+  ekf_.setCalibration(cal);
+  if (!setStartPose(sp)) forgetDrive();  // no usable pose (it had diverged): the next fix starts afresh
+  return true;
 }
 
 bool Tracker::setStartPose(const StartPose& sp) {
   if (!finite(sp.t) || !finite(sp.lat) || !finite(sp.lon) || !finite(sp.heading_deg) || !finite(sp.sigma_m) ||
       !finite(sp.heading_sigma_deg) || std::fabs(sp.lat) > 90 || std::fabs(sp.lon) > 180 || sp.sigma_m < 0 ||
-      sp.heading_sigma_deg < 0)
+      sp.sigma_m > kMaxFixSigmaM || sp.heading_sigma_deg < 0 || !plausibleAngle(sp.heading_deg))
     return false;
   forgetDrive();
   const geo::Enu p = frame_.forward(sp.lat, sp.lon, frame_.h0());
@@ -139,7 +170,7 @@ TrackerStats Tracker::stats() const {
     s.ring_dropped = dropped_;
     s.ring_high_water = high_water_;
   }
-  s.filter_resets = ekf_.resets();
+  s.filter_resets = carried_resets_ + ekf_.resets();
   if (matcher_) s.match = matcher_->stats();
   return s;
 }
@@ -296,32 +327,45 @@ void Tracker::checkStreetAgreement(double e, double n, double sigma) {
 }
 
 void Tracker::processGnss(const GnssFix& f, double t) {
-  if (!(f.flags & kGnssHasLatLon) || f.mode == kGnssModeNoFix || !finite(t) || !finite(f.lat) || !finite(f.lon) ||
-      std::fabs(f.lat) > 90 || std::fabs(f.lon) > 180) {
-    ++st_.gnss_ignored;
-    return;
-  }
-  if (ekf_.initialized() && t < ekf_.time()) ++st_.late_events;
-  ekf_.predict(t);
-  const geo::Enu p = frame_.forward(f.lat, f.lon, frame_.h0());
   double sigma = 0;  // unknown: the filter estimates it
   if ((f.flags & kGnssHasHAcc) && f.h_acc_m > 0 && finite(f.h_acc_m)) sigma = f.h_acc_m * kSqrtHalf;
   else if ((f.flags & kGnssHasHdop) && f.hdop > 0 && finite(f.hdop)) sigma = f.hdop * d_.ekf.uere_m * kSqrtHalf;
-  checkStreetAgreement(p.e, p.n, sigma > 0 ? sigma : ekf_.adaptiveSigma());
-  if (ekf_.updatePosition(t, p.e, p.n, sigma)) {
-    ++st_.gnss_used;
-    last_fix_t_ = t;
-  } else {
-    ++st_.gnss_rejected;
+  if (!(f.flags & kGnssHasLatLon) || f.mode == kGnssModeNoFix || !finite(t) || !finite(f.lat) || !finite(f.lon) ||
+      std::fabs(f.lat) > 90 || std::fabs(f.lon) > 180 || sigma > kMaxFixSigmaM) {
+    ++st_.gnss_ignored;
+    return;
   }
-  const bool has_speed = (f.flags & kGnssHasSpeed) && finite(f.speed_mps) && f.speed_mps >= 0;
+  clockStepped(t);
+  const bool repeat = std::fabs(t - last_fix_event_t_) < kSameEpochS;
+  if (!repeat) epoch_parts_ = 0;
+  if (ekf_.initialized() && t < ekf_.time()) ++st_.late_events;
+  ekf_.predict(t);
+  const geo::Enu p = frame_.forward(f.lat, f.lon, frame_.h0());
+  if (repeat) {
+    ++st_.gnss_duplicates;  // one measurement, not two: the filter would trust it twice
+  } else {
+    checkStreetAgreement(p.e, p.n, sigma > 0 ? sigma : ekf_.adaptiveSigma());
+    if (ekf_.updatePosition(t, p.e, p.n, sigma)) {
+      ++st_.gnss_used;
+      last_fix_t_ = t;
+    } else {
+      ++st_.gnss_rejected;
+    }
+  }
+  const bool has_speed = (f.flags & kGnssHasSpeed) && f.speed_mps >= 0 && f.speed_mps <= kMaxSpeedMps;
   // With odometry, GNSS speed calibrates the odometry scale; without, it drives the speed.
-  if (has_speed) ekf_.updateSpeed(f.speed_mps, d_.ekf.gnss_speed_sigma);
-  if (has_speed && (f.flags & kGnssHasTrack) && finite(f.track_deg) && f.speed_mps >= d_.ekf.track_min_speed) {
+  if (has_speed && !(epoch_parts_ & kEpochSpeed)) {
+    ekf_.updateSpeed(f.speed_mps, d_.ekf.gnss_speed_sigma);
+    epoch_parts_ |= kEpochSpeed;
+  }
+  if (has_speed && (f.flags & kGnssHasTrack) && plausibleAngle(f.track_deg) && f.speed_mps >= d_.ekf.track_min_speed &&
+      !(epoch_parts_ & kEpochTrack)) {
     // Course sigma from the velocity noise across the track, plus a floor.
     const double sigma_track = std::atan2(d_.ekf.gnss_speed_sigma, f.speed_mps) + 0.5 * kDeg;
     ekf_.updateHeading(f.track_deg * kDeg, sigma_track);
+    epoch_parts_ |= kEpochTrack;
   }
+  if (repeat) return;
   last_fix_event_t_ = t;
   if (ekf_.time() - last_step_t_ >= 0.5 * d_.match_interval_s) {
     const double en[2] = {p.e, p.n};
@@ -329,17 +373,29 @@ void Tracker::processGnss(const GnssFix& f, double t) {
   }
 }
 
+void Tracker::noteOutage(Pose& p) {
+  const double since_fix = ekf_.time() - last_fix_t_;
+  const bool outage = since_fix > d_.outage_s;
+  if (outage) p.flags |= kPoseDeadReckoning;
+  if (outage && last_fix_t_ > -1e299) {  // an outage after a fix, not a start on odometry
+    if (!in_outage_) ++st_.outages;
+    st_.longest_outage_s = std::max(st_.longest_outage_s, since_fix);
+  }
+  in_outage_ = outage;
+}
+
 void Tracker::processOdometry(const Odometry& o, bool advance) {
   if (!finite(o.t)) {
     ++st_.odometry_ignored;
     return;
   }
+  clockStepped(o.t);
   if (ekf_.initialized() && o.t < ekf_.time()) ++st_.late_events;
-  if ((o.flags & kOdoYawRate) && finite(o.yaw_rate_dps)) {
+  if ((o.flags & kOdoYawRate) && std::fabs(o.yaw_rate_dps) <= kMaxYawRateDps) {
     ekf_.setYawRate(o.t, o.yaw_rate_dps * kDeg);
     last_gyro_t_ = o.t;
   } else if ((o.flags & kOdoWheelSpeeds) && o.t - last_gyro_t_ > d_.ekf.gyro_timeout_s &&
-             finite(o.wheel_speeds_mps[2]) && finite(o.wheel_speeds_mps[3])) {
+             std::fabs(o.wheel_speeds_mps[2]) <= kMaxSpeedMps && std::fabs(o.wheel_speeds_mps[3]) <= kMaxSpeedMps) {
     // No yaw-rate sensor: the rear axle's wheel-speed difference over its
     // track (the rear wheels are not steered).
     double omega = (o.wheel_speeds_mps[3] - o.wheel_speeds_mps[2]) / d_.ekf.track_width_m;
@@ -353,12 +409,12 @@ void Tracker::processOdometry(const Odometry& o, bool advance) {
     const double* w = o.wheel_speeds_mps;
     v = 0.25 * (std::fabs(w[0]) + std::fabs(w[1]) + std::fabs(w[2]) + std::fabs(w[3]));
   }
-  if (finite(v)) {
+  if (v <= kMaxSpeedMps) {  // false for NaN too
     if ((o.flags & kOdoGear) && o.reverse) v = -v;
     ekf_.updateOdometrySpeed(v, d_.ekf.odo_speed_sigma);
     last_odo_speed_t_ = o.t;
   }
-  if ((o.flags & kOdoHeading) && finite(o.heading_deg)) ekf_.updateHeading(o.heading_deg * kDeg, d_.ekf.heading_sigma_deg * kDeg);
+  if ((o.flags & kOdoHeading) && plausibleAngle(o.heading_deg)) ekf_.updateHeading(o.heading_deg * kDeg, d_.ekf.heading_sigma_deg * kDeg);
   // These samples describe the interval that ends at o.t (see update()), so
   // the filter moves to o.t with them rather than with the previous ones.
   if (advance) ekf_.predict(o.t);
@@ -414,7 +470,7 @@ const Pose& Tracker::update(double t) {
   p.flags = kPoseValid | (ekf_.headingValid() ? static_cast<uint32_t>(kPoseHeadingValid) : 0u);
   const double psi_sigma = ekf_.headingValid() ? std::sqrt(std::max(0.0, ekf_.cov(Ekf::kPsi, Ekf::kPsi))) : 0.0;
   p.heading_sigma_deg = psi_sigma / kDeg;
-  if (ekf_.time() - last_fix_t_ > d_.outage_s) p.flags |= kPoseDeadReckoning;
+  noteOutage(p);
 
   // Off the map (graph::onMap), the nearest street may be hundreds of
   // kilometres away: no match, and matching starts afresh on the way back.

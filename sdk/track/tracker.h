@@ -34,10 +34,16 @@
 //   late fix is compared with the state moved back along the velocity, a late
 //   odometry sample is applied as if current. Events are never dropped for
 //   being late; a full ring drops its oldest event and the feed returns false.
+//   An event kClockStepS or more older than the filter means the host's clock
+//   went back, one kMaxGapS or more newer a gap no prediction spans: the drive
+//   goes on from the filter's pose under the new time (counted in clock_steps).
+//   A second report of a fix's epoch (same stamp) does not count its position
+//   twice (gnss_duplicates).
 // - Determinism: the same sequence of feed and update calls gives the same
 //   poses, bit for bit (no clocks, no randomness, no hashing).
 // - Errors: bad input never throws: a fix without a position, a NaN or an
-//   out-of-range value is counted and ignored.
+//   out-of-range value is counted and ignored (a fix vaguer than 10 km, a
+//   speed past 1 km/s, an angle past 720 degrees: tracker.cpp kMax*).
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -52,6 +58,15 @@
 #include "track/types.h"
 
 namespace blvd::track {
+
+// An event this much older than the filter is not late but stamped by a clock
+// that went back (no receiver or bus delivers data half a minute late); one
+// this much newer comes after a gap no filter predicts across (the car parked
+// with its bus asleep, or a clock that jumped ahead).
+constexpr double kClockStepS = 30;
+constexpr double kMaxGapS = 600;
+// Fix stamps closer than this are one epoch (receivers report at 20 Hz at most).
+constexpr double kSameEpochS = 1e-3;
 
 // Zero means "default" for every field (see trackerDefaults()).
 struct TrackerDesc {
@@ -99,6 +114,13 @@ struct TrackerStats {
   uint64_t gnss_ignored = 0;     // no position, no fix, or not finite
   uint64_t odometry_ignored = 0; // not finite
   uint64_t late_events = 0;      // older than the filter when processed
+  // Reports of an epoch already processed (the same time stamp: gpsd's TPV per
+  // sentence, an NMEA epoch completed late, a fix fed twice): the position
+  // counts once; a speed or course the first report lacked is still used.
+  uint64_t gnss_duplicates = 0;
+  uint64_t outages = 0;          // times dead reckoning began after an accepted fix (TrackerDesc::outage_s)
+  double longest_outage_s = 0;   // the longest time without an accepted fix, once past outage_s
+  uint64_t clock_steps = 0;      // events kClockStepS or more before the filter or kMaxGapS after it
   uint64_t filter_resets = 0;    // position resets after a run of rejected fixes
   uint64_t map_aids = 0, map_aids_rejected = 0;  // street constraints applied / gated out
   uint64_t map_aid_suspensions = 0;  // times the fixes stopped agreeing with the matched street
@@ -142,8 +164,8 @@ class Tracker {
   // (as reset(), except for the events still in the ring). Fixes that disagree
   // with the start pose (the car was moved while parked) are gated out and,
   // after EkfDesc::reset_after_rejects of them, reset the position to theirs.
-  // False, changing nothing, for a non-finite or out-of-range field or a
-  // negative sigma.
+  // False, changing nothing, for a non-finite or out-of-range field, a
+  // negative sigma or one over 10 km, a heading beyond 720 degrees.
   bool setStartPose(const StartPose& sp);
 
   // Tracking thread: the odometry calibration learned so far (ekf.h), to keep
@@ -168,6 +190,12 @@ class Tracker {
   };
 
   bool push(const Event& ev);
+  // The clock went back (an event kClockStepS or more older than the filter)
+  // or a gap no prediction spans (kMaxGapS or more newer): the drive goes on
+  // from the filter's pose under the new time.
+  bool clockStepped(double t);
+  // Flags dead reckoning on the pose and counts outages.
+  void noteOutage(Pose& p);
   // Forgets the drive: filter, match, map aid, times (not the ring, not the stats).
   void forgetDrive();
   void processGnss(const GnssFix& f, double t);
@@ -207,6 +235,9 @@ class Tracker {
   bool street_agrees_ = false;  // the map aid is on
   double last_step_t_ = -1e300, last_fix_t_ = -1e300, last_fix_event_t_ = -1e300;
   double last_gyro_t_ = -1e300, last_odo_speed_t_ = -1e300;
+  uint32_t epoch_parts_ = 0;    // what the last fix event's epoch has given (tracker.cpp EpochPart)
+  bool in_outage_ = false;
+  uint64_t carried_resets_ = 0; // filter resets before the last clock step
   TrackerStats st_;
 };
 
