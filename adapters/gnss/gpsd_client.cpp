@@ -10,12 +10,20 @@ namespace {
 
 using nlohmann::json;
 
-bool number(const json& j, const char* key, double* out) {
+// A number within [lo, hi]; anything else (a string, out of range, a value no
+// receiver gives, which a float could not even hold) counts as absent.
+bool number(const json& j, const char* key, double* out, double lo, double hi) {
   const auto it = j.find(key);
   if (it == j.end() || !it->is_number()) return false;
-  *out = it->get<double>();
-  return std::isfinite(*out);
+  const double v = it->get<double>();
+  if (!(v >= lo && v <= hi)) return false;
+  *out = v;
+  return true;
 }
+
+// Ranges: the globe, altitudes from the Dead Sea to low orbit, speeds below
+// any vehicle's, dilutions and 1-sigma errors as gpsd prints them.
+constexpr double kMaxAltM = 1e6, kMaxSpeedMps = 1e4, kMaxDop = 1e4, kMaxErrM = 1e7;
 
 // gpsd's TPV "status" (gps.h STATUS_*) to FixStatus.
 int statusFromGpsd(int s) {
@@ -43,21 +51,22 @@ bool parseTpvObject(const json& j, Fix* out) {
     const std::string& s = t->get_ref<const std::string&>();
     if (parseIso8601(s.data(), s.size(), &f.t_unix)) f.flags |= kFixHasTime;
   }
-  if (number(j, "lat", &f.lat) && number(j, "lon", &f.lon))
+  if (number(j, "lat", &f.lat, -90, 90) && number(j, "lon", &f.lon, -180, 180))
     f.flags |= kFixHasLatLon;
   else
     f.lat = f.lon = Fix::empty().lat;
-  if (number(j, "altMSL", &f.alt) || number(j, "alt", &f.alt)) f.flags |= kFixHasAlt;
+  if (number(j, "altMSL", &f.alt, -kMaxAltM, kMaxAltM) || number(j, "alt", &f.alt, -kMaxAltM, kMaxAltM))
+    f.flags |= kFixHasAlt;
   double v;
-  if (number(j, "speed", &v)) {
+  if (number(j, "speed", &v, 0, kMaxSpeedMps)) {
     f.speed_mps = static_cast<float>(v);
     f.flags |= kFixHasSpeed;
   }
-  if (number(j, "track", &v)) {
+  if (number(j, "track", &v, 0, 360)) {
     f.track_deg = static_cast<float>(v);
     f.flags |= kFixHasTrack;
   }
-  if (number(j, "geoidSep", &v)) {
+  if (number(j, "geoidSep", &v, -kMaxAltM, kMaxAltM)) {
     f.geoid_sep_m = static_cast<float>(v);
     f.flags |= kFixHasGeoidSep;
   }
@@ -104,7 +113,12 @@ ReadStatus GpsdClient::poll(Handler& h, int timeout_ms) {
   char chunk[4096];
   const ReadResult r = src_.read(chunk, sizeof chunk, timeout_ms);
   if (r.status != ReadStatus::Data) return r.status;
-  buf_.append(chunk, r.bytes);
+  consume(std::string_view(chunk, r.bytes), h);
+  return ReadStatus::Data;
+}
+
+void GpsdClient::consume(std::string_view bytes, Handler& h) {
+  buf_.append(bytes.data(), bytes.size());
   size_t start = 0;
   while (true) {
     const size_t nl = buf_.find('\n', start);
@@ -121,7 +135,6 @@ ReadStatus GpsdClient::poll(Handler& h, int timeout_ms) {
     h.onError("gpsd: over 1 MiB without a line end; input discarded");
     buf_.clear();
   }
-  return ReadStatus::Data;
 }
 
 void GpsdClient::handleLine(std::string_view line, Handler& h) {
@@ -145,22 +158,22 @@ void GpsdClient::handleLine(std::string_view line, Handler& h) {
     h.onError("gpsd: " + (msg != j.end() && msg->is_string() ? msg->get<std::string>() : std::string(line)));
   } else if (cls == "SKY") {
     double v;
-    if (number(j, "hdop", &v)) {
+    if (number(j, "hdop", &v, 0, kMaxDop)) {
       hdop_ = v;
       have_sky_ = true;
     }
-    if (number(j, "pdop", &v)) pdop_ = v;
-    if (number(j, "vdop", &v)) vdop_ = v;
+    if (number(j, "pdop", &v, 0, kMaxDop)) pdop_ = v;
+    if (number(j, "vdop", &v, 0, kMaxDop)) vdop_ = v;
     const auto u = j.find("uSat");
-    if (u != j.end() && u->is_number_integer()) used_ = u->get<int>();
+    if (u != j.end() && u->is_number_unsigned() && u->get<uint64_t>() <= 1000) used_ = u->get<int>();
   } else if (cls == "GST") {
     const auto t = j.find("time");
     double tt;
     if (t != j.end() && t->is_string() &&
         parseIso8601(t->get_ref<const std::string&>().data(), t->get_ref<const std::string&>().size(), &tt) &&
-        number(j, "lat", &gst_lat_) && number(j, "lon", &gst_lon_)) {
+        number(j, "lat", &gst_lat_, 0, kMaxErrM) && number(j, "lon", &gst_lon_, 0, kMaxErrM)) {
       gst_time_ = tt;
-      if (!number(j, "alt", &gst_alt_)) gst_alt_ = Fix::empty().alt;
+      if (!number(j, "alt", &gst_alt_, 0, kMaxErrM)) gst_alt_ = Fix::empty().alt;
       have_gst_ = true;
     }
   } else if (cls == "TPV") {

@@ -57,6 +57,9 @@ class GpsdClient {
   // Waits up to timeout_ms for data and handles every complete line.
   // End: gpsd closed the connection; Error: see error().
   ReadStatus poll(Handler& h, int timeout_ms);
+  // What poll does with the bytes it reads: whole lines are handled, a partial
+  // one waits for the rest (a recorded gpsd session, a fuzzer's input).
+  void consume(std::string_view bytes, Handler& h);
   void close() { src_.close(); }
   bool isOpen() const { return src_.isOpen(); }
   const std::string& error() const { return src_.error(); }

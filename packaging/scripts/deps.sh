@@ -10,6 +10,8 @@ pkgs=(
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
   libgtest-dev libgmock-dev libbenchmark-dev gpsd gpsd-clients
   libx11-dev libssl-dev libcurl4-openssl-dev
+  # tests/fuzz: coverage-guided fuzzing (libFuzzer ships in clang's runtime libraries).
+  clang libclang-rt-14-dev
   # tests/remote: a real HTTP server started by the tests.
   nginx-light
   # tests/cluster: a one-node Slurm cluster started by the test itself.

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The whole test suite, as CI runs it: install dependencies, build with
 # warnings as errors, run the parser/corruption and runtime-failure tests
-# under ASan+UBSan, the threaded tests under ThreadSanitizer, the arm64
+# under ASan+UBSan, the fuzz targets under libFuzzer (clang), the threaded
+# tests under ThreadSanitizer, the arm64
 # cross-build's tests under qemu, then every other test. The last line printed is CTest's summary.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -18,12 +19,23 @@ cmake --build build -j"$jobs"
 #    tracker and a CAN profile failing in turn: LeakSanitizer checks that nothing leaks).
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DBLVD_SANITIZE=ON -DBLVD_WERROR=ON > /dev/null
 cmake --build build-asan -j"$jobs" --target test_package test_graph_serialize test_gnss test_can \
-  fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc fuzz_can_frame fuzz_shard_manifest fuzz_cache_entry test_runtime_fault test_create_nomem
+  fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc fuzz_can_frame fuzz_shard_manifest fuzz_cache_entry \
+  fuzz_gpsd fuzz_osm fuzz_capi test_runtime_fault test_create_nomem
 # The runtime test needs the Monaco package: the fixture's own bake, run with
 # step 1's build (a sanitized CGAL bake would take many minutes).
 (cd build && ctest --output-on-failure -R '^bake\.monaco_geofabrik$')
 cp build/test-monaco.blvd build-asan/test-monaco.blvd
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" -L "asan|fuzz" -FS monaco_package)
+
+# 2b. Coverage-guided fuzzing (clang, libFuzzer, ASan+UBSan; tools/fuzz.sh for
+#     long campaigns): every target replays its seeds, its corpus and the
+#     crashes once found (tests/fuzz/regressions), then fuzzes for 15 s.
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBLVD_FUZZ=ON \
+  -DBLVD_SANITIZE=ON -DBLVD_BUILD_SAMPLES=OFF -DBLVD_FUZZ_SECONDS=15 > /dev/null
+fuzzers=$(sed -n 's/^build tests\/fuzz\/\(fuzz_[a-z_]*\): .*/\1/p' build-fuzz/build.ninja | sort -u)
+# shellcheck disable=SC2086
+cmake --build build-fuzz -j"$jobs" --target $fuzzers
+(cd build-fuzz && ctest --output-on-failure -j"$jobs" -L '^fuzz$|^fuzz_campaign$')
 
 # 3. ThreadSanitizer on the tests that share data across threads: the cell
 #    loader's two decoding threads and its frame clock and prefetch share,

@@ -2,6 +2,7 @@
 #include "bake/shard.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 
 #include <nlohmann/json.hpp>
@@ -77,24 +78,33 @@ ShardManifest parseManifest(const std::string& json, const std::string& name) {
   const nlohmann::json j = nlohmann::json::parse(json, nullptr, false);
   auto bad = [&](const std::string& why) { return core::Error(core::Status::Corrupt, name + ": shard manifest: " + why); };
   if (j.is_discarded() || !j.is_object()) throw bad("not a JSON object");
-  if (j.value("format", "") != "blvd-shard") throw bad("format is not blvd-shard");
+  // A count: an unsigned integer that fits (nlohmann's get<> would convert
+  // -1 or 1e300 without a word, the second undefined behaviour).
+  auto count = [&](const nlohmann::json& v, const char* what, uint64_t max) -> uint64_t {
+    if (!v.is_number_unsigned() || v.get<uint64_t>() > max) throw bad(std::string(what) + " is not a count: " + v.dump());
+    return v.get<uint64_t>();
+  };
+  constexpr uint64_t k32 = UINT32_MAX, k64 = UINT64_MAX;
   ShardManifest m;
   try {
-    m.version = j.at("version").get<uint32_t>();
+    const auto format = j.find("format");
+    if (format == j.end() || !format->is_string() || *format != "blvd-shard") throw bad("format is not blvd-shard");
+    m.version = static_cast<uint32_t>(count(j.at("version"), "version", k32));
     if (m.version != 1) throw bad("version " + std::to_string(m.version) + " (this blvd reads 1)");
-    m.index = j.at("shard").get<uint32_t>();
-    m.count = j.at("shards").get<uint32_t>();
+    m.index = static_cast<uint32_t>(count(j.at("shard"), "shard", k32));
+    m.count = static_cast<uint32_t>(count(j.at("shards"), "shards", k32));
     m.input_name = j.at("input").at("name").get<std::string>();
-    m.input_bytes = j.at("input").at("bytes").get<uint64_t>();
+    m.input_bytes = count(j.at("input").at("bytes"), "input bytes", k64);
     m.input_sha256 = j.at("input").at("sha256").get<std::string>();
     m.options_sha256 = j.at("options_sha256").get<std::string>();
     m.generator = j.at("generator").get<std::string>();
-    m.block_blobs = j.at("block_blobs").get<uint32_t>();
-    m.streets = j.at("streets").get<std::vector<uint32_t>>();
-    m.plan_streets = j.at("plan").at("streets").get<uint64_t>();
+    m.block_blobs = static_cast<uint32_t>(count(j.at("block_blobs"), "block_blobs", k32));
+    for (const nlohmann::json& h : j.at("streets").get_ref<const nlohmann::json::array_t&>())
+      m.streets.push_back(static_cast<uint32_t>(count(h, "a street", k32)));
+    m.plan_streets = count(j.at("plan").at("streets"), "plan streets", k64);
     m.plan_sha256 = j.at("plan").at("sha256").get<std::string>();
     m.plan_costs = j.at("plan").at("costs").get<std::vector<double>>();
-    m.blocks_drawn = j.at("blocks_drawn").get<uint64_t>();
+    m.blocks_drawn = count(j.at("blocks_drawn"), "blocks_drawn", k64);
     m.seconds = j.at("seconds").get<double>();
     m.cpu_seconds = j.at("cpu_seconds").get<double>();
   } catch (const nlohmann::json::exception& e) {

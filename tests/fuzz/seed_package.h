@@ -1,0 +1,79 @@
+// A small package with a street graph for the fuzz targets' seeds: a 3 x 3
+// grid of streets 50 m apart (its cell lists and segment grid), one block with
+// its GLB, a PVS per cell and one impostor layer on cell 0 (the block's blob
+// stands in for its GLB: the tables only index it).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "graph/block_table.h"
+#include "graph/cell_tables.h"
+#include "graph/segment_grid.h"
+#include "graph/street_graph.h"
+#include "package/glb.h"
+#include "package/writer.h"
+#include "track/track_test_util.h"
+
+namespace blvd_test {
+
+// A quad of two triangles with normals and colours.
+inline blvd::geo::MeshData seedQuad() {
+  blvd::geo::MeshData m;
+  m.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+  m.normals = {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
+  m.colors.assign(16, 180);
+  m.indices = {0, 1, 2, 2, 1, 3};
+  return m;
+}
+
+inline blvd::package::PackageHeader seedHeader() {
+  blvd::package::PackageHeader h;
+  h.origin_lat = 43.73;
+  h.origin_lon = 7.42;
+  h.block_count = 2;
+  return h;
+}
+
+inline void writeGridPackage(const std::string& path) {
+  using namespace blvd::package;
+  const blvd::geo::MeshData m = seedQuad();
+  const PackageHeader h = seedHeader();
+  // A small street graph, its cell lists and its segment grid.
+  blvd::graph::StreetGraph g = blvd_test::makeGrid(3, 50);
+  g.faces.resize(1);  // one block, all around: enough for the index checks to pass
+  for (auto& e : g.halfedges) e.face = 0, e.next = e.next == blvd::graph::kNone ? e.twin : e.next;
+  while (g.local_blocks.size() < g.halfedges.size()) g.local_blocks.push({0});
+  blvd::graph::SegmentGrid grid;
+  grid.build(g);
+  PackageWriter gw;
+  gw.setHeader(h);
+  gw.addSection(kSectionGraph, blvd::graph::serializeGraph(g));
+  gw.addSection(kSectionCells, blvd::graph::serializeCells(g));
+  gw.addSection(kSectionSpatialIndex, blvd::graph::serializeSegmentGrid(grid));
+  // One block with its blob, and per-cell tables: a PVS of it and, on cell 0,
+  // one impostor layer (the blob stands in for its GLB: the tables only index it).
+  blvd::graph::BlockRecord rec;
+  rec.blob = 0;
+  rec.lod_count = 1;
+  rec.triangles[0] = rec.triangle_count = 2;
+  rec.vertices[0] = rec.vertex_count = 4;
+  rec.bbox_max[0] = rec.bbox_max[1] = rec.bbox_max[2] = 1;
+  gw.addSection(kSectionBlocks, blvd::graph::serializeBlocks({rec}));
+  gw.addBlob(encodeGlb(m));
+  blvd::graph::CellTables t;
+  t.visibility.resize(g.halfedges.size(), blvd::graph::CellVisibility{{0}, {0.5f}});
+  t.impostors.resize(g.halfedges.size());
+  blvd::graph::ImpostorLayer layer;
+  layer.triangles = 2;
+  layer.vertices = 6;
+  layer.texture_width = layer.texture_height = 4;
+  layer.blocks = {0};
+  t.impostors[0].layered.push_back(layer);
+  std::vector<uint64_t> vis_at, imp_at;
+  gw.addSection(kSectionVisibility, blvd::graph::serializeVisibility(t, &vis_at));
+  gw.addSection(kSectionImpostors, blvd::graph::serializeImpostors(t, &imp_at));
+  gw.addSection(kSectionCellTableIndex, blvd::graph::serializeCellTableIndex(vis_at, imp_at));
+  gw.write(path);
+}
+
+}  // namespace blvd_test
