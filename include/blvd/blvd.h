@@ -364,7 +364,9 @@ typedef struct blvd_stats {
   uint64_t loads;                /* cells decoded by the loader */
   uint64_t evictions;            /* resident cells released for others */
   uint64_t misses;               /* frames whose current cell was not resident */
-  uint64_t load_errors;          /* cells that failed to decode (see blvd_last_error) */
+  uint64_t load_errors;          /* cells that failed to decode, and blocks left out of a cell because
+                                  * their blob failed its checksum (the cell draws without them; see
+                                  * blvd_last_error) */
   uint64_t frames;
   double upload_ms;              /* GL upload time of the last frame */
   double upload_ms_max;
@@ -628,9 +630,9 @@ typedef struct blvd_start_pose {
  * what was fed and not yet processed is kept); the camera follows it with BLVD_CAMERA_TRACKED.
  * Fixes that disagree with it (the car was moved while parked) are rejected at first and, after
  * five in a row, taken instead. Render thread. Errors: BLVD_ERR_INVALID_ARG for a latitude or
- * longitude out of range, a negative sigma or one over 10 km, a heading beyond 720 degrees, a
- * non-finite field or a nonzero struct_size that does not cover heading_sigma_deg; nothing
- * changes then. */
+ * longitude out of range, a negative sigma, sigma_m over 10 km or heading_sigma_deg over 180, a
+ * heading beyond 720 degrees, a non-finite field or a nonzero struct_size that does not cover
+ * heading_sigma_deg; nothing changes then. */
 BLVD_API blvd_status blvd_set_start_pose(blvd_runtime* rt, const blvd_start_pose* sp);
 
 /* What tracking made of its input since create: each fault a drive meets is counted here while

@@ -57,11 +57,11 @@ template <typename Start>
 void setStartPose(const char* fn, const blvd_start_pose& sp, Start&& start) {
   needStructSize(fn, sp.struct_size, offsetof(blvd_start_pose, heading_sigma_deg) + sizeof(double));
   if (start(blvd::capi::toTrack(sp))) return;
-  char msg[320];
+  char msg[512];
   std::snprintf(msg, sizeof msg,
                 "%s: t %g, lat %g, lon %g, heading %g deg, sigma %g m, heading sigma %g deg: every field must be "
-                "finite, lat within 90, lon within 180, the heading within 720, the sigmas not negative and the "
-                "position's at most 10 km",
+                "finite, lat within 90, lon within 180, the heading within 720, the sigmas not negative, the "
+                "position's at most 10 km and the heading's at most 180 deg",
                 fn, sp.t, sp.lat, sp.lon, sp.heading_deg, sp.sigma_m, sp.heading_sigma_deg);
   throw core::Error(core::Status::InvalidArg, msg);
 }

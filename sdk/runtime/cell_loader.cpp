@@ -377,6 +377,7 @@ bool CellLoader::decodeCell(Staging& s) {
   s.uploaded = 0;
   s.error[0] = 0;
   s.unavailable = false;
+  s.bad_blocks = 0;
   std::string err;
   // `st`: a link that is down, offline, or a package replaced on the server
   // makes the cell unavailable (asked for again later), not a load error.
@@ -430,6 +431,10 @@ bool CellLoader::decodeCell(Staging& s) {
       const int64_t cpu0 = threadCpuNs();
       if (k == 0) {
         const core::Status st = city_.openBlock(b, blob, err);
+        if (st == core::Status::Corrupt) {  // a bad blob costs its block, not the cell
+          if (s.bad_blocks++ == 0) std::snprintf(s.error, sizeof s.error, "cell %u: block left out: %s", s.cell, err.c_str());
+          break;
+        }
         if (st != core::Status::Ok) return fail(err, st);
       }
       const core::Status st = city_.decodeBlockLevel(blob, k, s.scratch, err);

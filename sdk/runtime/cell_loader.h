@@ -66,6 +66,7 @@ struct Staging {
   std::atomic<bool> abandon{false};
   char error[256] = {0};
   bool unavailable = false;  // Failed because the data is not here now (offline, link down): ask again later
+  uint32_t bad_blocks = 0;   // Ready without these blocks: their blobs failed the checksum (`error` names the first)
   std::vector<uint32_t> blob_ids;  // a package on a server: the cell's blobs, fetched before decoding
   geo::MeshData scratch;  // the decoder's reusable buffers (one per slot: jobs may run at once)
   std::vector<stream::LayerInfo> layers;  // the cell's impostor layers, sized at create

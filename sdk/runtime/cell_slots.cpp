@@ -81,7 +81,7 @@ void CellSlots::request(stream::Residency& residency, uint32_t cell) {
     const uint32_t c = residency.wanted()[r];
     bool have = false;
     for (const CellSlot& s : slots_) have |= s.cell == c && s.state != CellSlot::Empty;
-    if (have || std::find(failed_cells_.begin(), failed_cells_.end(), c) != failed_cells_.end()) continue;
+    if (have || failed(c)) continue;
     if (!mayFetch(c, r)) continue;
     // A slot that shared blocks are being copied from stays.
     for (size_t i = 0; i < slots_.size(); ++i) copy_sources_[i] = slots_[i].copy_refs > 0;

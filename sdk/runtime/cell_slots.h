@@ -12,6 +12,7 @@
 // cell_slots.cpp (requests and eviction), slot_upload.cpp (staging -> slab),
 // block_copy.cpp (shared blocks slab -> slab).
 #pragma once
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -89,6 +90,10 @@ class CellSlots {
   // then uploads and copies within `upload_budget_ms`.
   void stream(stream::Residency& residency, uint32_t cell, double arc_m, double speed_mps, double upload_budget_ms);
   const CellSlot* resident(uint32_t cell) const;
+  // Whether the cell's load failed (it is not asked for again; lastError() says why).
+  bool failed(uint32_t cell) const {
+    return std::find(failed_cells_.begin(), failed_cells_.end(), cell) != failed_cells_.end();
+  }
 
   uint32_t residentCount() const;
   uint64_t usedBytes() const;

@@ -198,7 +198,9 @@ void Runtime::waitResident(double timeout_ms) {
       if (!mapMissing(e)) throw;
       missing = e.what();
     }
-    if (slots_->counters().load_errors != errors) throw Error(Status::Corrupt, slots_->lastError());
+    // A load that failed now, or earlier (the cell is not asked for again).
+    if (slots_->counters().load_errors != errors || slots_->failed(cell))
+      throw Error(Status::Corrupt, slots_->lastError());
     if (msSince(t0) > timeout_ms)
       throw Error(Status::Timeout, (missing.empty() ? "cell " + std::to_string(cell) : std::string("the map")) +
                                        " not resident after " + std::to_string(timeout_ms) + " ms" +

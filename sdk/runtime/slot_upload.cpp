@@ -46,6 +46,10 @@ void CellSlots::uploadStaged(double budget_ms) {
     }
     const bool done = uploadMeshes(slot, *st, t0, budget_ms, spent);
     if (done) {
+      if (st->bad_blocks) {  // drawn without them
+        counters_.load_errors += st->bad_blocks;
+        last_error_ = st->error;
+      }
       loader_.release(st);
       slot.staged = true;
       if (slot.copies_done >= slot.copies.size()) finishSlot(slot);

@@ -146,7 +146,8 @@ bool Tracker::clockStepped(double t) {
 bool Tracker::setStartPose(const StartPose& sp) {
   if (!finite(sp.t) || !finite(sp.lat) || !finite(sp.lon) || !finite(sp.heading_deg) || !finite(sp.sigma_m) ||
       !finite(sp.heading_sigma_deg) || std::fabs(sp.lat) > 90 || std::fabs(sp.lon) > 180 || sp.sigma_m < 0 ||
-      sp.sigma_m > kMaxFixSigmaM || sp.heading_sigma_deg < 0 || !plausibleAngle(sp.heading_deg))
+      sp.sigma_m > kMaxFixSigmaM || sp.heading_sigma_deg < 0 || sp.heading_sigma_deg > 180 ||
+      !plausibleAngle(sp.heading_deg))
     return false;
   forgetDrive();
   const geo::Enu p = frame_.forward(sp.lat, sp.lon, frame_.h0());

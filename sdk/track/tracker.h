@@ -165,7 +165,8 @@ class Tracker {
   // with the start pose (the car was moved while parked) are gated out and,
   // after EkfDesc::reset_after_rejects of them, reset the position to theirs.
   // False, changing nothing, for a non-finite or out-of-range field, a
-  // negative sigma or one over 10 km, a heading beyond 720 degrees.
+  // negative sigma, a position sigma over 10 km or a heading sigma over 180
+  // degrees, a heading beyond 720 degrees.
   bool setStartPose(const StartPose& sp);
 
   // Tracking thread: the odometry calibration learned so far (ekf.h), to keep

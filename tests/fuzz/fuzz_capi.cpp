@@ -8,6 +8,7 @@
 //
 // Seeds: set BLVD_FUZZ_SEED_DIR and the target writes a few scripts there (a
 // drive of fixes and odometry, a start pose, a calibration, the getters).
+// BLVD_FUZZ_TRACE=1 prints each call and its struct, to read a crash's script.
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -228,6 +229,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   d.ring_capacity = mode >> 1;  // 0 (the default, 512) to 127: a ring that fills
   blvd_tracker* tr = nullptr;
   const blvd_status s = blvd_tracker_create(&d, &tr);
+  if (g_trace) std::fprintf(stderr, "create %d: %s\n", s, blvd_last_error(nullptr));
   if ((s == BLVD_OK) != (tr != nullptr)) std::abort();
   if (s != BLVD_OK) {
     if (blvd_last_error(nullptr)[0] == '\0') std::abort();
