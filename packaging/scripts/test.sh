@@ -54,10 +54,10 @@ cp build/test-monaco.blvd build-tsan/test-monaco.blvd
 bash packaging/scripts/arm64.sh build build-arm64
 
 # 5. Every test but the Debian packages' (label packaging: a second full build
-#    and a clean root; `ctest -L packaging` in build runs them).
+#    and a clean root; `ctest -L packaging` in build runs them) and the two-hour soak (label soak).
 cd build
 set +e
-ctest --output-on-failure -j"$jobs" --timeout 900 -LE '^packaging$' 2>&1 | tee ctest.log
+ctest --output-on-failure -j"$jobs" --timeout 900 -LE '^(packaging|soak)$' 2>&1 | tee ctest.log
 rc=${PIPESTATUS[0]}
 # CTest prints skipped tests after its summary; repeat the summary so it is the last line.
 grep -E "tests passed|tests failed" ctest.log | tail -n 1
