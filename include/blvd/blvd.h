@@ -265,7 +265,8 @@ BLVD_API blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const c
  * blvd_runtime_destroy. Thread: the calling thread becomes the render thread.
  * Errors: BLVD_ERR_INVALID_ARG, BLVD_ERR_IO, BLVD_ERR_CORRUPT, BLVD_ERR_BACKEND,
  * BLVD_ERR_BUDGET (the plan exceeds a budget: the message says by how much),
- * BLVD_ERR_NOMEM (the host allocator failed); on error *out is NULL and blvd_last_error(NULL) gives the reason. */
+ * BLVD_ERR_NOMEM (the host allocator failed, or the GL driver had no memory for the cell slabs); on
+ * error *out is NULL and blvd_last_error(NULL) gives the reason. */
 BLVD_API blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** out);
 
 /* Destroys a runtime and its GL objects. NULL is a no-op. Render thread only. */

@@ -152,6 +152,8 @@ bool Renderer::fail(const char* what) {
   return false;
 }
 
+bool Renderer::outOfMemory() const { return out_of_memory_; }
+
 const char* Renderer::backendName() const { return ctx_.name(); }
 
 namespace {
@@ -719,6 +721,7 @@ uint64_t slabGpuBytes(const SlabDesc& d) {
 
 SlabHandle Renderer::createSlab(const SlabDesc& d) {
   Impl& m = *impl_;
+  out_of_memory_ = false;
   if (d.meshes == 0 || d.vertex_bytes == 0 || d.index_bytes == 0) {
     fail("slab needs meshes, vertex bytes and index bytes");
     return {};
@@ -768,6 +771,24 @@ SlabHandle Renderer::createSlab(const SlabDesc& d) {
       setTextureSampling(gl);
     }
     gl.BindTexture(GL_TEXTURE_2D, 0);
+  }
+  // A driver that cannot back the slab says so here (GL_OUT_OF_MEMORY leaves
+  // the objects undefined, GLES 3.0 §2.5), not later as frames without cells.
+  GLenum e = GL_NO_ERROR;
+  for (GLenum next; (next = gl.GetError()) != GL_NO_ERROR;) e = e == GL_NO_ERROR ? next : e;
+  if (e != GL_NO_ERROR) {
+    gl.DeleteBuffers(1, &s.vbo);
+    gl.DeleteBuffers(1, &s.ibo);
+    gl.DeleteVertexArrays(static_cast<GLsizei>(s.vaos.size()), s.vaos.data());
+    if (!s.textures.empty()) gl.DeleteTextures(static_cast<GLsizei>(s.textures.size()), s.textures.data());
+    m.slabs.pop_back();
+    out_of_memory_ = e == GL_OUT_OF_MEMORY;
+    char msg[200];
+    std::snprintf(msg, sizeof msg, "GL %s allocating a cell slab (%llu vertex, %llu index bytes, %u textures of %dx%d)",
+                  out_of_memory_ ? "out of memory" : "error", static_cast<unsigned long long>(d.vertex_bytes),
+                  static_cast<unsigned long long>(d.index_bytes), d.textures, d.texture_width, d.texture_height);
+    fail(msg);
+    return {};
   }
   gpu_slab_bytes_ += slabGpuBytes(d);
   return SlabHandle{static_cast<uint32_t>(m.slabs.size())};

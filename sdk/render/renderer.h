@@ -165,8 +165,10 @@ class Renderer {
   void release(MeshHandle h);
 
   // Creates a slab (see SlabDesc). Call at start-up: this is where GL
-  // allocates. Invalid handle with lastError() set on failure.
+  // allocates. Invalid handle with lastError() set on failure; outOfMemory()
+  // then says whether the driver ran out of memory (GL_OUT_OF_MEMORY).
   SlabHandle createSlab(const SlabDesc& desc);
+  bool outOfMemory() const;
   // Places a prepared mesh after the slab's last one. Invalid handle when the
   // slab or the mesh pool is full. The only GL calls are sub-data copies.
   MeshHandle uploadToSlab(SlabHandle slab, const PreparedMesh& mesh);
@@ -219,6 +221,9 @@ class Renderer {
   uint32_t meshCount() const { return live_meshes_; }
   uint64_t meshBytes() const { return mesh_bytes_; }  // vertex + index bytes in GL buffers
   const std::string& lastError() const { return error_; }
+  // The GL entry points this renderer calls: a test puts a failing driver's
+  // in their place (tests/render: fault injection).
+  GlApi& api() { return *gl_; }
 
  public:
   struct Impl;  // renderer.cpp's; public so that its drawing helpers there can take it
@@ -245,6 +250,7 @@ class Renderer {
   std::string gl_renderer_, gl_version_, error_;
   bool gles_ = true;
   bool shared_ = false;
+  bool out_of_memory_ = false;  // the last createSlab failed with GL_OUT_OF_MEMORY
   int fb_w_ = 0, fb_h_ = 0;
   int last_w_ = 0, last_h_ = 0;
   uint32_t live_meshes_ = 0;

@@ -14,7 +14,9 @@ CellSlots::CellSlots(const stream::City& city, render::Renderer& renderer, CellL
   const size_t copies = std::min<size_t>(plan.max_local_blocks, kMaxSkippedBlocks);
   for (CellSlot& slot : slots_) {
     slot.slab = renderer.createSlab(plan.slab);
-    if (slot.slab.id == 0) throw core::Error(core::Status::Backend, "cell slab: " + renderer.lastError());
+    if (slot.slab.id == 0)
+      throw core::Error(renderer.outOfMemory() ? core::Status::NoMem : core::Status::Backend,
+                        "cell slab: " + renderer.lastError());
     slot.blocks.reserve(plan.max_local_blocks);
     slot.copies.reserve(copies);
     slot.layered.reserve(plan.slab.textures);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "render/context.h"
+#include "render/gl_api.h"
 #include "render/prepared_mesh.h"
 #include "render/renderer.h"
 #include "scene.h"
@@ -324,6 +325,52 @@ TEST(SlabUpload, AResetAbandonsAnUnfinishedUpload) {
   EXPECT_EQ(r->meshCount(), 0u);
   // The slab is whole again for the next cell.
   EXPECT_NE(r->uploadToSlab(slab, prep.meshes[0]).id, 0u) << r->lastError();
+}
+
+// A driver that runs out of memory while a slab is carved (its GetError, put in
+// the renderer's table, reports GL_OUT_OF_MEMORY once): createSlab says so and
+// keeps nothing of that slab; the next one is whole.
+GLenum g_injected = GL_NO_ERROR;
+PFNGLGETERRORPROC g_real_get_error = nullptr;
+GLenum GL_APIENTRY injectedGetError() {
+  const GLenum e = g_injected;
+  g_injected = GL_NO_ERROR;
+  return e != GL_NO_ERROR ? e : g_real_get_error();
+}
+
+TEST(SlabCreate, ADriverErrorAtCreateOrAfterAFrameIsReported) {
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
+  const Scene scene;
+  const Prepared prep(scene);
+  g_real_get_error = r->api().GetError;
+  r->api().GetError = injectedGetError;
+  g_injected = GL_OUT_OF_MEMORY;
+  EXPECT_EQ(r->createSlab(slabFor(prep)).id, 0u);
+  EXPECT_TRUE(r->outOfMemory());
+  EXPECT_NE(r->lastError().find("GL out of memory allocating a cell slab"), std::string::npos) << r->lastError();
+  const SlabHandle slab = r->createSlab(slabFor(prep));
+  EXPECT_EQ(slab.id, 1u);  // the failed slab's place was given back
+  EXPECT_FALSE(r->outOfMemory());
+  EXPECT_NE(r->uploadToSlab(slab, prep.meshes[0]).id, 0u) << r->lastError();
+  g_injected = GL_INVALID_OPERATION;
+  EXPECT_EQ(r->createSlab(slabFor(prep)).id, 0u);
+  EXPECT_FALSE(r->outOfMemory());
+  EXPECT_NE(r->lastError().find("GL error allocating a cell slab"), std::string::npos) << r->lastError();
+  // Mid-drive: a frame after which the driver reports an error fails, saying
+  // which (blvd_render returns it); the next frame is drawn as before.
+  const std::vector<MeshHandle> list{r->uploadToSlab(slab, prep.meshes[1])};
+  const std::vector<uint8_t> before = draw(*r, list);
+  Camera cam;
+  cam.eye_enu = {0.0, 0.0, 2.0};
+  cam.width = kW;
+  cam.height = kH;
+  g_injected = GL_OUT_OF_MEMORY;
+  EXPECT_FALSE(r->render(cam, list.data(), list.size(), nullptr));
+  EXPECT_NE(r->lastError().find("GL error 0x0505 in render"), std::string::npos) << r->lastError();
+  EXPECT_TRUE(draw(*r, list) == before);
+  r->api().GetError = g_real_get_error;
 }
 
 // Copies the untextured mesh `from` into `slab` in steps of max_bytes.
