@@ -182,11 +182,16 @@ struct Rig {
   }
 };
 
-std::vector<uint8_t> draw(Renderer& r, const std::vector<MeshHandle>& list) {
+Camera viewCamera() {
   Camera cam;
   cam.eye_enu = {0.0, 0.0, 2.0};
   cam.width = kW;
   cam.height = kH;
+  return cam;
+}
+
+std::vector<uint8_t> draw(Renderer& r, const std::vector<MeshHandle>& list) {
+  const Camera cam = viewCamera();
   EXPECT_TRUE(r.render(cam, list.data(), list.size(), nullptr)) << r.lastError();
   std::vector<uint8_t> px(size_t(kW) * kH * 4);
   EXPECT_TRUE(r.readPixels(px.data()));
@@ -362,10 +367,7 @@ TEST(SlabCreate, ADriverErrorAtCreateOrAfterAFrameIsReported) {
   // which (blvd_render returns it); the next frame is drawn as before.
   const std::vector<MeshHandle> list{r->uploadToSlab(slab, prep.meshes[1])};
   const std::vector<uint8_t> before = draw(*r, list);
-  Camera cam;
-  cam.eye_enu = {0.0, 0.0, 2.0};
-  cam.width = kW;
-  cam.height = kH;
+  const Camera cam = viewCamera();
   g_injected = GL_OUT_OF_MEMORY;
   EXPECT_FALSE(r->render(cam, list.data(), list.size(), nullptr));
   EXPECT_NE(r->lastError().find("GL error 0x0505 in render"), std::string::npos) << r->lastError();
