@@ -10,6 +10,14 @@ namespace {
 using core::kPi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kMaxSubstep = 0.1;       // seconds per integration step
+
+// The integration step's end from `now` towards `t`: `t` within a step, and
+// `t` too where a step no longer moves a clock this large (past 2^49 s a
+// double's spacing exceeds the step, and now + dt == now would loop for ever).
+double stepEnd(double now, double t) {
+  const double next = now + kMaxSubstep;
+  return t - now <= kMaxSubstep || !(next > now) ? t : next;
+}
 constexpr double kAnchorMinDist = 10.0;   // metres between fixes for a heading from displacement
 // Faster than any road vehicle (about 400 km/h): such a displacement is a jump
 // of the fixes (an outlier, a receiver reset, a pose off the map), not motion,
@@ -176,7 +184,7 @@ void Ekf::predict(double t) {
     const double dt = std::min(kMaxSubstep, t - t_);
     propagate(x_, P_, dt, t_);
     odometer_ += std::fabs(x_[kV]) * dt;
-    t_ = (t - t_ <= kMaxSubstep) ? t : t_ + dt;
+    t_ = stepEnd(t_, t);
   }
 }
 
@@ -189,7 +197,7 @@ void Ekf::extrapolate(double t, double out[kDim], double* sigma_out) const {
     while (t > now) {
       const double dt = std::min(kMaxSubstep, t - now);
       propagate(out, P, dt, now);
-      now = (t - now <= kMaxSubstep) ? t : now + dt;
+      now = stepEnd(now, t);
     }
   if (sigma_out) {
     const double a = P[kE][kE], b = P[kN][kN], c = P[kE][kN];
