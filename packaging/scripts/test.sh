@@ -35,7 +35,7 @@ CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWit
 fuzzers=$(sed -n 's/^build tests\/fuzz\/\(fuzz_[a-z_]*\): .*/\1/p' build-fuzz/build.ninja | sort -u)
 # shellcheck disable=SC2086
 cmake --build build-fuzz -j"$jobs" --target $fuzzers
-(cd build-fuzz && ctest --output-on-failure -j"$jobs" -L '^fuzz$|^fuzz_campaign$')
+(cd build-fuzz && BLVD_FUZZ_SEED=1 ctest --output-on-failure -j"$jobs" -L '^fuzz$|^fuzz_campaign$')
 
 # 3. ThreadSanitizer on the tests that share data across threads: the cell
 #    loader's two decoding threads and its frame clock and prefetch share,

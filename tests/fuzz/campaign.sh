@@ -31,7 +31,9 @@ while IFS= read -r p; do
   else echo "$name: input $p not found" >&2; exit 2
   fi
 done < "$list"
-flags=(-timeout=25 -rss_limit_mb=2048 -print_final_stats=1 "-artifact_prefix=$work/artifacts/")
+# BLVD_FUZZ_SEED fixes libFuzzer's random seed (CI's short campaigns: the same
+# mutations in the same order on every run); unset, each campaign draws its own.
+flags=(-timeout=25 -rss_limit_mb=2048 -print_final_stats=1 "-artifact_prefix=$work/artifacts/" "-seed=${BLVD_FUZZ_SEED:-0}")
 [ -f "$here/dict/$name.dict" ] && flags+=("-dict=$here/dict/$name.dict")
 
 if [ "$secs" = 0 ]; then
