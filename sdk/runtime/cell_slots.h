@@ -92,7 +92,7 @@ class CellSlots {
   const CellSlot* resident(uint32_t cell) const;
   // Whether the cell's load failed (it is not asked for again; lastError() says why).
   bool failed(uint32_t cell) const {
-    return std::find(failed_cells_.begin(), failed_cells_.end(), cell) != failed_cells_.end();
+    return cell != graph::kNone && std::find(failed_cells_.begin(), failed_cells_.end(), cell) != failed_cells_.end();
   }
 
   uint32_t residentCount() const;
