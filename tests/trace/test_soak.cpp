@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "blvd/blvd.h"
+#include "common/test_runtime.h"
 #include "sim/sim_feed.h"
 #include "trace_inputs.h"
 
@@ -73,13 +74,8 @@ TEST(Soak, MemoryFilesAndThreadsStayFlatOverTheDrive) {
   const std::string dir = (std::filesystem::temp_directory_path() / ("blvd_soak_" + std::to_string(getpid()))).string();
   std::filesystem::create_directories(dir);
 
-  blvd_runtime_desc desc{};
-  desc.struct_size = sizeof desc;
-  desc.package_path = BLVD_TEST_PACKAGE;
-  desc.width = 160;
-  desc.height = 96;
-  blvd_runtime* rt = nullptr;
-  ASSERT_EQ(blvd_runtime_create(&desc, &rt), BLVD_OK) << blvd_last_error(nullptr);
+  blvd_runtime* rt = blvd::test::createTrackingRuntime(160, 96);
+  ASSERT_NE(rt, nullptr);
   ASSERT_EQ(blvd_set_camera_source(rt, BLVD_CAMERA_TRACKED), BLVD_OK) << blvd_last_error(rt);
   blvd_can_profile* prof = createToyotaProfile();
   ASSERT_NE(prof, nullptr);
