@@ -146,7 +146,7 @@ SocketCanSource::~SocketCanSource() { close(); }
 
 SocketCanSource::SocketCanSource(SocketCanSource&& o) noexcept
     : fd_(o.fd_), fd_frames_(o.fd_frames_), bound_iface_(std::move(o.bound_iface_)), names_(std::move(o.names_)),
-      dropped_(o.dropped_) {
+      dropped_(o.dropped_), link_downs_(o.link_downs_) {
   o.fd_ = -1;
 }
 
@@ -158,6 +158,7 @@ SocketCanSource& SocketCanSource::operator=(SocketCanSource&& o) noexcept {
     bound_iface_ = std::move(o.bound_iface_);
     names_ = std::move(o.names_);
     dropped_ = o.dropped_;
+    link_downs_ = o.link_downs_;
     o.fd_ = -1;
   }
   return *this;
@@ -246,6 +247,7 @@ blvd_status SocketCanSource::open(const SocketCanDesc& desc, std::string& err) {
   fd_frames_ = desc.fd;
   bound_iface_ = any ? std::string() : desc.iface;
   dropped_ = 0;
+  link_downs_ = 0;
   return BLVD_OK;
 }
 
@@ -296,8 +298,10 @@ SocketCanSource::Result SocketCanSource::read(Frame& out, int timeout_ms, std::s
     const int e = errno;
     if (e == EAGAIN || e == EWOULDBLOCK) return Result::Timeout;
     err = sysError("recvmsg", e);
-    if (e == ENETDOWN) err += " (the interface went down)";
-    return Result::Error;
+    if (e != ENETDOWN) return Result::Error;
+    err += " (the interface went down)";
+    ++link_downs_;
+    return Result::LinkDown;
   }
   if (nbytes != static_cast<ssize_t>(CAN_MTU) && nbytes != static_cast<ssize_t>(CANFD_MTU)) {
     err = "recvmsg: unexpected frame size " + std::to_string(nbytes);

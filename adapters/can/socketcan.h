@@ -72,7 +72,10 @@ std::string describe(const ErrorReport& r);
 
 class SocketCanSource {
  public:
-  enum class Result { Frame, Timeout, Error };
+  // LinkDown: the interface went down (ENETDOWN, reported once per going
+  // down; a bus-off controller that the kernel stops shows the same). The
+  // socket stays bound: keep reading, frames come again when it is back up.
+  enum class Result { Frame, Timeout, Error, LinkDown };
 
   SocketCanSource() = default;
   ~SocketCanSource();
@@ -100,6 +103,8 @@ class SocketCanSource {
 
   // Frames the kernel dropped because the socket's receive queue was full (SO_RXQ_OVFL).
   uint32_t dropped() const { return dropped_; }
+  // Times read() saw the interface go down.
+  uint32_t linkDowns() const { return link_downs_; }
 
  private:
   const std::string& ifaceName(int ifindex);
@@ -109,6 +114,7 @@ class SocketCanSource {
   std::string bound_iface_;
   std::unordered_map<int, std::string> names_;
   uint32_t dropped_ = 0;
+  uint32_t link_downs_ = 0;
 };
 
 }  // namespace blvd::can

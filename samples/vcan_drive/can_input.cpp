@@ -59,6 +59,9 @@ CanInput::Result CanInput::next(blvd::can::Frame& out, int timeout_ms, std::stri
         return Result::Timeout;
       case SocketCanSource::Result::Error:
         return Result::Error;
+      case SocketCanSource::Result::LinkDown:  // reported; the drive waits for the bus to come back
+        std::fprintf(stderr, "vcan_drive: %s\n", err.c_str());
+        return Result::Timeout;
     }
   }
   if (out.error) {

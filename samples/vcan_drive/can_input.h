@@ -32,6 +32,7 @@ class CanInput {
   uint32_t kernelDropped() const { return socket_.dropped(); }
   uint64_t errorFrames() const { return error_frames_; }
   uint64_t busOffs() const { return bus_offs_; }
+  uint64_t linkDowns() const { return from_log_ ? 0 : socket_.linkDowns(); }
   uint64_t badLines() const { return reader_.badLineCount(); }
 
  private:

@@ -318,6 +318,7 @@ nlohmann::json runStats(const Options& opt, DriveIo& io, Tracking& tracking, con
   j["kernel_dropped"] = io.input.kernelDropped();
   j["error_frames"] = io.input.errorFrames();
   j["bus_off"] = io.input.busOffs();
+  j["link_downs"] = io.input.linkDowns();
   j["bad_lines"] = d.bad_lines;
   j["gnss_fed"] = io.gnss.fed();
   j["gnss_untimed"] = io.gnss.untimed();

@@ -1,4 +1,5 @@
-// Used by the runtime tests and `blvd bench memory`.
+// Used by the runtime tests and `blvd bench memory`; ThreadMallocFailer by the
+// tests only.
 //
 // Counts every malloc-family call made on the calling thread while a
 // ThreadMallocCounter is alive on it: blvd's own and the GL driver's (the
@@ -26,6 +27,23 @@ class ThreadMallocCounter {
   long count() const;        // blvd's own (not through the driver)
   long driverCount() const;  // made inside the GL driver
   static bool available();
+};
+
+// Makes the n-th malloc-family call of blvd's on this thread (not the GL
+// driver's: the same test of the stack as above) return null with ENOMEM
+// while it is alive: every C allocation (zstd, libwebp, stb_image) and,
+// through operator new, every C++ one of a call can be failed in turn.
+// fail_at < 0: count only. c_only: only the calls that do not come through
+// operator new (C libraries, and blvd's own malloc). Not available under
+// AddressSanitizer.
+class ThreadMallocFailer {
+ public:
+  explicit ThreadMallocFailer(long fail_at, bool c_only = false);
+  ~ThreadMallocFailer();
+  ThreadMallocFailer(const ThreadMallocFailer&) = delete;
+  ThreadMallocFailer& operator=(const ThreadMallocFailer&) = delete;
+  long count() const;   // blvd's calls on this thread so far
+  bool failed() const;  // the fail_at-th came
 };
 
 }  // namespace blvd::probe

@@ -34,6 +34,8 @@ PackageReader& PackageReader::operator=(PackageReader&& o) noexcept {
     data_ = o.data_;
     size_ = o.size_;
     mapped_ = o.mapped_;
+    fd_ = o.fd_;
+    o.fd_ = -1;
     name_ = std::move(o.name_);
     layout_ = o.layout_;
     sections_ = std::move(o.sections_);
@@ -52,6 +54,8 @@ PackageReader& PackageReader::operator=(PackageReader&& o) noexcept {
 
 void PackageReader::close() {
   if (mapped_ && data_) ::munmap(const_cast<uint8_t*>(data_), size_);
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
   data_ = nullptr;
   size_ = 0;
   mapped_ = false;
@@ -97,8 +101,10 @@ core::Status PackageReader::open(const std::string& path, PackageReader& out, st
     r.data_ = static_cast<const uint8_t*>(p);
     r.size_ = static_cast<size_t>(file_size);
     r.mapped_ = true;
+    r.fd_ = fd;  // read() after open
+  } else {
+    ::close(fd);
   }
-  ::close(fd);  // the mapping keeps the file referenced
   const core::Status s = r.validate(err);
   if (s != core::Status::Ok) return s;  // r's destructor unmaps
   out = std::move(r);
@@ -213,8 +219,7 @@ void PackageReader::dropPages(const Span& s) const {
   if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_DONTNEED);
 }
 
-core::Status PackageReader::blob(uint32_t i, Span& out, std::string& err) const {
-  out = Span{};
+core::Status PackageReader::blobExists(uint32_t i, std::string& err) const {
   if (!isOpen()) {
     err = "package reader is not open";
     return core::Status::Misuse;
@@ -224,13 +229,67 @@ core::Status PackageReader::blob(uint32_t i, Span& out, std::string& err) const 
           std::to_string(blobs_.size()) + ")";
     return core::Status::NotFound;
   }
+  return core::Status::Ok;
+}
+
+core::Status PackageReader::checkBlob(uint32_t i, const uint8_t* bytes, Span& out, std::string& err) const {
   const BlobInfo& b = blobs_[i];
-  const uint32_t crc = crc32c(data_ + b.offset, static_cast<size_t>(b.size));
+  const uint32_t crc = crc32c(bytes, static_cast<size_t>(b.size));
   if (crc != b.crc) {
     err = crcMismatch(name_, "blob " + std::to_string(i), b.offset, b.crc, crc);
     return core::Status::Corrupt;
   }
-  out = Span{data_ + b.offset, static_cast<size_t>(b.size), b.offset};
+  out = Span{bytes, static_cast<size_t>(b.size), b.offset};
+  return core::Status::Ok;
+}
+
+core::Status PackageReader::blob(uint32_t i, Span& out, std::string& err) const {
+  out = Span{};
+  const core::Status st = blobExists(i, err);
+  if (st != core::Status::Ok) return st;
+  return checkBlob(i, data_ + blobs_[i].offset, out, err);
+}
+
+core::Status PackageReader::readBlob(uint32_t i, std::vector<uint8_t>& into, Span& out, std::string& err) const {
+  out = Span{};
+  core::Status st = blobExists(i, err);
+  if (st != core::Status::Ok) return st;
+  const BlobInfo& b = blobs_[i];
+  if (into.size() < b.size) into.resize(static_cast<size_t>(b.size));
+  if ((st = read(b.offset, static_cast<size_t>(b.size), into.data(), err)) != core::Status::Ok) {
+    err += " (blob " + std::to_string(i) + ")";
+    return st;
+  }
+  return checkBlob(i, into.data(), out, err);
+}
+
+core::Status PackageReader::read(uint64_t offset, size_t size, uint8_t* dst, std::string& err) const {
+  if (!isOpen() || offset > size_ || size > size_ - offset) {
+    err = name_ + ": read of " + std::to_string(size) + " bytes at offset " + std::to_string(offset) +
+          " is outside the package's " + std::to_string(size_) + " bytes";
+    return core::Status::Misuse;
+  }
+  if (fd_ < 0) {
+    if (size) std::memcpy(dst, data_ + offset, size);
+    return core::Status::Ok;
+  }
+  size_t done = 0;
+  while (done < size) {
+    const ssize_t n = ::pread(fd_, dst + done, size - done, static_cast<off_t>(offset + done));
+    if (n > 0) {
+      done += static_cast<size_t>(n);
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    struct stat st {};
+    const std::string why = n < 0 ? std::strerror(errno)
+                            : ::fstat(fd_, &st) == 0
+                                ? "the file ends at offset " + std::to_string(st.st_size) + ", it had " +
+                                      std::to_string(size_) + " bytes when opened (truncated)"
+                                : "the file ends early (truncated)";
+    err = name_ + ": cannot read " + std::to_string(size) + " bytes at offset " + std::to_string(offset) + ": " + why;
+    return core::Status::Io;
+  }
   return core::Status::Ok;
 }
 

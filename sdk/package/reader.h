@@ -1,5 +1,5 @@
 // PackageReader: the runtime's view of one package file, memory-mapped
-// read-only and validated once at open, then read zero-copy.
+// read-only and validated once at open.
 //
 // Open checks magic, header CRC, version, the directory (CRC, every section
 // inside the file, aligned, not overlapping) and every blob's offset/length,
@@ -14,9 +14,13 @@
 // Threading: after open, every const method may be called from any number of
 // threads at once (the object is immutable). Lifetime: Spans point into the
 // mapping and stay valid until the reader is closed, destroyed or moved from.
-// The file must not be truncated while mapped (the format is immutable; a
-// package is replaced by renaming a new file over it, which keeps the old
-// mapping intact).
+//
+// A file truncated while open: the mapping is read only by open() and
+// verify(); afterwards the runtime reads through read() and readBlob(), which
+// copy with pread from the descriptor kept open, so a file cut short under a
+// running runtime gives Status::Io naming the offset, never a SIGBUS from a
+// page past the file's new end. (A package is meant to be replaced by renaming
+// a new file over it, which keeps the open one intact.)
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -89,7 +93,17 @@ class PackageReader {
   const BlobInfo& blobInfo(uint32_t i) const { return blobs_[i]; }
   // Blob `i`, zero-copy, after checking its CRC. NotFound for i >= blobCount(),
   // Corrupt naming the blob and its offset when the CRC does not match.
+  // Touches the mapping: for tools that hold the file (pack verify, merge).
   core::Status blob(uint32_t i, Span& out, std::string& err) const;
+  // Blob `i` copied into `into` (grown when too small, never shrunk), then its
+  // CRC checked; `out` points into `into`. As blob(), plus Io when the file no
+  // longer holds it (truncated since open). What the runtime uses.
+  core::Status readBlob(uint32_t i, std::vector<uint8_t>& into, Span& out, std::string& err) const;
+  // `size` bytes at file offset `offset` into `dst`: pread from the file (a
+  // package read into memory: a copy). Io naming the offset and the file's
+  // size now when it holds fewer (truncated since open); Misuse past the end
+  // the reader opened.
+  core::Status read(uint64_t offset, size_t size, uint8_t* dst, std::string& err) const;
 
   // Checks every checksum (header, directory, each section, each blob) and that
   // the padding between sections is zero; names the first bad one and its
@@ -110,10 +124,13 @@ class PackageReader {
  private:
   core::Status validate(std::string& err);
   core::Status verifyTablePages(std::string& err) const;
+  core::Status blobExists(uint32_t i, std::string& err) const;
+  core::Status checkBlob(uint32_t i, const uint8_t* bytes, Span& out, std::string& err) const;
 
   const uint8_t* data_ = nullptr;
   size_t size_ = 0;
   bool mapped_ = false;  // we own the mapping (open) rather than borrow (openMemory)
+  int fd_ = -1;          // kept open for read(): the file, when mapped_
   std::string name_;
   HeaderLayout layout_;
   std::vector<SectionInfo> sections_;

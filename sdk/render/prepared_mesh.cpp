@@ -9,6 +9,8 @@
 #include <stb_image.h>
 #include <webp/decode.h>
 
+#include "render/stb_alloc.h"
+
 namespace blvd::render {
 namespace {
 
@@ -89,6 +91,24 @@ void downsample(const uint8_t* src, int sw, int sh, uint8_t* dst, int dw, int dh
 // WebP decodes straight into it (libwebp), PNG and JPEG through stb_image.
 // The type is the one the GLB decoder read from the image's bytes.
 // Null with `err` set when the image cannot be decoded or does not fit.
+constexpr char kNoMemory[] = "out of memory decoding the mesh's image";
+
+// WebP straight into the arena; the decoder's own buffers are malloc'd, and
+// its status tells a failed allocation from a bad image.
+bool decodeWebp(const uint8_t* d, size_t n, uint8_t* rgba, int w, int h, std::string& err) {
+  WebPDecoderConfig config;
+  if (!WebPInitDecoderConfig(&config)) return failWith(err, "libwebp: version mismatch");
+  config.output.colorspace = MODE_RGBA;
+  config.output.is_external_memory = 1;
+  config.output.u.RGBA.rgba = rgba;
+  config.output.u.RGBA.stride = w * 4;
+  config.output.u.RGBA.size = size_t(w) * size_t(h) * 4;
+  const VP8StatusCode st = WebPDecode(d, n, &config);
+  WebPFreeDecBuffer(&config.output);  // external memory: frees nothing of ours
+  if (st == VP8_STATUS_OK) return true;
+  return failWith(err, st == VP8_STATUS_OUT_OF_MEMORY ? kNoMemory : "mesh image cannot be decoded");
+}
+
 void* decodeImage(const geo::MeshData& mesh, StagingArena& arena, int& w, int& h, int& levels, std::string& err) {
   const uint8_t* d = mesh.image.data();
   const size_t n = mesh.image.size();
@@ -97,13 +117,12 @@ void* decodeImage(const geo::MeshData& mesh, StagingArena& arena, int& w, int& h
     if (!WebPGetInfo(d, n, &w, &h) || w <= 0 || h <= 0) return failWith(err, "mesh image cannot be decoded"), nullptr;
     void* rgba = arena.take(mipChainBytes(w, h, &levels));
     if (!rgba) return failWith(err, "staging arena too small for the mesh's texture"), nullptr;
-    if (!WebPDecodeRGBAInto(d, n, static_cast<uint8_t*>(rgba), size_t(w) * size_t(h) * 4, w * 4))
-      return failWith(err, "mesh image cannot be decoded"), nullptr;
-    return rgba;
+    return decodeWebp(d, n, static_cast<uint8_t*>(rgba), w, h, err) ? rgba : nullptr;
   }
   int channels = 0;
+  stbAllocReset();
   stbi_uc* texels = stbi_load_from_memory(d, static_cast<int>(n), &w, &h, &channels, 4);
-  if (!texels) return failWith(err, "mesh image cannot be decoded"), nullptr;
+  if (!texels) return failWith(err, stbAllocFailed() ? kNoMemory : "mesh image cannot be decoded"), nullptr;
   void* rgba = arena.take(mipChainBytes(w, h, &levels));
   if (rgba) std::memcpy(rgba, texels, size_t(w) * size_t(h) * 4);
   stbi_image_free(texels);
@@ -111,6 +130,8 @@ void* decodeImage(const geo::MeshData& mesh, StagingArena& arena, int& w, int& h
   return rgba;
 }
 }  // namespace
+
+bool outOfMemory(const std::string& err) { return err == kNoMemory; }
 
 bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err) {
   out = PreparedMesh{};

@@ -61,7 +61,10 @@ size_t preparedBytes(uint64_t vertices, uint64_t indices, int texture_width, int
 
 // Validates `mesh` (counts agree, indices in range, image decodes), computes
 // missing normals (area-weighted) and writes the GPU layout into `arena`.
-// False with `err` set when the mesh is malformed or the arena is too small.
+// False with `err` set when the mesh is malformed or the arena is too small,
+// or when the image decoder could not allocate (outOfMemory(err)).
 bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err);
+// Whether prepareMesh's `err` is an allocation that failed (the mesh may be good).
+bool outOfMemory(const std::string& err);
 
 }  // namespace blvd::render

@@ -352,12 +352,14 @@ void CellLoader::measured(const Staging& s, bool impostor, double units, int64_t
 
 // A package on a server reads its tables over the link too: a read that
 // cannot (offline, a bad record) throws, and fails the cell as a decode
-// error would.
+// error would. So does an allocation that fails: that cell, this time.
 bool CellLoader::decode(Staging& s) {
   try {
     return decodeCell(s);
   } catch (const core::Error& e) {
     return markFailed(s, e.what(), e.status());
+  } catch (const std::bad_alloc&) {
+    return markFailed(s, "out of memory", core::Status::NoMem);
   }
 }
 
@@ -367,6 +369,7 @@ bool CellLoader::markFailed(Staging& s, const std::string& what, core::Status st
   std::lock_guard<std::mutex> lock(mu_);
   s.unavailable = r && (st == core::Status::Unavailable || st == core::Status::Io || st == core::Status::Timeout ||
                         r->changed());
+  s.out_of_memory = st == core::Status::NoMem;
   s.state = Staging::Failed;
   return true;
 }
@@ -377,6 +380,7 @@ bool CellLoader::decodeCell(Staging& s) {
   s.uploaded = 0;
   s.error[0] = 0;
   s.unavailable = false;
+  s.out_of_memory = false;
   s.bad_blocks = 0;
   std::string err;
   // `st`: a link that is down, offline, or a package replaced on the server
@@ -399,7 +403,8 @@ bool CellLoader::decodeCell(Staging& s) {
     if (s.scratch.empty()) return true;  // an empty block draws nothing
     if (s.mesh_count >= s.mesh_capacity) return !fail("more meshes than the plan's largest cell");
     StagedMesh& m = s.meshes[s.mesh_count];
-    if (!render::prepareMesh(s.scratch, s.arena, m.mesh, err)) return !fail(err);
+    if (!render::prepareMesh(s.scratch, s.arena, m.mesh, err))
+      return !fail(err, render::outOfMemory(err) ? core::Status::NoMem : core::Status::Corrupt);
     m.kind = kind;
     m.item = item;
     m.level = level;
@@ -420,7 +425,7 @@ bool CellLoader::decodeCell(Staging& s) {
     const core::Status st = r->fetchBlobs(s.blob_ids.data(), s.blob_ids.size(), err);
     if (st != core::Status::Ok) return fail(err, st);
   }
-  stream::City::BlockBlob blob;
+  stream::City::BlockBlob& blob = s.blob;
   for (const uint32_t b : city_.streets().localBlocks(s.cell)) {
     if (std::find(s.skip, s.skip + s.skip_count, b) != s.skip + s.skip_count) continue;  // the runtime copies it
     const graph::BlockRecord rec = city_.block(b);
@@ -431,7 +436,8 @@ bool CellLoader::decodeCell(Staging& s) {
       const int64_t cpu0 = threadCpuNs();
       if (k == 0) {
         const core::Status st = city_.openBlock(b, blob, err);
-        if (st == core::Status::Corrupt) {  // a bad blob costs its block, not the cell
+        // A bad blob, or one the file no longer holds, costs its block, not the cell.
+        if (st == core::Status::Corrupt || (st == core::Status::Io && !city_.remote())) {
           if (s.bad_blocks++ == 0) std::snprintf(s.error, sizeof s.error, "cell %u: block left out: %s", s.cell, err.c_str());
           break;
         }
@@ -439,7 +445,7 @@ bool CellLoader::decodeCell(Staging& s) {
       }
       const core::Status st = city_.decodeBlockLevel(blob, k, s.scratch, err);
       if (k + 1 == rec.lod_count) blob.close();
-      if (st != core::Status::Ok) return fail(err);
+      if (st != core::Status::Ok) return fail(err, st);
       if (!stage(MeshKind::Block, b, k)) return true;
       measured(s, false, units, threadCpuNs() - cpu0);
     }
@@ -453,7 +459,7 @@ bool CellLoader::decodeCell(Staging& s) {
     waitForGap(s, true, units);
     if (abandoned()) return false;
     const int64_t cpu0 = threadCpuNs();
-    const core::Status st = city_.decodeImpostorBlob(l.blob, s.scratch, err);
+    const core::Status st = city_.decodeImpostorBlob(l.blob, s.scratch, err, &s.impostor_bytes);
     if (st != core::Status::Ok) return fail(err, st);
     if (!stage(in_single ? MeshKind::Single : MeshKind::Layered, in_single ? j - layered : j, 0)) return true;
     measured(s, true, units, threadCpuNs() - cpu0);

@@ -66,9 +66,12 @@ struct Staging {
   std::atomic<bool> abandon{false};
   char error[256] = {0};
   bool unavailable = false;  // Failed because the data is not here now (offline, link down): ask again later
-  uint32_t bad_blocks = 0;   // Ready without these blocks: their blobs failed the checksum (`error` names the first)
+  bool out_of_memory = false;  // Failed for an allocation: counted and reported, but asked for again
+  uint32_t bad_blocks = 0;   // Ready without these blocks: their blobs failed the checksum or a read (`error` names the first)
   std::vector<uint32_t> blob_ids;  // a package on a server: the cell's blobs, fetched before decoding
   geo::MeshData scratch;  // the decoder's reusable buffers (one per slot: jobs may run at once)
+  stream::City::BlockBlob blob;       // the block being decoded; its bytes kept between cells
+  std::vector<uint8_t> impostor_bytes;  // an impostor's blob, likewise
   std::vector<stream::LayerInfo> layers;  // the cell's impostor layers, sized at create
 };
 

@@ -38,7 +38,7 @@ void CellSlots::uploadStaged(double budget_ms) {
     if (st->state == Staging::Failed) {
       last_error_ = st->error;
       ++counters_.load_errors;
-      failed_cells_[failed_next_++ % failed_cells_.size()] = st->cell;
+      if (!st->out_of_memory) failed_cells_[failed_next_++ % failed_cells_.size()] = st->cell;  // else asked again
       const uint32_t target = st->target;
       loader_.release(st);
       empty(target);

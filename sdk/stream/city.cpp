@@ -101,7 +101,7 @@ bool City::cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const {
 }
 
 core::Status City::blobBytes(uint32_t i, package::Span& s, std::vector<uint8_t>& hold, std::string& err) const {
-  if (!remote_) return reader_.blob(i, s, err);
+  if (!remote_) return reader_.readBlob(i, hold, s, err);  // pread: a file cut short is Io, not SIGBUS
   const core::Status st = remote_->blob(i, hold, err);
   if (st != core::Status::Ok) return st;
   s = package::Span{hold.data(), hold.size(), remote_->blobInfo(i).offset};
@@ -279,8 +279,6 @@ core::Status City::decodeBlock(uint32_t b, uint32_t lod, geo::MeshData& out, std
 }
 
 void City::BlockBlob::close() {
-  if (reader_) reader_->dropPages(span_);  // decoded: the file's pages need not stay resident
-  reader_ = nullptr;
   span_ = {};
   glb_ = package::GlbDocument{};
   block_ = 0xffffffffu;
@@ -301,7 +299,6 @@ core::Status City::openBlock(uint32_t b, BlockBlob& blob, std::string& err) cons
   core::Status st = blobBytes(rec.blob, s, blob.bytes_, err);
   if (st != core::Status::Ok) return st;
   blob.span_ = s;
-  blob.reader_ = remote_ ? nullptr : &reader_;
   st = blob.glb_.open(s.data, s.size, err);
   if (st != core::Status::Ok) {
     err = reader_.name() + ": block " + std::to_string(b) + " at offset " + std::to_string(s.offset) + ": " + err;
@@ -342,13 +339,13 @@ core::Status City::decodeBlockLevel(const BlockBlob& blob, uint32_t lod, geo::Me
   return core::Status::Ok;
 }
 
-core::Status City::decodeImpostorBlob(uint32_t blob, geo::MeshData& out, std::string& err) const {
+core::Status City::decodeImpostorBlob(uint32_t blob, geo::MeshData& out, std::string& err,
+                                      std::vector<uint8_t>* hold) const {
   package::Span s;
-  std::vector<uint8_t> hold;  // a package on a server's: the blob
-  core::Status st = blobBytes(blob, s, hold, err);
+  std::vector<uint8_t> own;
+  core::Status st = blobBytes(blob, s, hold ? *hold : own, err);
   if (st != core::Status::Ok) return st;
   st = package::decodeGlb(s.data, s.size, out, err);
-  if (!remote_) reader_.dropPages(s);
   if (st != core::Status::Ok)
     err = reader_.name() + ": impostor blob " + std::to_string(blob) + " at offset " + std::to_string(s.offset) +
           ": " + err;

@@ -126,7 +126,10 @@ class City {
   core::Status decodeImpostor(const graph::ImpostorLayer& layer, geo::MeshData& out, std::string& err) const {
     return decodeImpostorBlob(layer.blob, out, err);
   }
-  core::Status decodeImpostorBlob(uint32_t blob, geo::MeshData& out, std::string& err) const;
+  // `hold` (optional) receives the blob's bytes, so a loader that keeps it
+  // reads every blob without an allocation once it has the largest.
+  core::Status decodeImpostorBlob(uint32_t blob, geo::MeshData& out, std::string& err,
+                                  std::vector<uint8_t>* hold = nullptr) const;
   const geo::LocalFrame& frame() const { return frame_; }
   // Heap bytes of the tables above (graph, cells, blocks, visibility,
   // impostor lists): what holding the city costs besides the mapped file.
@@ -158,9 +161,8 @@ class City {
     friend class City;
     uint32_t block_ = 0xffffffffu;
     package::Span span_{};
-    std::vector<uint8_t> bytes_;  // the blob, for a package on a server
+    std::vector<uint8_t> bytes_;  // the blob, read from the file or the link; kept between opens
     package::GlbDocument glb_;
-    const package::PackageReader* reader_ = nullptr;
   };
   // NotFound for a block that does not exist or has no levels (empty);
   // Corrupt, naming the file, block and offset, for a bad blob or GLB.

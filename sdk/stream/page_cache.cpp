@@ -39,9 +39,12 @@ const uint8_t* PageCache::load(uint32_t t, uint32_t page, size_t slot) const {
   const uint64_t first = uint64_t(page) * tb.per_page;
   const uint64_t n = std::min<uint64_t>(tb.per_page, tb.count - first);
   uint8_t* dst = &slots_[slot * page_bytes_];
-  package::Span src{tb.data + size_t(first) * tb.record, size_t(n) * tb.record, 0};
-  std::memcpy(dst, src.data, src.size);
-  reader_.dropPages(src);  // the copy holds it now
+  // Read, not copied from the mapping: a file truncated since open is an
+  // error here, not a SIGBUS (package/reader.h).
+  std::string err;
+  const core::Status st =
+      reader_.read(reader_.offsetOf(tb.data) + first * tb.record, size_t(n) * tb.record, dst, err);
+  if (st != core::Status::Ok) throw core::Error(st, err);
   return dst;
 }
 
@@ -80,6 +83,7 @@ const uint8_t* PageCache::cached(uint32_t t, uint32_t page, std::unique_lock<std
     lock.lock();
     if (const uint8_t* p = find(key, set, &victim)) return p;  // another reader loaded it meanwhile
   }
+  tags_[victim] = Tag{};  // a read that fails leaves the slot empty, not the old page's
   const uint8_t* base = load(t, page, victim);
   tags_[victim] = Tag{key, tick_};
   return base;

@@ -1,13 +1,19 @@
-// A package that goes bad under a drive: a block blob of a cell on the route
-// fails its checksum. Each cell with that block is drawn without it, the block
+// A package that goes bad under a drive. A block blob of a cell on the route
+// fails its checksum: each cell with that block is drawn without it, the block
 // is reported (blvd_stats.load_errors, the last error naming the file, blob and
-// offset), and the drive goes on with whole frames; no frame fails.
+// offset), and the drive goes on with whole frames; no frame fails. The file
+// is cut short under the running runtime: the blobs past the cut are read
+// errors naming the offset (a mapped reader would die of SIGBUS), the drive
+// goes on; cut to nothing, a street whose table pages are not cached is a
+// refused call naming the file.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string>
+
+#include <unistd.h>
 
 #include "blvd/blvd.h"
 #include "drive.h"
@@ -79,6 +85,103 @@ TEST(RuntimeFaults, ABlobFailingItsChecksumMidDriveLeavesItsBlockOut) {
   EXPECT_NE(error.find("block left out"), std::string::npos) << error;
   EXPECT_NE(error.find(std::to_string(offset)), std::string::npos) << error;
   EXPECT_EQ(whole, dr.poses.size());  // every frame whole, the bad cell's too (without its block)
+  std::filesystem::remove(path);
+}
+
+// The smallest blob offset of `cells`' local blocks and impostor layers.
+uint64_t firstBlobOf(const std::string& path, const std::vector<uint32_t>& cells) {
+  blvd::stream::City city;
+  std::string err;
+  EXPECT_EQ(city.open(path, err), blvd::core::Status::Ok) << err;
+  uint64_t first = ~0ull;
+  std::vector<uint32_t> blobs;
+  for (const uint32_t c : cells) {
+    city.cellBlobs(c, nullptr, 0, blobs);
+    for (const uint32_t b : blobs) first = std::min(first, city.package().blobInfo(b).offset);
+  }
+  return first;
+}
+
+// Drives `poses`; every frame must be drawn (BLVD_OK). Returns the first
+// error the runtime reported with load_errors > 0.
+std::string driveThrough(blvd_runtime* rt, const std::vector<blvd_test::DrivePose>& poses) {
+  std::string error;
+  for (const auto& p : poses) {
+    EXPECT_EQ(blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f), BLVD_OK);
+    blvd_frame_stats fs{};
+    fs.struct_size = sizeof fs;
+    EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
+    if (fs.flags & BLVD_FRAME_DEGRADED) {
+      (void)blvd_wait_resident(rt, 60000);  // a cell whose impostors are past the cut fails: reported below
+      EXPECT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
+    }
+    if (statsOf(rt).load_errors > 0 && error.empty()) error = blvd_last_error(rt);
+  }
+  return error;
+}
+
+TEST(RuntimeFaults, APackageCutShortMidDriveGivesReadErrorsNotASigbus) {
+  const blvd_test::Drive dr = blvd_test::impostorDrive(12, 8.0);
+  ASSERT_GE(dr.cells.size(), 8u);
+  const std::string path = (std::filesystem::temp_directory_path() / "blvd_test_cut_short.blvd").string();
+  std::filesystem::copy_file(BLVD_TEST_PACKAGE, path, std::filesystem::copy_options::overwrite_existing);
+  // The poses follow dr.cells: the first six cells before the cut, the rest
+  // after it (a drive may come back to a cell: those count as before).
+  const std::vector<uint32_t> first(dr.cells.begin(), dr.cells.begin() + 6);
+  std::vector<uint32_t> later;
+  for (auto c = dr.cells.begin() + 6; c != dr.cells.end(); ++c)
+    if (std::find(first.begin(), first.end(), *c) == first.end()) later.push_back(*c);
+  ASSERT_FALSE(later.empty());
+  const uint64_t cut = firstBlobOf(path, later);
+  ASSERT_LT(cut, std::filesystem::file_size(path));
+  blvd_runtime_desc d = baseDesc();
+  d.package_path = path.c_str();
+  Runtime r;
+  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+  std::vector<blvd_test::DrivePose> before, after;
+  const size_t split = size_t(std::find_if(dr.poses.begin(), dr.poses.end(),
+                                            [&](const blvd_test::DrivePose& p) { return p.cell == dr.cells[6]; }) -
+                               dr.poses.begin());
+  before.assign(dr.poses.begin(), dr.poses.begin() + split);
+  after.assign(dr.poses.begin() + split, dr.poses.end());
+  ASSERT_FALSE(before.empty());
+  ASSERT_FALSE(after.empty());
+  EXPECT_EQ(driveThrough(r.rt, before), "");
+  ASSERT_EQ(statsOf(r.rt).load_errors, 0u);
+  ASSERT_EQ(::truncate(path.c_str(), static_cast<off_t>(cut)), 0);  // under the running runtime
+  const std::string error = driveThrough(r.rt, after);
+  const blvd_stats s = statsOf(r.rt);
+  EXPECT_GE(s.load_errors, 1u);
+  EXPECT_NE(error.find(path), std::string::npos) << error;
+  EXPECT_NE(error.find("the file ends at offset " + std::to_string(cut)), std::string::npos) << error;
+  EXPECT_NE(error.find("(truncated)"), std::string::npos) << error;
+  // And back to where the drive began: those cells draw as before.
+  EXPECT_NO_FATAL_FAILURE(driveThrough(r.rt, before));
+  // Cut to nothing: the tables' pages the caches let go can no longer be read.
+  ASSERT_EQ(::truncate(path.c_str(), 0), 0);
+  blvd_test::Drive elsewhere;
+  {
+    blvd::stream::City city;
+    std::string err;
+    ASSERT_EQ(city.open(BLVD_TEST_PACKAGE, err), blvd::core::Status::Ok) << err;
+    elsewhere = blvd_test::makeDrive(city.graph(), city.graph().cellCount() / 2, 8, 8.0);
+  }
+  size_t failed = 0, drawn = 0;
+  for (const auto& p : elsewhere.poses) {
+    const blvd_status st = blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f);
+    blvd_frame_stats fs{};
+    fs.struct_size = sizeof fs;
+    const blvd_status rs = st == BLVD_OK ? blvd_render(r.rt, &fs) : st;
+    if (rs == BLVD_OK) {
+      ++drawn;
+      continue;
+    }
+    ++failed;
+    const std::string why = blvd_last_error(r.rt);
+    EXPECT_NE(why.find(path + ": cannot read"), std::string::npos) << why;
+  }
+  std::printf("file cut to 0 bytes: %zu frames drawn, %zu refused with a read error\n", drawn, failed);
+  EXPECT_GT(failed, 0u);  // a new street's table pages were not cached: the cut shows, named
   std::filesystem::remove(path);
 }
 

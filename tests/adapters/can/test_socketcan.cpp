@@ -1,10 +1,14 @@
 // SocketCAN source: a clear error where the kernel has no AF_CAN (this build
 // machine, most containers), error-frame decoding on synthesized frames, and,
-// where a vcan0 exists (the qemu guest of tests/vcan), a loopback round trip.
+// where a vcan0 exists (the qemu guest of tests/vcan), a loopback round trip,
+// error frames on the bus, and the bus going down and coming back.
 #include <gtest/gtest.h>
 
 #include <linux/can.h>
 #include <linux/can/error.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -80,6 +84,85 @@ TEST(SocketCan, VcanLoopbackIfPresent) {
   EXPECT_EQ(got.iface, "vcan0");
   EXPECT_GT(got.t, 1.5e9);
   EXPECT_EQ(rx.read(got, 50, err), SocketCanSource::Result::Timeout);
+}
+
+// Sets vcan0 up or down (SIOCSIFFLAGS, as `ip link set vcan0 up|down`); errno on failure.
+int setLink(const char* iface, bool up) {
+  const int s = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
+  if (s < 0) return errno;
+  ifreq ifr{};
+  std::strncpy(ifr.ifr_name, iface, IFNAMSIZ - 1);
+  int rc = ::ioctl(s, SIOCGIFFLAGS, &ifr);
+  if (rc == 0) {
+    ifr.ifr_flags = static_cast<short>(up ? (ifr.ifr_flags | IFF_UP) : (ifr.ifr_flags & ~IFF_UP));
+    rc = ::ioctl(s, SIOCSIFFLAGS, &ifr);
+  }
+  const int e = rc == 0 ? 0 : errno;
+  ::close(s);
+  return e;
+}
+
+// Puts an error frame on vcan0 as a controller's driver would (a raw socket
+// may send CAN_ERR_FLAG frames; the vcan echoes them to the sockets that asked
+// for that class). SocketCanSource::write refuses them on purpose.
+int sendErrorFrame(uint32_t classes, std::initializer_list<uint8_t> data) {
+  const int s = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
+  if (s < 0) return errno;
+  sockaddr_can addr{};
+  addr.can_family = AF_CAN;
+  addr.can_ifindex = static_cast<int>(if_nametoindex("vcan0"));
+  can_frame f{};
+  f.can_id = CAN_ERR_FLAG | classes;
+  f.len = CAN_ERR_DLC;
+  int i = 0;
+  for (uint8_t b : data) f.data[i++] = b;
+  int e = 0;
+  if (::bind(s, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::write(s, &f, sizeof f) != sizeof f) e = errno;
+  ::close(s);
+  return e;
+}
+
+// A controller going bus-off on a real vcan bus and coming back: the error
+// frames are read and decoded as such, the interface going down is LinkDown
+// (not a dead source), and once it is up again the same source reads frames.
+TEST(SocketCan, BusOffAndALinkDownOnVcanIfPresent) {
+  if (probeAfCan() != 0) GTEST_SKIP() << "no AF_CAN on this kernel";
+  SocketCanSource rx, tx;
+  SocketCanDesc desc;
+  desc.iface = "vcan0";
+  std::string err;
+  if (rx.open(desc, err) != BLVD_OK) GTEST_SKIP() << err;
+  ASSERT_EQ(tx.open(desc, err), BLVD_OK) << err;
+  ASSERT_EQ(sendErrorFrame(CAN_ERR_CRTL | CAN_ERR_CNT, {0, CAN_ERR_CRTL_TX_PASSIVE, 0, 0, 0, 0, 140, 3}), 0);
+  ASSERT_EQ(sendErrorFrame(CAN_ERR_BUSOFF, {}), 0);
+  Frame got;
+  ASSERT_EQ(rx.read(got, 1000, err), SocketCanSource::Result::Frame) << err;
+  ASSERT_TRUE(got.error);
+  EXPECT_EQ(describe(decodeErrorFrame(got)), "controller problem: tx error-passive; tx errors 140, rx errors 3");
+  ASSERT_EQ(rx.read(got, 1000, err), SocketCanSource::Result::Frame) << err;
+  ASSERT_TRUE(got.error);
+  EXPECT_TRUE(decodeErrorFrame(got).bus_off);
+
+  // The bus goes away (a stopped controller's interface, a pulled link).
+  ASSERT_EQ(setLink("vcan0", false), 0) << "needs CAP_NET_ADMIN (the guest runs as root)";
+  EXPECT_EQ(rx.read(got, 1000, err), SocketCanSource::Result::LinkDown) << err;
+  EXPECT_NE(err.find("the interface went down"), std::string::npos) << err;
+  EXPECT_EQ(rx.linkDowns(), 1u);
+  Frame f;
+  std::string reason;
+  ASSERT_TRUE(parseFrame("123#0102", f, reason));
+  EXPECT_NE(tx.write(f, err), BLVD_OK);  // nothing can be sent meanwhile
+  EXPECT_EQ(rx.read(got, 100, err), SocketCanSource::Result::Timeout) << err;
+
+  // It returns, with the controller restarted: the same sockets carry on.
+  ASSERT_EQ(setLink("vcan0", true), 0);
+  ASSERT_EQ(sendErrorFrame(CAN_ERR_RESTARTED, {}), 0);
+  ASSERT_EQ(tx.write(f, err), BLVD_OK) << err;
+  ASSERT_EQ(rx.read(got, 1000, err), SocketCanSource::Result::Frame) << err;
+  EXPECT_TRUE(decodeErrorFrame(got).restarted);
+  ASSERT_EQ(rx.read(got, 1000, err), SocketCanSource::Result::Frame) << err;
+  EXPECT_EQ(formatFrame(got), "123#0102");
+  EXPECT_EQ(rx.linkDowns(), 1u);
 }
 
 Frame errorFrame(uint32_t classes, std::initializer_list<uint8_t> data) {
