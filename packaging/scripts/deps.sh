@@ -5,7 +5,7 @@ set -euo pipefail
 pkgs=(
   build-essential cmake ninja-build pkg-config python3
   libglm-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libwebp-dev libdraco-dev libgeographiclib-dev
-  libosmium2-dev libprotozero-dev zlib1g-dev libbz2-dev libexpat1-dev liblz4-dev
+  libosmium2-dev libprotozero-dev zlib1g-dev libbz2-dev libexpat1-dev liblz4-dev libzip-dev
   libcgal-dev libgmp-dev libmpfr-dev libmeshoptimizer-dev libzstd-dev libcli11-dev
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
   libgtest-dev libgmock-dev libbenchmark-dev gpsd gpsd-clients

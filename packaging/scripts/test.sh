@@ -16,11 +16,13 @@ cmake --build build -j"$jobs"
 # 2. Sanitizers on the code that reads untrusted bytes (packages, GLB, graph,
 #    NMEA, CAN) and on the runtime's create-time failure paths (budget, host
 #    allocator failing at each call; every allocation of a package open, a
-#    tracker and a CAN profile failing in turn: LeakSanitizer checks that nothing leaks).
+#    tracker, a CAN profile and a cell's load failing in turn: LeakSanitizer
+#    checks that nothing leaks), and the short soak (ten virtual minutes of
+#    driving, LeakSanitizer at its end).
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DBLVD_SANITIZE=ON -DBLVD_WERROR=ON > /dev/null
 cmake --build build-asan -j"$jobs" --target test_package test_graph_serialize test_gnss test_can \
   fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc fuzz_can_frame fuzz_shard_manifest fuzz_cache_entry \
-  fuzz_gpsd fuzz_osm fuzz_capi test_runtime_fault test_create_nomem
+  fuzz_gpsd fuzz_osm fuzz_capi test_runtime_fault test_create_nomem test_soak
 # The runtime test needs the Monaco package: the fixture's own bake, run with
 # step 1's build (a sanitized CGAL bake would take many minutes).
 (cd build && ctest --output-on-failure -R '^bake\.monaco_geofabrik$')
@@ -29,9 +31,9 @@ cp build/test-monaco.blvd build-asan/test-monaco.blvd
 
 # 2b. Coverage-guided fuzzing (clang, libFuzzer, ASan+UBSan; tools/fuzz.sh for
 #     long campaigns): every target replays its seeds, its corpus and the
-#     crashes once found (tests/fuzz/regressions), then fuzzes for 15 s.
+#     crashes once found (tests/fuzz/regressions), then fuzzes for 10 s.
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBLVD_FUZZ=ON \
-  -DBLVD_SANITIZE=ON -DBLVD_BUILD_SAMPLES=OFF -DBLVD_FUZZ_SECONDS=15 > /dev/null
+  -DBLVD_SANITIZE=ON -DBLVD_BUILD_SAMPLES=OFF -DBLVD_FUZZ_SECONDS=10 > /dev/null
 fuzzers=$(sed -n 's/^build tests\/fuzz\/\(fuzz_[a-z_]*\): .*/\1/p' build-fuzz/build.ninja | sort -u)
 # shellcheck disable=SC2086
 cmake --build build-fuzz -j"$jobs" --target $fuzzers

@@ -10,9 +10,14 @@
 
 #include <initializer_list>
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__)  // GCC
 #define BLVD_HOOK_MALLOC 0
-#else
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)  // clang
+#define BLVD_HOOK_MALLOC 0
+#endif
+#endif
+#ifndef BLVD_HOOK_MALLOC
 #define BLVD_HOOK_MALLOC 1
 #endif
 

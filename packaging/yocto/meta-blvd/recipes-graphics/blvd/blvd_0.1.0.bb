@@ -65,14 +65,14 @@ EXTRA_OECMAKE = "\
 # tools: the bake and /usr/bin/blvd (package blvd-tools), on a build host or a
 #   development image; a vehicle image needs only libblvd0. Its dependencies:
 #   cgal (this layer) with gmp, mpfr, boost (openembedded-core); libosmium and
-#   protozero (header-only, this layer); bzip2, expat, openssl (openembedded-core).
+#   protozero (header-only, this layer); bzip2, expat, openssl (openembedded-core); libzip (meta-oe).
 # osmesa: the software backend; mesa (openembedded-core) built with
 #   PACKAGECONFIG:append:pn-mesa = " osmesa". Without it, the osmesa backend
 #   fails at create and Auto uses EGL only.
 # EGL has no switch: it is the runtime's backend (virtual/egl above), and the
 # host-context path gets its GL functions through it.
 PACKAGECONFIG ??= "tools osmesa"
-PACKAGECONFIG[tools] = "-DBLVD_BUILD_TOOLS=ON,-DBLVD_BUILD_TOOLS=OFF,cgal gmp mpfr boost libosmium protozero bzip2 expat openssl"
+PACKAGECONFIG[tools] = "-DBLVD_BUILD_TOOLS=ON,-DBLVD_BUILD_TOOLS=OFF,cgal gmp mpfr boost libosmium protozero bzip2 expat openssl libzip"
 PACKAGECONFIG[osmesa] = "-DBLVD_WITH_OSMESA=ON,-DBLVD_WITH_OSMESA=OFF,mesa"
 PACKAGECONFIG[werror] = "-DBLVD_WERROR=ON,-DBLVD_WERROR=OFF"
 # The samples build only (none is installed); host_context needs glesv2.
