@@ -154,6 +154,17 @@ bool Renderer::fail(const char* what) {
 
 bool Renderer::outOfMemory() const { return out_of_memory_; }
 
+namespace {
+constexpr GLenum kContextLost = 0x0507;  // GL_CONTEXT_LOST (GLES 3.2, KHR_robustness)
+constexpr char kLostMessage[] =
+    "GL context lost (0x0507: the GPU was reset): its objects are gone; destroy the runtime and create it again";
+}  // namespace
+
+bool Renderer::lost() {
+  if (context_lost_) error_ = kLostMessage;
+  return context_lost_;
+}
+
 const char* Renderer::backendName() const { return ctx_.name(); }
 
 namespace {
@@ -423,6 +434,7 @@ bool Renderer::isValid(MeshHandle h) const {
 }
 
 MeshHandle Renderer::upload(const geo::MeshData& mesh) {
+  if (lost()) return {};
   Impl& m = *impl_;
   // Prepared into a scratch arena kept between calls, then copied into GL
   // buffers of its own.
@@ -446,6 +458,7 @@ MeshHandle Renderer::uploadToSlab(SlabHandle slab, const PreparedMesh& mesh) {
 
 bool Renderer::beginSlabUpload(SlabHandle h, const PreparedMesh& p, SlabUpload& up) {
   up = SlabUpload{};
+  if (lost()) return false;
   if (h.id == 0 || h.id > impl_->slabs.size()) return fail("invalid slab handle");
   if (p.vertex_count == 0 || p.index_count == 0 || !p.vertices || !p.indices) return fail("mesh has no triangles");
   if (p.rgba && p.mip_levels < 1) return fail("prepared texture has no levels");
@@ -477,6 +490,7 @@ bool Renderer::reserve(Slab& slab, const PreparedMesh& p, SlabUpload& up) {
 
 bool Renderer::beginSlabCopy(SlabHandle h, MeshHandle source, SlabUpload& up) {
   up = SlabUpload{};
+  if (lost()) return false;
   if (h.id == 0 || h.id > impl_->slabs.size()) return fail("invalid slab handle");
   if (!isValid(source)) return fail("slab copy: invalid source mesh");
   const uint32_t index = (source.id & kIndexMask) - 1;
@@ -722,6 +736,7 @@ uint64_t slabGpuBytes(const SlabDesc& d) {
 SlabHandle Renderer::createSlab(const SlabDesc& d) {
   Impl& m = *impl_;
   out_of_memory_ = false;
+  if (lost()) return {};
   if (d.meshes == 0 || d.vertex_bytes == 0 || d.index_bytes == 0) {
     fail("slab needs meshes, vertex bytes and index bytes");
     return {};
@@ -1103,6 +1118,7 @@ void Renderer::drawMeshes(const Camera& cam, const MeshHandle* list, size_t n, c
 bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, FrameStats* stats,
                       const RenderOptions& opt) {
   if (const char* bad = checkRender(out, list, n, opt)) return fail(bad);
+  if (lost()) return false;
   if (!ctx_.makeCurrent()) return fail("GL context is not current on this thread");
   // Scaled: the same camera over fewer pixels of the scaled target, stretched
   // over the view afterwards (the aspect ratio is kept to within a pixel).
@@ -1141,6 +1157,10 @@ bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, Frame
   // host's own pending errors.
   if (!shared_) {
     const GLenum e = gl.GetError();
+    if (e == kContextLost) {
+      context_lost_ = true;
+      return !lost();
+    }
     if (e != GL_NO_ERROR) {
       char buf[48];
       std::snprintf(buf, sizeof buf, "GL error 0x%04x in render", e);
@@ -1152,6 +1172,7 @@ bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, Frame
 
 bool Renderer::readPixels(uint8_t* rgba) {
   if (!rgba) return fail("readPixels: null output");
+  if (lost()) return false;
   if (last_w_ == 0) return fail("readPixels: nothing rendered yet");
   if (!ctx_.makeCurrent()) return fail("GL context is not current on this thread");
   const GlApi& gl = *gl_;

@@ -169,6 +169,11 @@ class Renderer {
   // then says whether the driver ran out of memory (GL_OUT_OF_MEMORY).
   SlabHandle createSlab(const SlabDesc& desc);
   bool outOfMemory() const;
+  // The driver reported GL_CONTEXT_LOST after a frame (a GPU reset; GLES 3.2,
+  // KHR_robustness): the context's objects are gone, so every later call
+  // fails at once with the same error and touches no GL. The owner destroys
+  // the renderer (its runtime) and creates a new one.
+  bool contextLost() const { return context_lost_; }
   // Places a prepared mesh after the slab's last one. Invalid handle when the
   // slab or the mesh pool is full. The only GL calls are sub-data copies.
   MeshHandle uploadToSlab(SlabHandle slab, const PreparedMesh& mesh);
@@ -251,6 +256,8 @@ class Renderer {
   bool gles_ = true;
   bool shared_ = false;
   bool out_of_memory_ = false;  // the last createSlab failed with GL_OUT_OF_MEMORY
+  bool context_lost_ = false;
+  bool lost();  // contextLost(), with lastError() set
   int fb_w_ = 0, fb_h_ = 0;
   int last_w_ = 0, last_h_ = 0;
   uint32_t live_meshes_ = 0;

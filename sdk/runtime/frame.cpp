@@ -34,7 +34,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   if (!views) {
     full_pixels = uint64_t(cam_.width) * uint64_t(cam_.height);
     if (!renderer_->render(cam_, draw_->meshes(), draw_->size(), &fs, ro))
-      throw Error(Status::Internal, "render failed: " + renderer_->lastError());
+      renderFailed();
   } else {
     renderViews(views, n, ro, fs, full_pixels);
   }
@@ -45,6 +45,10 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   // The whole call counts against the target: streaming and uploads too.
   afterFrame(std::chrono::duration<double, std::milli>(t_drawn - t_frame).count(), fs, full_pixels, ro.scale);
   if (stats) writeFrameStats(stats, fs, cell);
+}
+
+void Runtime::renderFailed() const {
+  throw Error(renderer_->contextLost() ? Status::Backend : Status::Internal, "render failed: " + renderer_->lastError());
 }
 
 // The cell the vehicle is in, its slots streamed. A package on a server may
@@ -88,7 +92,7 @@ void Runtime::renderViews(const blvd_view* views, uint32_t n, const render::Rend
     const render::Camera c = viewCamera(core::sized(views[i]), i);
     render::FrameStats one;
     if (!renderer_->render(c, draw_->meshes(), draw_->size(), &one, ro))
-      throw Error(Status::Internal, "render failed: " + renderer_->lastError());
+      renderFailed();
     full_pixels += uint64_t(c.width) * uint64_t(c.height);
     fs.pixels += one.pixels;
     fs.frame_ms += one.frame_ms;

@@ -69,6 +69,8 @@ class Runtime {
   bool setStartPose(const track::StartPose& sp);
   track::Tracker& tracker() { return *tracker_; }
   const geo::LocalFrame& frame() const { return city_.frame(); }
+  // The renderer, for the tests' fault injection (Renderer::api()).
+  render::Renderer& renderer() { return *renderer_; }
 
   std::string last_error;
 
@@ -77,6 +79,9 @@ class Runtime {
   // The camera from the tracker when it drives, then the current cell.
   uint32_t currentCell(double& arc_m, double& speed_mps);
   uint32_t streamCell(double& arc_m);  // streamSteps, degraded when the map has not arrived (frame.cpp)
+  // Throws the renderer's error: Backend when the GL context was lost (the
+  // runtime must be created again), Internal otherwise (frame.cpp).
+  [[noreturn]] void renderFailed() const;
   uint32_t streamSteps(double& arc_m, double upload_budget_ms);  // currentCell, its slots streamed, the link planned
   // Whether `e` says the map (table pages of a package on a server) has not arrived.
   bool mapMissing(const core::Error& e) const;

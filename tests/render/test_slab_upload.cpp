@@ -375,6 +375,35 @@ TEST(SlabCreate, ADriverErrorAtCreateOrAfterAFrameIsReported) {
   r->api().GetError = g_real_get_error;
 }
 
+// A GPU reset (GetError reports GL_CONTEXT_LOST after a frame): that frame
+// fails saying so, and so does every later call, at once, without GL: the
+// objects are gone and only a new renderer draws again.
+TEST(SlabCreate, ALostContextFailsEveryLaterCall) {
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
+  const Scene scene;
+  const Prepared prep(scene);
+  const SlabHandle slab = r->createSlab(slabFor(prep));
+  ASSERT_NE(slab.id, 0u) << r->lastError();
+  const std::vector<MeshHandle> list{r->uploadToSlab(slab, prep.meshes[1])};
+  g_real_get_error = r->api().GetError;
+  r->api().GetError = injectedGetError;
+  g_injected = 0x0507;  // GL_CONTEXT_LOST
+  const Camera cam = viewCamera();
+  EXPECT_FALSE(r->render(cam, list.data(), list.size(), nullptr));
+  EXPECT_TRUE(r->contextLost());
+  EXPECT_NE(r->lastError().find("GL context lost"), std::string::npos) << r->lastError();
+  r->api().GetError = g_real_get_error;
+  EXPECT_FALSE(r->render(cam, list.data(), list.size(), nullptr));
+  EXPECT_NE(r->lastError().find("destroy the runtime and create it again"), std::string::npos) << r->lastError();
+  EXPECT_EQ(r->uploadToSlab(slab, prep.meshes[0]).id, 0u);
+  EXPECT_EQ(r->createSlab(slabFor(prep)).id, 0u);
+  std::vector<uint8_t> px(size_t(cam.width) * size_t(cam.height) * 4);
+  EXPECT_FALSE(r->readPixels(px.data()));
+  EXPECT_NE(r->lastError().find("GL context lost"), std::string::npos) << r->lastError();
+}
+
 // Copies the untextured mesh `from` into `slab` in steps of max_bytes.
 MeshHandle copyInSteps(Renderer& r, SlabHandle slab, MeshHandle from, uint64_t max_bytes, int& steps) {
   SlabUpload up;

@@ -5,7 +5,9 @@
 // is cut short under the running runtime: the blobs past the cut are read
 // errors naming the offset (a mapped reader would die of SIGBUS), the drive
 // goes on; cut to nothing, a street whose table pages are not cached is a
-// refused call naming the file.
+// refused call naming the file. The GPU is reset under the drive (the
+// driver's GetError says GL_CONTEXT_LOST): every frame from then on is
+// BLVD_ERR_BACKEND saying to create the runtime again, and a new one draws.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,8 +18,11 @@
 #include <unistd.h>
 
 #include "blvd/blvd.h"
+#include "capi/binding.h"
 #include "drive.h"
 #include "package/reader.h"
+#include "render/gl_api.h"
+#include "render/renderer.h"
 #include "runtime_fixture.h"
 #include "stream/city.h"
 
@@ -183,6 +188,34 @@ TEST(RuntimeFaults, APackageCutShortMidDriveGivesReadErrorsNotASigbus) {
   std::printf("file cut to 0 bytes: %zu frames drawn, %zu refused with a read error\n", drawn, failed);
   EXPECT_GT(failed, 0u);  // a new street's table pages were not cached: the cut shows, named
   std::filesystem::remove(path);
+}
+
+GLenum GL_APIENTRY contextLost() { return 0x0507; }  // GL_CONTEXT_LOST, for ever after
+
+TEST(RuntimeFaults, AGpuResetMidDriveFailsEveryFrameUntilTheRuntimeIsCreatedAgain) {
+  const blvd_test::Drive dr = blvd_test::impostorDrive(2, 8.0);
+  blvd_runtime_desc d = baseDesc();
+  Runtime r;
+  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+  const auto& p = dr.poses.front();
+  ASSERT_EQ(blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f), BLVD_OK);
+  ASSERT_EQ(blvd_wait_resident(r.rt, 60000), BLVD_OK) << blvd_last_error(r.rt);
+  blvd_frame_stats fs{};
+  fs.struct_size = sizeof fs;
+  ASSERT_EQ(blvd_render(r.rt, &fs), BLVD_OK) << blvd_last_error(r.rt);
+  r.rt->impl->renderer().api().GetError = contextLost;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(blvd_render(r.rt, &fs), BLVD_ERR_BACKEND);
+    EXPECT_NE(std::string(blvd_last_error(r.rt)).find("GL context lost"), std::string::npos) << blvd_last_error(r.rt);
+  }
+  EXPECT_NE(std::string(blvd_last_error(r.rt)).find("create it again"), std::string::npos) << blvd_last_error(r.rt);
+  blvd_runtime_destroy(r.rt);
+  r.rt = nullptr;
+  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f), BLVD_OK);
+  ASSERT_EQ(blvd_wait_resident(r.rt, 60000), BLVD_OK) << blvd_last_error(r.rt);
+  EXPECT_EQ(blvd_render(r.rt, &fs), BLVD_OK) << blvd_last_error(r.rt);
+  EXPECT_GT(fs.blocks_drawn, 0u);
 }
 
 }  // namespace
