@@ -2,10 +2,13 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <memory>
 
 #include <sys/resource.h>
 
+#include <glm/common.hpp>
 #include <nlohmann/json.hpp>
 
 #include "bake/block_mesh.h"
@@ -14,6 +17,7 @@
 #include "bake/progress.h"
 #include "bake/pool_sizing.h"
 #include "bake/street_map.h"
+#include "bake/terrain.h"
 #include "bake/tile.h"
 #include "bake/triangulate.h"
 #include "blvd/blvd.h"
@@ -45,11 +49,64 @@ std::vector<std::vector<uint32_t>> placeBuildings(const OsmCity& city, StreetMap
   return face_buildings;
 }
 
+// Terrain rules (bake/terrain.h): ground and streets draped where an edge's
+// midpoint is more than 5 cm off the DEM's bilinear surface (DrapeTolerance),
+// a building's base found on a grid of kBaseStepM inside its footprint (a
+// third of SRTM3's 90 m spacing).
+constexpr DrapeTolerance kDrape{};
+constexpr double kBaseStepM = 30.0;
+
+void appendMesh(geo::MeshData& dst, const geo::MeshData& src) {
+  const auto base = static_cast<uint32_t>(dst.vertexCount());
+  dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
+  dst.normals.insert(dst.normals.end(), src.normals.begin(), src.normals.end());
+  dst.colors.insert(dst.colors.end(), src.colors.begin(), src.colors.end());
+  for (uint32_t i : src.indices) dst.indices.push_back(base + i);
+}
+
+// A ground surface (block ground, half street) onto the terrain, if any. A
+// street is raised by the room the ground's straight edges may need over a
+// crease of the slope under it (half the shortest edge times the slope: a
+// crease's worst change of slope is twice the slope, its error a quarter of
+// the edge times that), at most kTerrainStreetLift.
+void onGround(geo::MeshData& part, const TerrainHeight* terrain, bool street = false) {
+  if (!terrain) return;
+  subdivideForTerrain(part, *terrain, kDrape);
+  drapeOnTerrain(part, *terrain);
+  if (street) raiseBySlope(part, *terrain, 0.5 * kDrape.min_edge_m, kTerrainStreetLift);
+}
+
+// The DEM of --dem, read and checked to cover every street point and
+// building of the city (its east/north box, as latitudes and longitudes).
+std::unique_ptr<Dem> loadDem(const OsmCity& city, const graph::StreetGraph& g, const std::vector<std::string>& files,
+                             BakeSummary& sum) {
+  auto dem = std::make_unique<Dem>();
+  for (const std::string& f : files) dem->addFile(f);
+  glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (const glm::dvec2& p : g.points) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  for (const OsmBuilding& b : city.buildings)
+    for (const Polygon2& poly : b.polygons)
+      for (const glm::dvec2& p : poly.outer.pts) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const geo::LocalFrame frame(city.origin_lat, city.origin_lon);
+  double lat_lo = 90, lat_hi = -90, lon_lo = 180, lon_hi = -180;
+  for (const glm::dvec2& c : {lo, hi, glm::dvec2(lo.x, hi.y), glm::dvec2(hi.x, lo.y)}) {
+    double lat, lon, h;
+    frame.reverse(geo::Enu{c.x, c.y, 0}, lat, lon, h);
+    lat_lo = std::min(lat_lo, lat), lat_hi = std::max(lat_hi, lat), lon_lo = std::min(lon_lo, lon), lon_hi = std::max(lon_hi, lon);
+  }
+  dem->requireCovers(lat_lo, lon_lo, lat_hi, lon_hi);
+  for (const DemTile& t : dem->tiles()) sum.dem_voids += t.voids;
+  return dem;
+}
+
 // One block per face: ground, half streets and buildings, its LOD chain as a
 // GLB blob in the package; the meshes are kept for the impostor captures.
+// With a terrain, the ground and streets are draped and each building stands
+// at the lowest ground under it.
 void buildBlocks(const OsmCity& city, StreetMap& map, const std::vector<std::vector<uint32_t>>& face_buildings,
-                 const BakeOptions& opt, package::PackageWriter& writer, std::vector<graph::BlockRecord>& blocks,
-                 std::vector<geo::MeshData>& block_meshes, BakeSummary& sum, Progress& progress) {
+                 const BakeOptions& opt, const TerrainHeight* terrain, package::PackageWriter& writer,
+                 std::vector<graph::BlockRecord>& blocks, std::vector<geo::MeshData>& block_meshes, BakeSummary& sum,
+                 Progress& progress) {
   const graph::StreetGraph& g = map.graph();
   std::vector<std::vector<uint32_t>> face_halfedges(g.faces.size());
   for (uint32_t h = 0; h < g.halfedges.size(); ++h) face_halfedges[g.halfedges[h].face].push_back(h);
@@ -63,11 +120,23 @@ void buildBlocks(const OsmCity& city, StreetMap& map, const std::vector<std::vec
     graph::BlockRecord& rec = blocks[f];
     if (g.faces[f].unbounded) rec.flags |= graph::kBlockUnbounded;
     std::string why;
-    if (!g.faces[f].unbounded)
-      appendBlockGround(g, f, [&](glm::dvec2 p) { return map.locateFace(p) == f; }, mesh, why);
-    for (uint32_t h : face_halfedges[f]) appendHalfStreet(g, h, mesh);
+    geo::MeshData part;
+    if (!g.faces[f].unbounded &&
+        appendBlockGround(g, f, [&](glm::dvec2 p) { return map.locateFace(p) == f; }, part, why)) {
+      onGround(part, terrain);
+      appendMesh(mesh, part);
+    }
+    for (uint32_t h : face_halfedges[f]) {
+      part.clear();
+      appendHalfStreet(g, h, part);
+      onGround(part, terrain, true);
+      appendMesh(mesh, part);
+    }
     for (uint32_t b : face_buildings[f]) {
-      if (appendBuilding(city.buildings[b], mesh, why)) {
+      part.clear();
+      if (appendBuilding(city.buildings[b], part, why)) {
+        if (terrain) raise(part, lowestUnder(city.buildings[b].polygons, *terrain, kBaseStepM));
+        appendMesh(mesh, part);
         ++rec.building_count;
       } else {
         ++sum.skipped_buildings;
@@ -195,6 +264,15 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
        {{"streets", sum.streets}, {"buildings", sum.buildings}, {"height_tagged", city.height_tagged},
         {"level_tagged", city.level_tagged}, {"defaulted", city.defaulted}, {"skipped", sum.skipped_buildings}}},
   };
+  if (!opt.dem.empty()) {  // only then: a flat bake's META stays as it was
+    std::vector<std::string> names;
+    for (const std::string& f : opt.dem) names.push_back(f.substr(f.find_last_of('/') + 1));
+    meta["terrain"] = {{"dem", names},
+                       {"dem_voids_filled", sum.dem_voids},
+                       {"ground_m", {sum.ground_min_m, sum.ground_max_m}},
+                       {"drape", {{"max_edge_m", kDrape.max_edge_m}, {"min_edge_m", kDrape.min_edge_m}, {"height_m", kDrape.height_m}}},
+                       {"base_step_m", kBaseStepM}};
+  }
   return meta.dump(1);
 }
 
@@ -219,6 +297,23 @@ ShardManifest& identifyShard(ShardManifest& m, const std::string& osm_path, cons
                 std::to_string(BLVD_VERSION_PATCH);
   m.block_blobs = block_blobs;
   return m;
+}
+
+// ELEV (docs/package-format.md): the ground's height at every graph point.
+std::vector<uint8_t> elevationSection(const graph::StreetGraph& g, const TerrainHeight& terrain, BakeSummary& sum) {
+  std::vector<uint8_t> out(8 + 4 * g.points.size());
+  const uint32_t head[2] = {1, static_cast<uint32_t>(g.points.size())};
+  std::memcpy(out.data(), head, 8);
+  sum.ground_min_m = std::numeric_limits<double>::infinity();
+  sum.ground_max_m = -std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < g.points.size(); ++i) {
+    const double h = terrain(g.points[i]);
+    const auto f = static_cast<float>(h);
+    std::memcpy(out.data() + 8 + 4 * i, &f, 4);
+    sum.ground_min_m = std::min(sum.ground_min_m, h), sum.ground_max_m = std::max(sum.ground_max_m, h);
+  }
+  if (g.points.empty()) sum.ground_min_m = sum.ground_max_m = 0;
+  return out;
 }
 
 // A tiled bake repeats the city: its counts grow with the copies.
@@ -274,6 +369,8 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   checkLodOptions(opt.lod);
   if (opt.shard.count > 0 && (opt.tile.nx * opt.tile.ny > 1 || opt.on_impostors))
     throw core::Error(core::Status::InvalidArg, "a shard of a bake cannot be tiled or reported: merge the shards first");
+  if (!opt.dem.empty() && (opt.shard.count > 0 || opt.tile.nx * opt.tile.ny > 1))
+    throw core::Error(core::Status::InvalidArg, "--dem cannot be combined with --shard or --tile yet");
   if (opt.shard.count > 0 && opt.shard.index >= opt.shard.count)
     throw core::Error(core::Status::InvalidArg, "shard " + std::to_string(opt.shard.index) + " of " +
                                                     std::to_string(opt.shard.count) + ": the index must be below the count");
@@ -290,6 +387,13 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   progress.stage("street map (arrangement)");
   StreetMap map(city.streets);
   graph::StreetGraph& g = map.graph();
+  std::unique_ptr<Dem> dem;
+  TerrainHeight terrain;
+  if (!opt.dem.empty()) {
+    progress.stage("terrain (DEM)");
+    dem = loadDem(city, g, opt.dem, sum);
+    terrain = demTerrain(*dem, geo::LocalFrame(city.origin_lat, city.origin_lon));
+  }
   progress.stage("placing buildings");
   const std::vector<std::vector<uint32_t>> face_buildings = placeBuildings(city, map, sum, progress);
   widenLocalModels(g, city.buildings, face_buildings, opt.local_radius_m);
@@ -297,13 +401,15 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   package::PackageWriter writer;
   std::vector<graph::BlockRecord> blocks;
   std::vector<geo::MeshData> block_meshes;
-  buildBlocks(city, map, face_buildings, opt, writer, blocks, block_meshes, sum, progress);
+  buildBlocks(city, map, face_buildings, opt, terrain ? &terrain : nullptr, writer, blocks, block_meshes, sum, progress);
 
   // Chosen on the city before any tiling, so the same cells in a 1x and a tiled package.
   const std::vector<uint32_t> route = opt.select_cells ? opt.select_cells(g) : std::vector<uint32_t>{};
   const uint32_t block_blobs = writer.blobCount();
   ShardManifest shard;
-  graph::CellTables tables = impostorsOf(g, block_meshes, route, opt, writer, sum, progress, shard);
+  BakeOptions with_ground = opt;
+  with_ground.impostor.ground = terrain;
+  graph::CellTables tables = impostorsOf(g, block_meshes, route, with_ground, writer, sum, progress, shard);
 
   const bool tiled = opt.tile.nx * opt.tile.ny > 1;
   if (tiled) progress.stage("tiling " + std::to_string(opt.tile.nx) + "x" + std::to_string(opt.tile.ny));
@@ -317,11 +423,13 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   writer.setHeader(packageHeader(city, g, blocks, tables, writer, sum));
   graph::SegmentGrid grid;
   grid.build(g);
+  const std::vector<uint8_t> elevation = terrain ? elevationSection(g, terrain, sum) : std::vector<uint8_t>{};
   const std::string meta = packageMeta(osm_path, city, opt, tiles, route, sum);
   addPackageSections(writer,
                      {graph::serializeGraph(g), graph::serializeCells(g), graph::serializeSegmentGrid(grid),
                       graph::serializeBlocks(blocks), std::vector<uint8_t>(meta.begin(), meta.end())},
                      tables);
+  if (terrain) writer.addSection(package::kSectionElevation, elevation);
   if (opt.shard.count > 0) {
     identifyShard(shard, osm_path, city, opt, route, block_blobs);
     shard.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

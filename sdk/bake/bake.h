@@ -31,6 +31,10 @@ struct BakeOptions {
   // blocks touching the street and its end junctions.
   double local_radius_m = 20.0;
   TileOptions tile;  // --tile NxM: N x M disconnected copies of the city (benchmarks)
+  // --dem: SRTM tiles (bake/dem.h) that cover the city; empty: flat ground.
+  // The blocks stand and lie on the terrain, the item buffers and captures
+  // look from 1.5 m above it, and the graph's points get heights (ELEV).
+  std::vector<std::string> dem;
   ImpostorOptions impostor;
   // Called with the graph, the impostor results and the LOD totals before the
   // package is written (the CLI writes its HTML bake report from them).
@@ -53,6 +57,9 @@ struct BakeSummary {
   double pvs_seconds = 0, impostor_seconds = 0;
   uint64_t source_bytes = 0, package_bytes = 0;
   double street_km = 0;  // street length in the graph, each two-way street once
+  // With a DEM: the ground's range under the streets, metres, and its voids filled.
+  double ground_min_m = 0, ground_max_m = 0;
+  uint64_t dem_voids = 0;
   double seconds = 0;
   std::vector<uint32_t> shard_streets;  // a shard's streets (lower half-edges)
 };

@@ -112,7 +112,7 @@ CellView cellView(const graph::StreetGraph& g, const graph::HalfEdge& e, double 
   const double len = s1 - s0;
   for (double s : {-opt.pullback_m, -0.5 * opt.pullback_m, 0.0, 0.25 * len, 0.5 * len}) {
     const glm::dvec2 eye2 = s < 0 ? v.P + fwd * s : pointAt(g, e, s0 + s);
-    v.eye_enu = {eye2.x, eye2.y, kEyeHeight};
+    v.eye_enu = eyeAt(eye2, opt.ground);
     if (!rig.insideGeometry(v.eye_enu)) break;
   }
   double a = 0, lo = 0, hi = 0;

@@ -25,6 +25,9 @@ enum class TextureCodec : uint8_t { Jpeg, Webp };
 
 struct ImpostorOptions {
   ImpostorMode mode = ImpostorMode::Layered;
+  // The ground's height under a street point (bake/terrain.h); unset: flat at
+  // 0. The eye of every item-buffer sample and capture is kEyeHeight above it.
+  std::function<double(glm::dvec2)> ground;
   int texture_max = 512;          // largest texture side, pixels
   double threshold_px = 10.0;     // D99's T, pixels at the display below
   int max_layers = 4;             // layers beyond this merge (capLayers); counted in the result

@@ -5,12 +5,19 @@
 
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
 
 #include "graph/street_graph.h"
 
 namespace blvd::bake {
 
 constexpr double kEyeHeight = 1.5;  // metres above the street
+
+// The eye kEyeHeight above the ground at street point p (flat ground: 0).
+template <class Ground>
+glm::dvec3 eyeAt(glm::dvec2 p, const Ground& ground) {
+  return {p.x, p.y, (ground ? ground(p) : 0.0) + kEyeHeight};
+}
 constexpr double kViewDistanceM = 6000.0;  // far plane of every item buffer and capture
 
 // The point at arc length `s` along half-edge `e` (clamped to its ends).

@@ -19,7 +19,7 @@ Counts sampleAt(CaptureRig& rig, glm::dvec2 p, const ImpostorOptions& opt) {
   const int res = opt.item_resolution;
   std::vector<uint32_t> counts(rig.blockCount(), 0u);
   render::Camera cam;
-  cam.eye_enu = {p.x, p.y, kEyeHeight};
+  cam.eye_enu = eyeAt(p, opt.ground);
   cam.fov_y_deg = 90.0;
   cam.width = cam.height = res;
   cam.near_m = 0.3;

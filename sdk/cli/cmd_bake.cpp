@@ -51,6 +51,9 @@ void printSummary(const bake::BakeSummary& s, const std::string& in, const std::
       s.item_samples, s.pvs_seconds, s.impostor_seconds, static_cast<unsigned long long>(s.package_bytes),
       static_cast<unsigned long long>(s.source_bytes),
       s.source_bytes ? double(s.package_bytes) / double(s.source_bytes) : 0.0);
+  if (s.ground_max_m > s.ground_min_m)
+    std::printf("  terrain: the streets from %.1f to %.1f m (%llu DEM voids filled)\n", s.ground_min_m, s.ground_max_m,
+                static_cast<unsigned long long>(s.dem_voids));
   if (s.street_km > 0 && s.cells > 0)
     std::printf("  package per km of street %.0f bytes (%.1f km), per cell %.0f bytes\n",
                 double(s.package_bytes) / s.street_km, s.street_km, double(s.package_bytes) / double(s.cells));
@@ -152,6 +155,10 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->add_option("--impostor-route", o->only_route,
                   "bake impostors only for the cells of a drive (auto:N with --seed), e.g. for benchmarks");
   cmd->add_option("--seed", o->seed, "seed of --impostor-route")->capture_default_str();
+  cmd->add_option("--dem", o->bake.dem,
+                  "SRTM elevation tiles (.hgt or .hgt.zip, named by their south-west corner, e.g. N43E007.hgt.zip) "
+                  "covering the city: the blocks stand on the terrain and the streets follow it")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--report", o->report_dir, "write an HTML bake report (map, impostor thumbnails) to this folder");
   cmd->add_option("--shard", o->shard,
                   "bake one shard into a shard file for `blvd pack merge`: I/N, I with --shards N, or env "

@@ -23,6 +23,10 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   loader_->keepOffCpu(::sched_getcpu());
   double arc_m = 0;
   const uint32_t cell = streamCell(arc_m);
+  // On terrain the eye is eye_height_m above the road where the camera is
+  // (the package's ELEV, linear along the cell); flat packages keep the
+  // height the pose was given.
+  if (city_.hasGround() && cell != graph::kNone) cam_.eye_enu.z = city_.groundHeight(cell, arc_m) + desc_.eye_height_m;
   if (off_map_)
     draw_->clear();  // sky and ground, in every mode
   else

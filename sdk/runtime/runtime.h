@@ -71,6 +71,8 @@ class Runtime {
   const geo::LocalFrame& frame() const { return city_.frame(); }
   // The renderer, for the tests' fault injection (Renderer::api()).
   render::Renderer& renderer() { return *renderer_; }
+  // Where the last frame's eye was (east, north, up in the package frame).
+  const glm::dvec3& cameraEye() const { return cam_.eye_enu; }
 
   std::string last_error;
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
@@ -37,6 +38,7 @@ core::Status City::open(const std::string& path, std::string& err, Tables tables
   block_pages_.reset();
   max_cell_layers_ = 0;
   streets_ = nullptr;
+  ground_.clear();
   core::Status st = package::PackageReader::open(path, reader_, err);
   if (st != core::Status::Ok) return st;
   if (reader_.hasSection(package::kSectionShard)) {
@@ -47,6 +49,7 @@ core::Status City::open(const std::string& path, std::string& err, Tables tables
   st = graph == GraphTables::Paged ? openPaged(paging, err) : openWhole(err);
   if (st != core::Status::Ok) return st;
   if (tables == Tables::All && (st = openRenderTables(err)) != core::Status::Ok) return st;
+  if ((st = openElevation(err)) != core::Status::Ok) return st;
   const auto& h = reader_.header();
   frame_ = geo::LocalFrame(h.origin_lat, h.origin_lon, h.origin_h);
   return core::Status::Ok;
@@ -161,6 +164,53 @@ core::Status City::requiredSection(uint32_t tag, package::Span& s, std::string& 
   return st;
 }
 
+core::Status City::openElevation(std::string& err) {
+  ground_.clear();
+  if (!reader_.hasSection(package::kSectionElevation)) return core::Status::Ok;
+  package::Span s;
+  core::Status st = requiredSection(package::kSectionElevation, s, err);
+  if (st != core::Status::Ok) return st;
+  const uint64_t points = streets_->pointCount();
+  uint32_t head[2] = {0, 0};
+  if (s.size >= 8) std::memcpy(head, s.data, 8);
+  if (s.size < 8 || head[0] != 1 || head[1] != points || s.size != 8 + 4 * points) {
+    err = reader_.name() + ": elevation section ELEV at offset " + std::to_string(s.offset) + ": version " +
+          std::to_string(head[0]) + ", " + std::to_string(head[1]) + " heights in " + std::to_string(s.size) +
+          " bytes; a version 1 section for the graph's " + std::to_string(points) + " points has " +
+          std::to_string(8 + 4 * points);
+    return core::Status::Corrupt;
+  }
+  ground_.resize(points);
+  std::memcpy(ground_.data(), s.data + 8, 4 * points);
+  for (uint64_t i = 0; i < points; ++i)
+    if (!std::isfinite(ground_[i]) || std::abs(ground_[i]) > 1e4f) {
+      err = reader_.name() + ": elevation section ELEV at offset " + std::to_string(s.offset + 8 + 4 * i) +
+            ": point " + std::to_string(i) + " has no plausible height";
+      ground_.clear();
+      return core::Status::Corrupt;
+    }
+  reader_.dropPages(s);
+  return core::Status::Ok;
+}
+
+double City::groundHeight(uint32_t cell, double arc_m) const {
+  if (ground_.empty() || cell >= streets_->cellCount()) return 0;
+  const graph::HalfEdge e = streets_->halfedge(cell);
+  if (e.pts_count == 0 || uint64_t(e.pts_begin) + e.pts_count > ground_.size()) return 0;
+  glm::dvec2 a = streets_->point(e.pts_begin);
+  for (uint32_t i = 1; i < e.pts_count; ++i) {
+    const glm::dvec2 b = streets_->point(e.pts_begin + i);
+    const double l = glm::length(b - a);
+    if (arc_m <= l) {
+      const double t = l > 0 ? std::max(0.0, arc_m) / l : 0;
+      return ground_[e.pts_begin + i - 1] * (1 - t) + ground_[e.pts_begin + i] * t;
+    }
+    arc_m -= l;
+    a = b;
+  }
+  return ground_[e.pts_begin + e.pts_count - 1];
+}
+
 // Blocks, then (present when the bake made impostors) visibility and impostors.
 core::Status City::openRenderTables(std::string& err) {
   const uint32_t cells = streets_->cellCount();
@@ -246,7 +296,7 @@ uint64_t City::tableBytes() const {
                bytesOf(graph_.local_blocks) + bytesOf(blocks_) + bytesOf(tables_.visibility) +
                bytesOf(tables_.impostors) + (whole_ ? whole_->bytes() : 0) + (paged_ ? paged_->bytes() : 0) +
                (cell_pages_ ? cell_pages_->bytes() : 0) +
-               (block_pages_ ? block_pages_->bytes() : 0);
+               (block_pages_ ? block_pages_->bytes() : 0) + bytesOf(ground_);
   for (const auto& v : tables_.visibility) n += bytesOf(v.blocks) + bytesOf(v.ach);
   for (const auto& c : tables_.impostors) {
     n += bytesOf(c.layered) + bytesOf(c.single);

@@ -131,6 +131,12 @@ class City {
   core::Status decodeImpostorBlob(uint32_t blob, geo::MeshData& out, std::string& err,
                                   std::vector<uint8_t>* hold = nullptr) const;
   const geo::LocalFrame& frame() const { return frame_; }
+  // Terrain (the ELEV section, docs/package-format.md): whether the package
+  // has the ground's height under its streets, and that height at arc length
+  // `arc_m` along cell `cell` (linear between its polyline's points), metres
+  // above the frame's origin height; 0 without ELEV. No allocation.
+  bool hasGround() const { return !ground_.empty(); }
+  double groundHeight(uint32_t cell, double arc_m) const;
   // Heap bytes of the tables above (graph, cells, blocks, visibility,
   // impostor lists): what holding the city costs besides the mapped file.
   uint64_t tableBytes() const;
@@ -188,6 +194,7 @@ class City {
   core::Status openWhole(std::string& err);
   core::Status openPaged(const PagedGraphDesc& paging, std::string& err);
   core::Status openRenderTables(std::string& err);
+  core::Status openElevation(std::string& err);  // ELEV, when the package has one
   core::Status requiredSection(uint32_t tag, package::Span& s, std::string& err) const;  // Corrupt when absent
   // A section's pages all fetched (a whole-table parse of a package on a server).
   core::Status ensureSection(uint32_t tag, std::string& err) const;
@@ -211,6 +218,7 @@ class City {
   std::unique_ptr<BlockPages> block_pages_;  // paged  // paged, for a package with a cell table index
   uint32_t max_cell_layers_ = 0;
   const graph::GraphSource* streets_ = nullptr;  // whole_ or paged_
+  std::vector<float> ground_;  // ELEV: the ground's height at each graph point (read whole: 4 bytes a point)
   geo::LocalFrame frame_{0, 0, 0};
 };
 

@@ -33,6 +33,7 @@ RECIPES = {
     "pkg:osmesa": ["mesa"],
     "pkg:stb": ["stb"],
     "pkg:libwebp": ["libwebp"],
+    "pkg:libzip": ["libzip"],
     "pkg:glesv2": ["virtual/libgles2"],
 }
 
