@@ -314,7 +314,9 @@ BLVD_API blvd_status blvd_set_camera_source(blvd_runtime* rt, blvd_camera_source
 #define BLVD_MAP_MARGIN_M 250.0
 
 /* Places the eye at lat/lon (WGS84 degrees), eye_height_m above the street,
- * looking along heading_deg (clockwise from north), pitched by pitch_deg.
+ * looking along heading_deg (clockwise from north), pitched by pitch_deg. On
+ * a package baked with terrain (blvd bake --dem) the street's height and its
+ * grade where the camera is are added: pitch_deg is relative to the road.
  * Render thread. Errors: BLVD_ERR_INVALID_ARG for non-finite or out-of-range
  * values; BLVD_ERR_MISUSE while the camera source is BLVD_CAMERA_TRACKED;
  * BLVD_ERR_OFF_MAP for a pose off the map (the message says how far): the

@@ -24,9 +24,14 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   double arc_m = 0;
   const uint32_t cell = streamCell(arc_m);
   // On terrain the eye is eye_height_m above the road where the camera is
-  // (the package's ELEV, linear along the cell); flat packages keep the
-  // height the pose was given.
-  if (city_.hasGround() && cell != graph::kNone) cam_.eye_enu.z = city_.groundHeight(cell, arc_m) + desc_.eye_height_m;
+  // (the package's ELEV, linear along the cell), and the pose's pitch is
+  // taken from the road's grade there, as a car's camera sits; flat packages
+  // keep the pose as given.
+  if (city_.hasGround() && cell != graph::kNone) {
+    cam_.eye_enu.z = city_.groundHeight(cell, arc_m) + desc_.eye_height_m;
+    const double grade = std::atan(city_.groundGrade(cell, arc_m)) * 180.0 / M_PI;
+    cam_.pitch_deg = std::clamp(pose_pitch_deg_ + grade, -89.0, 89.0);
+  }
   if (off_map_)
     draw_->clear();  // sky and ground, in every mode
   else

@@ -127,7 +127,7 @@ void Runtime::placeCamera(double x, double y, double heading_deg, double pitch_d
   if (pitch_deg <= -90 || pitch_deg >= 90) throw Error(Status::InvalidArg, "pitch must be within (-90, 90) degrees");
   cam_.eye_enu = {x, y, desc_.eye_height_m};
   cam_.heading_deg = std::fmod(heading_deg, 360.0);
-  cam_.pitch_deg = pitch_deg;
+  cam_.pitch_deg = pose_pitch_deg_ = pitch_deg;
   const double out = graph::outsideStreets(city_.streets(), x, y);
   host_off_map_ = !(out <= graph::kMapMarginM);
   if (!host_off_map_) return;

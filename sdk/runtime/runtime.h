@@ -71,8 +71,8 @@ class Runtime {
   const geo::LocalFrame& frame() const { return city_.frame(); }
   // The renderer, for the tests' fault injection (Renderer::api()).
   render::Renderer& renderer() { return *renderer_; }
-  // Where the last frame's eye was (east, north, up in the package frame).
-  const glm::dvec3& cameraEye() const { return cam_.eye_enu; }
+  // The last frame's camera (its eye east, north, up in the package frame).
+  const render::Camera& camera() const { return cam_; }
 
   std::string last_error;
 
@@ -115,6 +115,7 @@ class Runtime {
   std::unique_ptr<stream::FrameBudget> budget_;  // with target_frame_ms
   FrameClock* clock_ = nullptr;  // this runtime's frames, for the loaders' gap scheduling
   render::Camera cam_;
+  double pose_pitch_deg_ = 0;  // the pose's pitch; cam_'s adds the road's grade on terrain (frame.cpp)
   blvd_render_mode mode_ = BLVD_MODE_BLVD;
   float radius_m_ = 250.f;
   bool rendered_ = false;

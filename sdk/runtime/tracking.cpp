@@ -46,7 +46,7 @@ uint32_t Runtime::currentCell(double& arc_m, double& speed) {
     if (p.flags & track::kPoseValid) {
       cam_.eye_enu = {p.camera.eye_e, p.camera.eye_n, p.camera.eye_u};
       cam_.heading_deg = p.camera.heading_deg;
-      cam_.pitch_deg = p.camera.pitch_deg;
+      cam_.pitch_deg = pose_pitch_deg_ = p.camera.pitch_deg;
       speed = p.speed_mps;
       host_off_map_ = false;  // the host's pose is no longer where the camera is
       off_map_ = (p.flags & track::kPoseOffMap) != 0;

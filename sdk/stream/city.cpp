@@ -193,22 +193,33 @@ core::Status City::openElevation(std::string& err) {
   return core::Status::Ok;
 }
 
-double City::groundHeight(uint32_t cell, double arc_m) const {
-  if (ground_.empty() || cell >= streets_->cellCount()) return 0;
+bool City::groundSegment(uint32_t cell, double arc_m, GroundSegment& out) const {
+  if (ground_.empty() || cell >= streets_->cellCount()) return false;
   const graph::HalfEdge e = streets_->halfedge(cell);
-  if (e.pts_count == 0 || uint64_t(e.pts_begin) + e.pts_count > ground_.size()) return 0;
+  if (e.pts_count == 0 || uint64_t(e.pts_begin) + e.pts_count > ground_.size()) return false;
+  out = GroundSegment{ground_[e.pts_begin], ground_[e.pts_begin], 0, 0};
   glm::dvec2 a = streets_->point(e.pts_begin);
   for (uint32_t i = 1; i < e.pts_count; ++i) {
     const glm::dvec2 b = streets_->point(e.pts_begin + i);
-    const double l = glm::length(b - a);
-    if (arc_m <= l) {
-      const double t = l > 0 ? std::max(0.0, arc_m) / l : 0;
-      return ground_[e.pts_begin + i - 1] * (1 - t) + ground_[e.pts_begin + i] * t;
-    }
-    arc_m -= l;
+    out = GroundSegment{ground_[e.pts_begin + i - 1], ground_[e.pts_begin + i], glm::length(b - a), arc_m};
+    if (arc_m <= out.length) break;
+    arc_m -= out.length;
     a = b;
   }
-  return ground_[e.pts_begin + e.pts_count - 1];
+  return true;
+}
+
+double City::groundHeight(uint32_t cell, double arc_m) const {
+  GroundSegment s;
+  if (!groundSegment(cell, arc_m, s)) return 0;
+  const double t = s.length > 0 ? std::clamp(s.at_m / s.length, 0.0, 1.0) : 1.0;
+  return s.h0 * (1 - t) + s.h1 * t;
+}
+
+double City::groundGrade(uint32_t cell, double arc_m) const {
+  GroundSegment s;
+  if (!groundSegment(cell, arc_m, s) || s.length < 0.5) return 0;  // a segment too short to say
+  return (s.h1 - s.h0) / s.length;
 }
 
 // Blocks, then (present when the bake made impostors) visibility and impostors.

@@ -137,6 +137,9 @@ class City {
   // above the frame's origin height; 0 without ELEV. No allocation.
   bool hasGround() const { return !ground_.empty(); }
   double groundHeight(uint32_t cell, double arc_m) const;
+  // The road's grade there along the cell's direction: rise over run of the
+  // polyline segment holding arc_m (0 without ELEV). No allocation.
+  double groundGrade(uint32_t cell, double arc_m) const;
   // Heap bytes of the tables above (graph, cells, blocks, visibility,
   // impostor lists): what holding the city costs besides the mapped file.
   uint64_t tableBytes() const;
@@ -195,6 +198,12 @@ class City {
   core::Status openPaged(const PagedGraphDesc& paging, std::string& err);
   core::Status openRenderTables(std::string& err);
   core::Status openElevation(std::string& err);  // ELEV, when the package has one
+  // The polyline segment of `cell` holding arc_m: its ends' heights, its
+  // length and arc_m's place along it.
+  struct GroundSegment {
+    double h0 = 0, h1 = 0, length = 0, at_m = 0;
+  };
+  bool groundSegment(uint32_t cell, double arc_m, GroundSegment& out) const;
   core::Status requiredSection(uint32_t tag, package::Span& s, std::string& err) const;  // Corrupt when absent
   // A section's pages all fetched (a whole-table parse of a package on a server).
   core::Status ensureSection(uint32_t tag, std::string& err) const;

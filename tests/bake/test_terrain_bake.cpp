@@ -139,13 +139,24 @@ TEST(TerrainBake, OnASlopeTheStreetsAndBlocksFollowTheGround) {
   d.width = 160, d.height = 96;
   blvd_runtime* rt = nullptr;
   ASSERT_EQ(blvd_runtime_create(&d, &rt), BLVD_OK) << blvd_last_error(nullptr);
-  const glm::dvec2 p = g.point(g.halfedge(0).pts_begin) * 0.5 + g.point(g.halfedge(0).pts_begin + 1) * 0.5;
+  // On a street running east (uphill), facing east: the eye 1.5 m above the
+  // road and the camera pitched up with the road's 5 % grade.
+  uint32_t east = graph::kNone;
+  for (uint32_t c = 0; c < g.cellCount() && east == graph::kNone; ++c) {
+    const graph::HalfEdge e = g.halfedge(c);
+    const glm::dvec2 run = g.point(e.pts_begin + 1) - g.point(e.pts_begin);
+    if (e.pts_count >= 2 && run.x > 100 && std::abs(run.y) < 1) east = c;
+  }
+  ASSERT_NE(east, graph::kNone);
+  const glm::dvec2 p = g.point(g.halfedge(east).pts_begin) * 0.5 + g.point(g.halfedge(east).pts_begin + 1) * 0.5;
   ASSERT_EQ(blvd_set_pose_local(rt, p.x, p.y, 90.f, 0.f), BLVD_OK);
   ASSERT_EQ(blvd_wait_resident(rt, 60000), BLVD_OK) << blvd_last_error(rt);
   blvd_frame_stats fs{};
   fs.struct_size = sizeof fs;
   ASSERT_EQ(blvd_render(rt, &fs), BLVD_OK) << blvd_last_error(rt);
-  EXPECT_NEAR(rt->impl->cameraEye().z, slope(lonOf(city, p)) + 1.5, 0.6);
+  EXPECT_EQ(fs.cell, east);
+  EXPECT_NEAR(rt->impl->camera().eye_enu.z, slope(lonOf(city, p)) + 1.5, 0.6);
+  EXPECT_NEAR(rt->impl->camera().pitch_deg, std::atan(0.05) * 180.0 / M_PI, 0.5);
   blvd_runtime_destroy(rt);
 }
 

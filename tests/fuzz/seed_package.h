@@ -3,6 +3,7 @@
 // its GLB, a PVS per cell and one impostor layer on cell 0 (the block's blob
 // stands in for its GLB: the tables only index it).
 #pragma once
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,15 @@ inline void writeGridPackage(const std::string& path) {
   gw.addSection(kSectionVisibility, blvd::graph::serializeVisibility(t, &vis_at));
   gw.addSection(kSectionImpostors, blvd::graph::serializeImpostors(t, &imp_at));
   gw.addSection(kSectionCellTableIndex, blvd::graph::serializeCellTableIndex(vis_at, imp_at));
+  // The ground's heights (ELEV): a slope rising to the east.
+  std::vector<uint8_t> elev(8 + 4 * g.points.size());
+  const uint32_t head[2] = {1, static_cast<uint32_t>(g.points.size())};
+  std::memcpy(elev.data(), head, 8);
+  for (size_t i = 0; i < g.points.size(); ++i) {
+    const float z = static_cast<float>(0.05 * g.points[i].x);
+    std::memcpy(elev.data() + 8 + 4 * i, &z, 4);
+  }
+  gw.addSection(kSectionElevation, std::move(elev));
   gw.write(path);
 }
 
