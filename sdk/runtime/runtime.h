@@ -64,6 +64,8 @@ class Runtime {
   // None of them moves the camera: setCameraSource does.
   void feedGnss(const track::GnssFix& fix);
   void feedOdometry(const track::Odometry& odo);
+  // On terrain (ELEV) a matched pose's camera stands on the road: its eye
+  // eye_height_m above it, its pitch the road's grade (as blvd_render's).
   const track::Pose& pose(double t);
   // False when the start pose is impossible (track::Tracker::setStartPose).
   bool setStartPose(const track::StartPose& sp);
@@ -116,6 +118,7 @@ class Runtime {
   FrameClock* clock_ = nullptr;  // this runtime's frames, for the loaders' gap scheduling
   render::Camera cam_;
   double pose_pitch_deg_ = 0;  // the pose's pitch; cam_'s adds the road's grade on terrain (frame.cpp)
+  track::Pose posed_;          // pose()'s answer, on the road's ground where the package has terrain
   blvd_render_mode mode_ = BLVD_MODE_BLVD;
   float radius_m_ = 250.f;
   bool rendered_ = false;

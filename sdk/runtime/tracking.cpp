@@ -26,7 +26,12 @@ void Runtime::feedOdometry(const track::Odometry& odo) {
 
 const track::Pose& Runtime::pose(double t) {
   if (!std::isfinite(t)) throw core::Error(core::Status::InvalidArg, "blvd_get_pose: t is not finite");
-  return tracker_->update(t);
+  posed_ = tracker_->update(t);
+  if (city_.hasGround() && (posed_.flags & track::kPoseMatched)) {
+    posed_.camera.eye_u = city_.groundHeight(posed_.cell, posed_.arc_m) + desc_.eye_height_m;
+    posed_.camera.pitch_deg += std::atan(city_.groundGrade(posed_.cell, posed_.arc_m)) * 180.0 / M_PI;
+  }
+  return posed_;
 }
 
 bool Runtime::setStartPose(const track::StartPose& sp) {

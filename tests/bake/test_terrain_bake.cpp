@@ -157,6 +157,20 @@ TEST(TerrainBake, OnASlopeTheStreetsAndBlocksFollowTheGround) {
   EXPECT_EQ(fs.cell, east);
   EXPECT_NEAR(rt->impl->camera().eye_enu.z, slope(lonOf(city, p)) + 1.5, 0.6);
   EXPECT_NEAR(rt->impl->camera().pitch_deg, std::atan(0.05) * 180.0 / M_PI, 0.5);
+  // The tracker's pose there (a start pose on that street) carries the same camera.
+  blvd_start_pose sp{};
+  sp.struct_size = sizeof sp;
+  sp.t = 100;
+  double h;
+  city.frame().reverse(geo::Enu{p.x, p.y, 0}, sp.lat, sp.lon, h);
+  sp.heading_deg = 90;
+  ASSERT_EQ(blvd_set_start_pose(rt, &sp), BLVD_OK) << blvd_last_error(rt);
+  blvd_pose pose{};
+  pose.struct_size = sizeof pose;
+  ASSERT_EQ(blvd_get_pose(rt, 100, &pose), BLVD_OK) << blvd_last_error(rt);
+  ASSERT_TRUE(pose.flags & BLVD_POSE_MATCHED) << pose.flags;
+  EXPECT_NEAR(pose.camera_z, slope(lonOf(city, p)) + 1.5, 0.6);
+  EXPECT_NEAR(pose.camera_pitch_deg, std::atan(0.05) * 180.0 / M_PI, 0.5);
   blvd_runtime_destroy(rt);
 }
 
