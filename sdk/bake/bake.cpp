@@ -56,14 +56,6 @@ std::vector<std::vector<uint32_t>> placeBuildings(const OsmCity& city, StreetMap
 constexpr DrapeTolerance kDrape{};
 constexpr double kBaseStepM = 30.0;
 
-void appendMesh(geo::MeshData& dst, const geo::MeshData& src) {
-  const auto base = static_cast<uint32_t>(dst.vertexCount());
-  dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
-  dst.normals.insert(dst.normals.end(), src.normals.begin(), src.normals.end());
-  dst.colors.insert(dst.colors.end(), src.colors.begin(), src.colors.end());
-  for (uint32_t i : src.indices) dst.indices.push_back(base + i);
-}
-
 // A ground surface (block ground, half street) onto the terrain, if any. A
 // street is raised by the room the ground's straight edges may need over a
 // crease of the slope under it (half the shortest edge times the slope: a
@@ -124,19 +116,19 @@ void buildBlocks(const OsmCity& city, StreetMap& map, const std::vector<std::vec
     if (!g.faces[f].unbounded &&
         appendBlockGround(g, f, [&](glm::dvec2 p) { return map.locateFace(p) == f; }, part, why)) {
       onGround(part, terrain);
-      appendMesh(mesh, part);
+      mesh.append(part);
     }
     for (uint32_t h : face_halfedges[f]) {
       part.clear();
       appendHalfStreet(g, h, part);
       onGround(part, terrain, true);
-      appendMesh(mesh, part);
+      mesh.append(part);
     }
     for (uint32_t b : face_buildings[f]) {
       part.clear();
       if (appendBuilding(city.buildings[b], part, why)) {
         if (terrain) raise(part, lowestUnder(city.buildings[b].polygons, *terrain, kBaseStepM));
-        appendMesh(mesh, part);
+        mesh.append(part);
         ++rec.building_count;
       } else {
         ++sum.skipped_buildings;

@@ -27,11 +27,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   // (the package's ELEV, linear along the cell), and the pose's pitch is
   // taken from the road's grade there, as a car's camera sits; flat packages
   // keep the pose as given.
-  if (city_.hasGround() && cell != graph::kNone) {
-    cam_.eye_enu.z = city_.groundHeight(cell, arc_m) + desc_.eye_height_m;
-    const double grade = std::atan(city_.groundGrade(cell, arc_m)) * 180.0 / M_PI;
-    cam_.pitch_deg = std::clamp(pose_pitch_deg_ + grade, -89.0, 89.0);
-  }
+  if (cell != graph::kNone) onRoad(cell, arc_m, pose_pitch_deg_, cam_.eye_enu.z, cam_.pitch_deg);
   if (off_map_)
     draw_->clear();  // sky and ground, in every mode
   else
@@ -54,6 +50,13 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   // The whole call counts against the target: streaming and uploads too.
   afterFrame(std::chrono::duration<double, std::milli>(t_drawn - t_frame).count(), fs, full_pixels, ro.scale);
   if (stats) writeFrameStats(stats, fs, cell);
+}
+
+void Runtime::onRoad(uint32_t cell, double arc_m, double pose_pitch_deg, double& eye_u, double& pitch_deg) const {
+  double ground, grade;
+  if (!city_.groundAt(cell, arc_m, ground, grade)) return;
+  eye_u = ground + desc_.eye_height_m;
+  pitch_deg = std::clamp(pose_pitch_deg + std::atan(grade) * 180.0 / M_PI, -89.0, 89.0);
 }
 
 void Runtime::renderFailed() const {

@@ -86,6 +86,9 @@ class Runtime {
   // Throws the renderer's error: Backend when the GL context was lost (the
   // runtime must be created again), Internal otherwise (frame.cpp).
   [[noreturn]] void renderFailed() const;
+  // On a package with terrain: the eye eye_height_m above the road at
+  // (cell, arc) and the pose's pitch plus the road's grade there (frame.cpp).
+  void onRoad(uint32_t cell, double arc_m, double pose_pitch_deg, double& eye_u, double& pitch_deg) const;
   uint32_t streamSteps(double& arc_m, double upload_budget_ms);  // currentCell, its slots streamed, the link planned
   // Whether `e` says the map (table pages of a package on a server) has not arrived.
   bool mapMissing(const core::Error& e) const;

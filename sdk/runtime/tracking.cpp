@@ -27,10 +27,8 @@ void Runtime::feedOdometry(const track::Odometry& odo) {
 const track::Pose& Runtime::pose(double t) {
   if (!std::isfinite(t)) throw core::Error(core::Status::InvalidArg, "blvd_get_pose: t is not finite");
   posed_ = tracker_->update(t);
-  if (city_.hasGround() && (posed_.flags & track::kPoseMatched)) {
-    posed_.camera.eye_u = city_.groundHeight(posed_.cell, posed_.arc_m) + desc_.eye_height_m;
-    posed_.camera.pitch_deg += std::atan(city_.groundGrade(posed_.cell, posed_.arc_m)) * 180.0 / M_PI;
-  }
+  if (posed_.flags & track::kPoseMatched)
+    onRoad(posed_.cell, posed_.arc_m, posed_.camera.pitch_deg, posed_.camera.eye_u, posed_.camera.pitch_deg);
   return posed_;
 }
 

@@ -210,16 +210,19 @@ bool City::groundSegment(uint32_t cell, double arc_m, GroundSegment& out) const 
 }
 
 double City::groundHeight(uint32_t cell, double arc_m) const {
-  GroundSegment s;
-  if (!groundSegment(cell, arc_m, s)) return 0;
-  const double t = s.length > 0 ? std::clamp(s.at_m / s.length, 0.0, 1.0) : 1.0;
-  return s.h0 * (1 - t) + s.h1 * t;
+  double height = 0, grade = 0;
+  groundAt(cell, arc_m, height, grade);
+  return height;
 }
 
-double City::groundGrade(uint32_t cell, double arc_m) const {
+bool City::groundAt(uint32_t cell, double arc_m, double& height, double& grade) const {
   GroundSegment s;
-  if (!groundSegment(cell, arc_m, s) || s.length < 0.5) return 0;  // a segment too short to say
-  return (s.h1 - s.h0) / s.length;
+  height = grade = 0;
+  if (!groundSegment(cell, arc_m, s)) return false;
+  const double t = s.length > 0 ? std::clamp(s.at_m / s.length, 0.0, 1.0) : 1.0;
+  height = s.h0 * (1 - t) + s.h1 * t;
+  grade = s.length < 0.5 ? 0.0 : (s.h1 - s.h0) / s.length;  // a segment too short to say
+  return true;
 }
 
 // Blocks, then (present when the bake made impostors) visibility and impostors.

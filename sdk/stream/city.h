@@ -137,9 +137,10 @@ class City {
   // above the frame's origin height; 0 without ELEV. No allocation.
   bool hasGround() const { return !ground_.empty(); }
   double groundHeight(uint32_t cell, double arc_m) const;
-  // The road's grade there along the cell's direction: rise over run of the
-  // polyline segment holding arc_m (0 without ELEV). No allocation.
-  double groundGrade(uint32_t cell, double arc_m) const;
+  // The same height and the road's grade there along the cell's direction
+  // (rise over run of the polyline segment holding arc_m; 0 on a segment under
+  // half a metre), in one walk of the polyline. False without ELEV.
+  bool groundAt(uint32_t cell, double arc_m, double& height, double& grade) const;
   // Heap bytes of the tables above (graph, cells, blocks, visibility,
   // impostor lists): what holding the city costs besides the mapped file.
   uint64_t tableBytes() const;
