@@ -20,9 +20,12 @@ cmake --build build -j"$jobs"
 #    checks that nothing leaks), and the short soak (ten virtual minutes of
 #    driving, LeakSanitizer at its end).
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DBLVD_SANITIZE=ON -DBLVD_WERROR=ON > /dev/null
+# Every fuzz target is built (its seed replay is labelled fuzz), found in the
+# build file so that a new target cannot be left out.
+asan_fuzzers=$(sed -n 's/^build tests\/fuzz\/\(fuzz_[a-z_]*\): .*/\1/p' build-asan/build.ninja | sort -u)
+# shellcheck disable=SC2086
 cmake --build build-asan -j"$jobs" --target test_package test_graph_serialize test_gnss test_can \
-  fuzz_package fuzz_glb fuzz_nmea fuzz_candump fuzz_dbc fuzz_can_frame fuzz_shard_manifest fuzz_cache_entry \
-  fuzz_gpsd fuzz_osm fuzz_capi test_runtime_fault test_create_nomem test_soak
+  test_runtime_fault test_create_nomem test_soak $asan_fuzzers
 # The runtime test needs the Monaco package: the fixture's own bake, run with
 # step 1's build (a sanitized CGAL bake would take many minutes).
 (cd build && ctest --output-on-failure -R '^bake\.monaco_geofabrik$')
