@@ -212,7 +212,9 @@ std::vector<uint8_t> PackageWriter::toBytes() const {
 }
 
 void PackageWriter::write(const std::string& path) const {
-  const std::string tmp = path + ".tmp";
+  // A name of this process's own: two writers of one path (a test's seed
+  // written by two fuzz runs at once) each rename a whole file over it.
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) {
     const int e = errno;

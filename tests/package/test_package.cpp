@@ -3,9 +3,11 @@
 // structurally bad files with valid checksums.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
+#include <iterator>
 #include <set>
 
 #include "package/reader.h"
@@ -67,7 +69,8 @@ TEST(Package, RoundTrip) {
   EXPECT_EQ(w.sectionBytes(kSectionMeta), 0u);
   EXPECT_EQ(w.sectionBytes(kSectionBlobIndex), kBlobIndexPrefix + 5 * kBlobEntrySize);
   w.write(path);
-  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  // Nothing left beside it: the package alone (its temporary file renamed over it).
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), std::filesystem::directory_iterator()), 1);
   EXPECT_EQ(std::filesystem::file_size(path), w.fileBytes());
   EXPECT_EQ(readFile(path), w.toBytes());
 
@@ -206,7 +209,7 @@ TEST(Package, WriteFailureNamesPath) {
     EXPECT_EQ(e.status(), Status::Io);
     EXPECT_TRUE(contains(e.what(), path)) << e.what();
   }
-  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp." + std::to_string(::getpid())));
 }
 
 TEST(Package, OpenFailures) {
