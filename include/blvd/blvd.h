@@ -417,6 +417,12 @@ typedef struct blvd_stats {
   double cached_ahead_s;          /* cached_ahead_m at the vehicle's speed (0 when it has none) */
   uint64_t link_table_bytes;      /* of link_bytes, the tables' (header, directory, table pages, blob index) */
   uint64_t cache_evictions;       /* blobs the disk cache evicted to make room */
+  /* A package with terrain (its TERR tiles, drawn beyond the blocks): */
+  uint64_t terrain_bytes;         /* the tiles' load scratch and slot tables; blvd_memory_required's CPU
+                                   * bytes are staging capacity + table_bytes + tracking_bytes + this */
+  uint32_t terrain_tiles;         /* tiles drawn by the last frame */
+  uint64_t terrain_loads;         /* tiles loaded into their GPU slots */
+  uint64_t terrain_load_errors;   /* tiles that failed to load (bad blob, file cut short), not asked for again */
 } blvd_stats;
 
 /* Fills *stats up to stats->struct_size. Render thread. */

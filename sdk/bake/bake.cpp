@@ -68,17 +68,23 @@ void onGround(geo::MeshData& part, const TerrainHeight* terrain, bool street = f
   if (street) raiseBySlope(part, *terrain, 0.5 * kDrape.min_edge_m, kTerrainStreetLift);
 }
 
-// The DEM of --dem, read and checked to cover every street point and
-// building of the city (its east/north box, as latitudes and longitudes).
-std::unique_ptr<Dem> loadDem(const OsmCity& city, const graph::StreetGraph& g, const std::vector<std::string>& files,
-                             BakeSummary& sum) {
-  auto dem = std::make_unique<Dem>();
-  for (const std::string& f : files) dem->addFile(f);
-  glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+// The city's east/north box: every street point and building.
+void cityBox(const OsmCity& city, const graph::StreetGraph& g, glm::dvec2& lo, glm::dvec2& hi) {
+  lo = glm::dvec2(std::numeric_limits<double>::infinity()), hi = glm::dvec2(-std::numeric_limits<double>::infinity());
   for (const glm::dvec2& p : g.points) lo = glm::min(lo, p), hi = glm::max(hi, p);
   for (const OsmBuilding& b : city.buildings)
     for (const Polygon2& poly : b.polygons)
       for (const glm::dvec2& p : poly.outer.pts) lo = glm::min(lo, p), hi = glm::max(hi, p);
+}
+
+// The DEM of --dem, read and checked to cover the city's box (as latitudes
+// and longitudes).
+std::unique_ptr<Dem> loadDem(const OsmCity& city, const graph::StreetGraph& g, const std::vector<std::string>& files,
+                             BakeSummary& sum) {
+  auto dem = std::make_unique<Dem>();
+  for (const std::string& f : files) dem->addFile(f);
+  glm::dvec2 lo, hi;
+  cityBox(city, g, lo, hi);
   const geo::LocalFrame frame(city.origin_lat, city.origin_lon);
   double lat_lo = 90, lat_hi = -90, lon_lo = 180, lon_hi = -180;
   for (const glm::dvec2& c : {lo, hi, glm::dvec2(lo.x, hi.y), glm::dvec2(hi.x, lo.y)}) {
@@ -263,7 +269,15 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
                        {"dem_voids_filled", sum.dem_voids},
                        {"ground_m", {sum.ground_min_m, sum.ground_max_m}},
                        {"drape", {{"max_edge_m", kDrape.max_edge_m}, {"min_edge_m", kDrape.min_edge_m}, {"height_m", kDrape.height_m}}},
-                       {"base_step_m", kBaseStepM}};
+                       {"base_step_m", kBaseStepM},
+                       {"tiles",
+                        {{"grid", opt.terrain_tiles.grid},
+                         {"levels", sum.terrain_levels},
+                         {"count", sum.terrain_tiles},
+                         {"spacing_m", opt.terrain_tiles.spacing_m},
+                         {"margin_m", opt.terrain_tiles.margin_m},
+                         {"root_error_m", sum.terrain_error_m},
+                         {"uncovered_points", sum.terrain_uncovered}}}};
   }
   return meta.dump(1);
 }
@@ -289,6 +303,30 @@ ShardManifest& identifyShard(ShardManifest& m, const std::string& osm_path, cons
                 std::to_string(BLVD_VERSION_PATCH);
   m.block_blobs = block_blobs;
   return m;
+}
+
+// TERR (docs/package-format.md): the terrain's quadtree tiles over the
+// city's box and a margin, their heights as blobs after the city's; none
+// when the ground there is level within kFlatTerrainM (a flat DEM then bakes
+// the flat city's package but for the draped ground and ELEV).
+constexpr float kFlatTerrainM = 0.5f;
+
+std::vector<uint8_t> terrainTiles(const Dem& dem, const OsmCity& city, const graph::StreetGraph& g,
+                                  TerrainTileOptions opt, package::PackageWriter& writer, BakeSummary& sum) {
+  const geo::LocalFrame frame(city.origin_lat, city.origin_lon);
+  glm::dvec2 lo, hi;
+  cityBox(city, g, lo, hi);
+  opt.fill_m = -frame.h0();  // the sea's level
+  TerrainTileSet set = buildTerrainTiles(demHeights(dem, frame), lo, hi, opt);
+  float low = set.records[0].min_m, high = set.records[0].max_m;
+  for (const graph::TerrainRecord& r : set.records) low = std::min(low, r.min_m), high = std::max(high, r.max_m);
+  if (high - low <= kFlatTerrainM) return {};  // level ground: the runtime's background draws it already
+  for (graph::TerrainRecord& r : set.records) r.blob = writer.addBlob(std::move(set.blobs[r.blob]));
+  sum.terrain_tiles = set.records.size();
+  sum.terrain_levels = set.layout.levels;
+  sum.terrain_uncovered = set.uncovered;
+  sum.terrain_error_m = set.records.empty() ? 0.0 : set.records[0].error_m;
+  return graph::serializeTerrain(set.layout, set.records);
 }
 
 // ELEV (docs/package-format.md): the ground's height at every graph point.
@@ -409,6 +447,9 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   if (opt.shard.count > 0) tiles.blobs = 0;  // the package's blob count: the merge sets it (metaWithBlobCount)
   if (tiled) scaleForTiles(tiles, sum);
 
+  std::vector<uint8_t> terrain_section;
+  if (dem) terrain_section = terrainTiles(*dem, city, g, opt.terrain_tiles, writer, sum);
+
   progress.stage("writing package");
   const std::vector<std::string> bad = graph::checkInvariants(g);
   if (!bad.empty()) throw core::Error(core::Status::Internal, "street graph invariant broken: " + bad.front());
@@ -422,6 +463,7 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
                       graph::serializeBlocks(blocks), std::vector<uint8_t>(meta.begin(), meta.end())},
                      tables);
   if (terrain) writer.addSection(package::kSectionElevation, elevation);
+  if (!terrain_section.empty()) writer.addSection(package::kSectionTerrain, terrain_section);
   if (opt.shard.count > 0) {
     identifyShard(shard, osm_path, city, opt, route, block_blobs);
     shard.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

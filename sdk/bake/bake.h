@@ -10,6 +10,7 @@
 #include "bake/lod_chain.h"
 #include "bake/osm_reader.h"
 #include "bake/shard.h"
+#include "bake/terrain_tiles.h"
 #include "bake/tile.h"
 
 namespace blvd::bake {
@@ -35,6 +36,9 @@ struct BakeOptions {
   // The blocks stand and lie on the terrain, the item buffers and captures
   // look from 1.5 m above it, and the graph's points get heights (ELEV).
   std::vector<std::string> dem;
+  // With a DEM, the terrain beyond the blocks: quadtree tiles over the city's
+  // box and this margin (bake/terrain_tiles.h), the TERR section.
+  TerrainTileOptions terrain_tiles;
   ImpostorOptions impostor;
   // Called with the graph, the impostor results and the LOD totals before the
   // package is written (the CLI writes its HTML bake report from them).
@@ -60,6 +64,11 @@ struct BakeSummary {
   // With a DEM: the ground's range under the streets, metres, and its voids filled.
   double ground_min_m = 0, ground_max_m = 0;
   uint64_t dem_voids = 0;
+  // With a DEM: TERR's tiles, levels, the root's geometric error and the grid
+  // points the DEM does not cover (drawn at sea level).
+  uint64_t terrain_tiles = 0, terrain_uncovered = 0;
+  uint32_t terrain_levels = 0;
+  double terrain_error_m = 0;
   double seconds = 0;
   std::vector<uint32_t> shard_streets;  // a shard's streets (lower half-edges)
 };

@@ -41,18 +41,26 @@ uint32_t midpoint(geo::MeshData& m, uint32_t a, uint32_t b, std::unordered_map<u
 
 }  // namespace
 
-TerrainHeight demTerrain(const Dem& dem, const geo::LocalFrame& frame) {
+TerrainHeight demHeights(const Dem& dem, const geo::LocalFrame& frame) {
   return [&dem, frame](glm::dvec2 en) {
     double lat, lon, h;
     frame.reverse(geo::Enu{en.x, en.y, 0}, lat, lon, h);
-    const double z = dem.height(lat, lon);
+    return dem.height(lat, lon) - frame.h0();  // NaN stays NaN
+  };
+}
+
+TerrainHeight demTerrain(const Dem& dem, const geo::LocalFrame& frame) {
+  return [heights = demHeights(dem, frame), frame](glm::dvec2 en) {
+    const double z = heights(en);
     if (std::isnan(z)) {
+      double lat, lon, h;
+      frame.reverse(geo::Enu{en.x, en.y, 0}, lat, lon, h);
       char buf[128];
       std::snprintf(buf, sizeof buf, "terrain: no DEM height at %.6f, %.6f (east %.1f m, north %.1f m)", lat, lon,
                     en.x, en.y);
       throw core::Error(core::Status::Internal, buf);
     }
-    return z - frame.h0();
+    return z;
   };
 }
 

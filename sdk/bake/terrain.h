@@ -36,6 +36,8 @@ using TerrainHeight = std::function<double(glm::dvec2 en)>;
 // DEM does not cover are a bug here (the bake checks coverage first): they
 // throw core::Error(Internal) naming the point.
 TerrainHeight demTerrain(const Dem& dem, const geo::LocalFrame& frame);
+// The same, NaN where the DEM has no height (the terrain tiles' margin).
+TerrainHeight demHeights(const Dem& dem, const geo::LocalFrame& frame);
 
 // Splits m's triangles (positions in glTF axes: x east, y up, z = -north) until
 // no edge measured in the horizontal plane is longer than max_edge_m. New

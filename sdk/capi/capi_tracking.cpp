@@ -20,6 +20,7 @@ struct blvd_tracker {
   std::unique_ptr<blvd::stream::City> city;  // graph and cells only; null without a package
   blvd::geo::LocalFrame frame{0, 0};
   std::unique_ptr<blvd::track::Tracker> tracker;
+  double eye_height_m = 1.5;
   std::string last_error;
 };
 
@@ -171,7 +172,7 @@ blvd_status blvd_tracker_create(const blvd_tracker_desc* desc, blvd_tracker** ou
   const blvd_status st = guarded(nullptr, [&] {
     tr = std::make_unique<blvd_tracker>();  // its members allocate too (the local frame)
     track::TrackerDesc td;
-    td.eye_height_m = d.eye_height_m > 0 ? d.eye_height_m : 1.5;
+    td.eye_height_m = tr->eye_height_m = d.eye_height_m > 0 ? d.eye_height_m : 1.5;
     td.ring_capacity = d.ring_capacity ? d.ring_capacity : 512;
     if (has_package) {
       tr->city = std::make_unique<blvd::stream::City>();
@@ -221,7 +222,11 @@ blvd_status blvd_tracker_get_pose(blvd_tracker* tr, double t, blvd_pose* pose) {
   if (!pose) return BLVD_ERR_INVALID_ARG;
   return trackerGuarded(tr, [&] {
     if (!std::isfinite(t)) throw core::Error(core::Status::InvalidArg, "blvd_tracker_get_pose: t is not finite");
-    blvd::capi::toBlvd(tr->tracker->update(t), tr->frame, pose);
+    track::Pose p = tr->tracker->update(t);
+    // On terrain (ELEV) the camera stands on the road, as the runtime's does.
+    if (tr->city && (p.flags & track::kPoseMatched))
+      tr->city->cameraOnRoad(p.cell, p.arc_m, tr->eye_height_m, p.camera.eye_u, p.camera.pitch_deg);
+    blvd::capi::toBlvd(p, tr->frame, pose);
   });
 }
 

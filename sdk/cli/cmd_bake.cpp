@@ -54,6 +54,10 @@ void printSummary(const bake::BakeSummary& s, const std::string& in, const std::
   if (s.ground_max_m > s.ground_min_m)
     std::printf("  terrain: the streets from %.1f to %.1f m (%llu DEM voids filled)\n", s.ground_min_m, s.ground_max_m,
                 static_cast<unsigned long long>(s.dem_voids));
+  if (s.terrain_tiles)
+    std::printf("  terrain tiles: %llu in %u levels, root error %.1f m (%llu grid points outside the DEM, at sea level)\n",
+                static_cast<unsigned long long>(s.terrain_tiles), s.terrain_levels, s.terrain_error_m,
+                static_cast<unsigned long long>(s.terrain_uncovered));
   if (s.street_km > 0 && s.cells > 0)
     std::printf("  package per km of street %.0f bytes (%.1f km), per cell %.0f bytes\n",
                 double(s.package_bytes) / s.street_km, s.street_km, double(s.package_bytes) / double(s.cells));

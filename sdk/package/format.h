@@ -45,6 +45,7 @@ inline constexpr uint32_t kSectionImpostors = fourcc('I', 'M', 'P', 'O');     //
 inline constexpr uint32_t kSectionCellTableIndex = fourcc('C', 'T', 'I', 'X');  // per-cell PVSA/IMPO offsets
 inline constexpr uint32_t kSectionShard = fourcc('S', 'H', 'R', 'D');  // only in a bake shard file (bake/shard.h)
 inline constexpr uint32_t kSectionElevation = fourcc('E', 'L', 'E', 'V');  // ground height of each graph point (terrain)
+inline constexpr uint32_t kSectionTerrain = fourcc('T', 'E', 'R', 'R');    // terrain quadtree tiles (graph/terrain_table.h)
 // Written by PackageWriter itself; addSection() refuses these three tags.
 inline constexpr uint32_t kSectionBlobIndex = fourcc('B', 'I', 'D', 'X');  // blob offset/size/crc table
 inline constexpr uint32_t kSectionBlobData = fourcc('B', 'D', 'A', 'T');   // the blobs themselves

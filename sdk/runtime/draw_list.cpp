@@ -8,7 +8,7 @@ namespace blvd::runtime {
 
 DrawList::DrawList(const stream::City& city, const MemoryPlan& plan, float lod_error_px)
     : city_(city), lod_error_px_(lod_error_px) {
-  draw_.reserve(plan.slab.meshes + 1);  // the reference modes reserve for every block when first chosen
+  draw_.reserve(plan.slab.meshes + 1 + plan.terrain.slots);  // the reference modes reserve for every block when first chosen
   draw_items_.reserve(draw_.capacity());
   const size_t nb = plan.max_local_blocks;
   ach_.resize(nb);
@@ -95,10 +95,18 @@ void DrawList::addCell(blvd_render_mode mode, const CellSlot& slot, uint32_t cel
   }
 }
 
+void DrawList::addTerrain(const render::MeshHandle* tiles, uint32_t n) {
+  for (uint32_t i = 0; i < n; ++i) {
+    draw_.push_back(tiles[i]);
+    draw_items_.push_back(0);
+  }
+  terrain_ += n;
+}
+
 void DrawList::clear() {
   draw_.clear();
   draw_items_.clear();
-  impostors_ = 0;
+  impostors_ = terrain_ = 0;
   degraded_ = false;
 }
 

@@ -39,7 +39,10 @@ class DrawList {
   const uint32_t* items() const { return draw_items_.data(); }
   size_t size() const { return draw_.size(); }
   uint32_t impostors() const { return impostors_; }
-  uint32_t blocks() const { return uint32_t(draw_.size()) - impostors_; }
+  uint32_t blocks() const { return uint32_t(draw_.size()) - impostors_ - terrain_; }
+  // The terrain's tiles (runtime/terrain_set.h), after the rest, object id 0.
+  void addTerrain(const render::MeshHandle* tiles, uint32_t n);
+  uint32_t terrainTiles() const { return terrain_; }
   bool degraded() const { return degraded_; }
   void clear();  // nothing to draw (the sky and ground remain)
   uint32_t lastDrawnCell() const { return last_drawn_cell_; }
@@ -70,7 +73,7 @@ class DrawList {
   std::vector<Box> reference_boxes_;  // with reference_blocks_
   std::vector<render::MeshHandle> draw_;
   std::vector<uint32_t> draw_items_;
-  uint32_t impostors_ = 0;
+  uint32_t impostors_ = 0, terrain_ = 0;
   uint32_t last_drawn_cell_ = graph::kNone;
   bool degraded_ = false;
   uint64_t misses_ = 0;

@@ -32,6 +32,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
     draw_->clear();  // sky and ground, in every mode
   else
     draw_->build(mode_, radius_m_, cell, arc_m, cam_, *slots_, budget_.get());
+  if (!off_map_) draw_->addTerrain(terrain_tiles_.data(), terrain_->frame(cam_, terrain_tiles_.data()));
   render::FrameStats fs;
   render::RenderOptions ro;
   ro.scale = budget_ ? budget_->scale() : 1.0;
@@ -53,10 +54,8 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
 }
 
 void Runtime::onRoad(uint32_t cell, double arc_m, double pose_pitch_deg, double& eye_u, double& pitch_deg) const {
-  double ground, grade;
-  if (!city_.groundAt(cell, arc_m, ground, grade)) return;
-  eye_u = ground + desc_.eye_height_m;
-  pitch_deg = std::clamp(pose_pitch_deg + std::atan(grade) * 180.0 / M_PI, -89.0, 89.0);
+  double u = eye_u, pitch = pose_pitch_deg;
+  if (city_.cameraOnRoad(cell, arc_m, desc_.eye_height_m, u, pitch)) eye_u = u, pitch_deg = pitch;
 }
 
 void Runtime::renderFailed() const {

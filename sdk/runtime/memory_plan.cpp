@@ -106,8 +106,9 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   const track::Tracker probe(city.frame(), &city.streets(), td);
   p.max_cell_layers = city.maxCellLayers();
   p.tracking_bytes = probe.bytes();
-  p.cpu_bytes = p.staging_bytes + p.table_bytes + p.tracking_bytes;
-  p.gpu_bytes = uint64_t(p.resident_cells) * render::slabGpuBytes(p.slab);
+  p.terrain = TerrainSet::plan(city);
+  p.cpu_bytes = p.staging_bytes + p.table_bytes + p.tracking_bytes + p.terrain.cpu_bytes;
+  p.gpu_bytes = uint64_t(p.resident_cells) * render::slabGpuBytes(p.slab) + p.terrain.gpu_bytes;
   return p;
 }
 

@@ -16,6 +16,7 @@
 
 #include "blvd/blvd.h"
 #include "runtime/cell_loader.h"
+#include "runtime/terrain_set.h"
 #include "render/renderer.h"
 #include "stream/city.h"
 
@@ -42,8 +43,9 @@ struct MemoryPlan {
   uint64_t staging_bytes = 0;        // all staging slots with their mesh tables
   uint64_t table_bytes = 0;          // the package tables held in memory
   uint64_t tracking_bytes = 0;       // tracker rings, filter, matcher
-  uint64_t cpu_bytes = 0;            // staging + tables + tracking
-  uint64_t gpu_bytes = 0;            // slabs
+  TerrainPlan terrain;               // the terrain's tile slots and scratch (none without TERR)
+  uint64_t cpu_bytes = 0;            // staging + tables + tracking + terrain scratch
+  uint64_t gpu_bytes = 0;            // slabs, the terrain's with them
   uint32_t largest_cell = 0;         // the cell that needs the most bytes
   uint32_t max_local_blocks = 0;     // most local blocks of one cell (LOD scratch size)
 };

@@ -44,12 +44,14 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
   rd.width = static_cast<int>(desc.width);
   rd.height = static_cast<int>(desc.height);
   // The cell slabs' meshes; the reference modes add every block when first chosen.
-  rd.mesh_capacity = plan_.resident_cells * plan_.slab.meshes + 1;
+  rd.mesh_capacity = plan_.resident_cells * plan_.slab.meshes + plan_.terrain.slots + 1;
   rd.scaled_target = desc.target_frame_ms > 0 && desc.min_render_scale < 1.f;
   renderer_ = render::Renderer::create(*ctx_, rd, err);
   if (!renderer_) throw Error(Status::Backend, err);
 
   slots_ = std::make_unique<CellSlots>(city_, *renderer_, *loader_, plan_, desc.block_reuse >= 0);
+  terrain_ = std::make_unique<TerrainSet>(city_, *renderer_, plan_.terrain, desc.lod_error_px);
+  terrain_tiles_.resize(plan_.terrain.slots);
   // What the slabs hold as the GL reports it (the plan's own formula where it cannot).
   bool measured = false;
   gpu_capacity_ = renderer_->measuredSlabBytes(measured);
@@ -183,6 +185,7 @@ bool Runtime::mapMissing(const core::Error& e) const {
 void Runtime::waitResident(double timeout_ms) {
   if (!(timeout_ms >= 0)) throw Error(Status::InvalidArg, "blvd_wait_resident: timeout_ms must be >= 0");
   if (!ctx_->makeCurrent()) throw Error(Status::Misuse, "the GL context cannot be made current on this thread");
+  terrain_->settle(cam_);
   if (referenceMode()) return draw_->ensureReferenceBlocks(*renderer_);
   const auto t0 = std::chrono::steady_clock::now();
   const stream::City::NoLinkWait no_wait;  // the map of where the vehicle is, waited for below
@@ -232,6 +235,10 @@ void Runtime::stats(blvd_stats* out) const {
   s.decode.high_water_bytes = loader_->decodeHighWater();
   s.table_bytes = city_.tableBytes();
   s.tracking_bytes = tracker_->bytes();
+  s.terrain_bytes = plan_.terrain.cpu_bytes;
+  s.terrain_tiles = draw_->terrainTiles();
+  s.terrain_loads = terrain_->loads();
+  s.terrain_load_errors = terrain_->loadErrors();
   s.loads = loader_->loads();
   s.prefetch_gap_waits = loader_->gapWaits();
   s.prefetch_gap_wait_ms = loader_->gapWaitMs();

@@ -12,6 +12,7 @@
 #include <atomic>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "blvd/blvd.h"
 #include "render/camera.h"
@@ -116,6 +117,8 @@ class Runtime {
   std::unique_ptr<stream::Residency> residency_;
   std::unique_ptr<CellSlots> slots_;
   std::unique_ptr<DrawList> draw_;
+  std::unique_ptr<TerrainSet> terrain_;
+  std::vector<render::MeshHandle> terrain_tiles_;  // a frame's, sized at create
   std::unique_ptr<CellChoice> choice_;
   std::unique_ptr<stream::FrameBudget> budget_;  // with target_frame_ms
   FrameClock* clock_ = nullptr;  // this runtime's frames, for the loaders' gap scheduling

@@ -39,6 +39,7 @@ core::Status City::open(const std::string& path, std::string& err, Tables tables
   max_cell_layers_ = 0;
   streets_ = nullptr;
   ground_.clear();
+  terrain_.reset();
   core::Status st = package::PackageReader::open(path, reader_, err);
   if (st != core::Status::Ok) return st;
   if (reader_.hasSection(package::kSectionShard)) {
@@ -50,6 +51,7 @@ core::Status City::open(const std::string& path, std::string& err, Tables tables
   if (st != core::Status::Ok) return st;
   if (tables == Tables::All && (st = openRenderTables(err)) != core::Status::Ok) return st;
   if ((st = openElevation(err)) != core::Status::Ok) return st;
+  if (tables == Tables::All && (st = openTerrain(err)) != core::Status::Ok) return st;
   const auto& h = reader_.header();
   frame_ = geo::LocalFrame(h.origin_lat, h.origin_lon, h.origin_h);
   return core::Status::Ok;
@@ -193,6 +195,31 @@ core::Status City::openElevation(std::string& err) {
   return core::Status::Ok;
 }
 
+core::Status City::openTerrain(std::string& err) {
+  if (!reader_.hasSection(package::kSectionTerrain)) return core::Status::Ok;
+  terrain_ = std::make_unique<TerrainPages>();
+  const core::Status st = terrain_->open(reader_, err, source());
+  if (st != core::Status::Ok) terrain_.reset();
+  return st;
+}
+
+core::Status City::terrainHeights(const graph::TerrainRecord& r, std::vector<uint8_t>& hold, float* out,
+                                  std::string& err) const {
+  if (remote_ && !remote_->cached(r.blob)) {
+    err = reader_.name() + ": terrain blob " + std::to_string(r.blob) + " is not in the cache";
+    return core::Status::Unavailable;
+  }
+  package::Span s;
+  const core::Status st = blobBytes(r.blob, s, hold, err);
+  if (st != core::Status::Ok) return st;
+  const uint32_t grid = terrain_->layout().grid;
+  if (graph::decodeTerrainHeights(s.data, s.size, terrain_->layout(), out)) return core::Status::Ok;
+  err = reader_.name() + ": terrain blob " + std::to_string(r.blob) + " at offset " + std::to_string(s.offset) +
+        ": " + std::to_string(s.size) + " bytes, a tile of " + std::to_string(grid) + "² heights has " +
+        std::to_string(2 * grid * grid);
+  return core::Status::Corrupt;
+}
+
 bool City::groundSegment(uint32_t cell, double arc_m, GroundSegment& out) const {
   if (ground_.empty() || cell >= streets_->cellCount()) return false;
   const graph::HalfEdge e = streets_->halfedge(cell);
@@ -222,6 +249,14 @@ bool City::groundAt(uint32_t cell, double arc_m, double& height, double& grade) 
   const double t = s.length > 0 ? std::clamp(s.at_m / s.length, 0.0, 1.0) : 1.0;
   height = s.h0 * (1 - t) + s.h1 * t;
   grade = s.length < 0.5 ? 0.0 : (s.h1 - s.h0) / s.length;  // a segment too short to say
+  return true;
+}
+
+bool City::cameraOnRoad(uint32_t cell, double arc_m, double eye_height_m, double& eye_u, double& pitch_deg) const {
+  double ground, grade;
+  if (!groundAt(cell, arc_m, ground, grade)) return false;
+  eye_u = ground + eye_height_m;
+  pitch_deg = std::clamp(pitch_deg + std::atan(grade) * 180.0 / M_PI, -89.0, 89.0);
   return true;
 }
 
@@ -310,7 +345,7 @@ uint64_t City::tableBytes() const {
                bytesOf(graph_.local_blocks) + bytesOf(blocks_) + bytesOf(tables_.visibility) +
                bytesOf(tables_.impostors) + (whole_ ? whole_->bytes() : 0) + (paged_ ? paged_->bytes() : 0) +
                (cell_pages_ ? cell_pages_->bytes() : 0) +
-               (block_pages_ ? block_pages_->bytes() : 0) + bytesOf(ground_);
+               (block_pages_ ? block_pages_->bytes() : 0) + bytesOf(ground_) + (terrain_ ? terrain_->bytes() : 0);
   for (const auto& v : tables_.visibility) n += bytesOf(v.blocks) + bytesOf(v.ach);
   for (const auto& c : tables_.impostors) {
     n += bytesOf(c.layered) + bytesOf(c.single);

@@ -19,6 +19,7 @@
 #include "stream/block_pages.h"
 #include "stream/cell_table_pages.h"
 #include "stream/paged_graph.h"
+#include "stream/terrain_pages.h"
 #include "package/reader.h"
 #include "remote/remote_package.h"
 
@@ -141,6 +142,19 @@ class City {
   // (rise over run of the polyline segment holding arc_m; 0 on a segment under
   // half a metre), in one walk of the polyline. False without ELEV.
   bool groundAt(uint32_t cell, double arc_m, double& height, double& grade) const;
+  // A car's camera on the road there: the eye `eye_height_m` above the road,
+  // the road's grade added to `pitch_deg` (within ±89°). False, and nothing
+  // changed, without ELEV. What the runtime's frame and both trackers' poses use.
+  bool cameraOnRoad(uint32_t cell, double arc_m, double eye_height_m, double& eye_u, double& pitch_deg) const;
+  // Terrain tiles (the TERR section, stream/terrain_pages.h): null when the
+  // package has none.
+  const TerrainPages* terrain() const { return terrain_.get(); }
+  // Tile `tile`'s heights (record r, read by the caller) into out[grid²];
+  // `hold` keeps the blob's bytes between calls. Corrupt for a bad blob,
+  // Io for a file cut short; Unavailable for a package on a server whose
+  // cache does not hold the tile (a frame never waits for the link).
+  core::Status terrainHeights(const graph::TerrainRecord& r, std::vector<uint8_t>& hold, float* out,
+                              std::string& err) const;
   // Heap bytes of the tables above (graph, cells, blocks, visibility,
   // impostor lists): what holding the city costs besides the mapped file.
   uint64_t tableBytes() const;
@@ -199,6 +213,7 @@ class City {
   core::Status openPaged(const PagedGraphDesc& paging, std::string& err);
   core::Status openRenderTables(std::string& err);
   core::Status openElevation(std::string& err);  // ELEV, when the package has one
+  core::Status openTerrain(std::string& err);    // TERR, when the package has one
   // The polyline segment of `cell` holding arc_m: its ends' heights, its
   // length and arc_m's place along it.
   struct GroundSegment {
@@ -228,6 +243,7 @@ class City {
   std::unique_ptr<BlockPages> block_pages_;  // paged  // paged, for a package with a cell table index
   uint32_t max_cell_layers_ = 0;
   const graph::GraphSource* streets_ = nullptr;  // whole_ or paged_
+  std::unique_ptr<TerrainPages> terrain_;
   std::vector<float> ground_;  // ELEV: the ground's height at each graph point (read whole: 4 bytes a point)
   geo::LocalFrame frame_{0, 0, 0};
 };

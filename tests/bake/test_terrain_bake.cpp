@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "bake/bake.h"
 #include "blvd/blvd.h"
 #include "capi/binding.h"
+#include "cli/malloc_probe.h"
 #include "common/osm_writer.h"
 #include "imaging/image.h"
 #include "stream/city.h"
@@ -172,6 +174,20 @@ TEST(TerrainBake, OnASlopeTheStreetsAndBlocksFollowTheGround) {
   EXPECT_NEAR(pose.camera_z, slope(lonOf(city, p)) + 1.5, 0.6);
   EXPECT_NEAR(pose.camera_pitch_deg, std::atan(0.05) * 180.0 / M_PI, 0.5);
   blvd_runtime_destroy(rt);
+  // A tracker without a renderer on the same package: the same camera.
+  blvd_tracker_desc td{};
+  td.struct_size = sizeof td;
+  td.package_path = path.c_str();
+  blvd_tracker* tr = nullptr;
+  ASSERT_EQ(blvd_tracker_create(&td, &tr), BLVD_OK) << blvd_tracker_last_error(nullptr);
+  ASSERT_EQ(blvd_tracker_set_start_pose(tr, &sp), BLVD_OK) << blvd_tracker_last_error(tr);
+  blvd_pose alone{};
+  alone.struct_size = sizeof alone;
+  ASSERT_EQ(blvd_tracker_get_pose(tr, 100, &alone), BLVD_OK) << blvd_tracker_last_error(tr);
+  ASSERT_TRUE(alone.flags & BLVD_POSE_MATCHED) << alone.flags;
+  EXPECT_NEAR(alone.camera_z, pose.camera_z, 1e-6);
+  EXPECT_NEAR(alone.camera_pitch_deg, pose.camera_pitch_deg, 1e-6);
+  blvd_tracker_destroy(tr);
 }
 
 // A frame at `pose` (east, north, heading) of a package: RGBA, 320 x 192.
@@ -204,6 +220,119 @@ TEST(TerrainBake, AFlatDemDrawsTheFlatBakesFrames) {
     const std::vector<uint8_t> a = frameOf(flat, {p.x + 20, p.y, heading}), b = frameOf(zero, {p.x + 20, p.y, heading});
     EXPECT_GT(imaging::psnr(a.data(), b.data(), a.size() / 4), 40.0) << "heading " << heading;
   }
+}
+
+// A hill 300 m high, its top 1.2 km east of the city's east edge, and level
+// ground (at sea level) elsewhere: outside every block, so only the terrain
+// tiles can draw it.
+constexpr double kHillEastM = 1600, kHillNorthM = 200;
+double hill(double lat, double lon) {
+  const double e = (lon - kLon0) * kMetresPerLon - kHillEastM, n = (lat - kLat0) * 111320.0 - kHillNorthM;
+  return 300.0 * std::exp(-(e * e + n * n) / (2 * 350.0 * 350.0));
+}
+
+struct Frame {
+  std::vector<uint8_t> px;
+  blvd_stats stats{};
+};
+
+// Frames along the north street at heading `heading`, east from x = 60 m,
+// the last one's pixels and the runtime's stats; `allocations` (optional):
+// blvd's own on this thread over the frames after the first ten.
+Frame driveNorthStreet(const std::string& package, float heading, long* allocations = nullptr) {
+  blvd_runtime_desc d{};
+  d.struct_size = sizeof d;
+  d.package_path = package.c_str();
+  d.width = 320, d.height = 192;
+  blvd_runtime* rt = nullptr;
+  Frame f;
+  EXPECT_EQ(blvd_runtime_create(&d, &rt), BLVD_OK) << blvd_last_error(nullptr);
+  if (!rt) return f;
+  f.px.resize(size_t(d.width) * d.height * 4);
+  std::unique_ptr<probe::ThreadMallocCounter> counter;
+  for (int i = 0; i < 40; ++i) {
+    if (i == 10 && allocations) counter = std::make_unique<probe::ThreadMallocCounter>();
+    EXPECT_EQ(blvd_set_pose_local(rt, 60.0 + 3.0 * i, 400.0, heading, 0.f), BLVD_OK);
+    if (i == 0) {
+      EXPECT_EQ(blvd_wait_resident(rt, 60000), BLVD_OK) << blvd_last_error(rt);
+    }
+    EXPECT_EQ(blvd_render(rt, nullptr), BLVD_OK) << blvd_last_error(rt);
+  }
+  if (counter) *allocations = counter->count();
+  EXPECT_EQ(blvd_read_pixels(rt, f.px.data(), f.px.size()), BLVD_OK) << blvd_last_error(rt);
+  f.stats.struct_size = sizeof f.stats;
+  EXPECT_EQ(blvd_runtime_stats(rt, &f.stats), BLVD_OK);
+  blvd_runtime_destroy(rt);
+  return f;
+}
+
+// Pixels of the band 5 to 15 degrees above the horizon (the view's middle
+// row at pitch 0) that differ between two frames by more than 12 in a channel
+// (a hill 1.3 km off is mostly fog).
+size_t differingAboveTheHorizon(const Frame& a, const Frame& b) {
+  const int w = 320, h = 192;
+  const double px_per_deg = h / 45.0;
+  size_t n = 0;
+  for (int y = int(h / 2 - 15 * px_per_deg); y < int(h / 2 - 5 * px_per_deg); ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c)
+        if (std::abs(int(a.px[(size_t(y) * w + x) * 4 + c]) - int(b.px[(size_t(y) * w + x) * 4 + c])) > 12) {
+          ++n;
+          break;
+        }
+  return n;
+}
+
+TEST(TerrainBake, TheHillsBeyondTheCityAreDrawnFromStreamedTiles) {
+  const std::string hilly = bake("hill", hill), flat = bake("flat", nullptr);
+  stream::City city;
+  std::string err;
+  ASSERT_EQ(city.open(hilly, err), core::Status::Ok) << err;
+  ASSERT_NE(city.terrain(), nullptr);
+  // The default tiles: the city's 400 m box and 3 km a side, 400 m squares
+  // at the root down to 50 m ones.
+  const graph::TerrainLayout& l = city.terrain()->layout();
+  EXPECT_EQ(l.grid, 17u);
+  EXPECT_EQ(l.levels, 4u);
+  EXPECT_NEAR(l.size, 6400.0, 1.0);
+  EXPECT_GT(city.terrain()->record(0).error_m, 10.f);
+  // Level ground everywhere: no tiles (the background draws it).
+  stream::City level;
+  ASSERT_EQ(level.open(bake("zero", [](double, double) { return 0.0; }), err), core::Status::Ok) << err;
+  EXPECT_EQ(level.terrain(), nullptr);
+
+  long allocations = -1;
+  const Frame east = driveNorthStreet(hilly, 90.f, probe::ThreadMallocCounter::available() ? &allocations : nullptr);
+  const Frame east_flat = driveNorthStreet(flat, 90.f), west = driveNorthStreet(hilly, 270.f);
+  EXPECT_GT(east.stats.terrain_tiles, 0u);
+  EXPECT_GE(east.stats.terrain_loads, east.stats.terrain_tiles);
+  EXPECT_EQ(east.stats.terrain_load_errors, 0u);
+  EXPECT_EQ(east_flat.stats.terrain_tiles, 0u);
+  // Looking east the hill rises above the horizon; the flat package, and
+  // the hilly one looking west (level ground), show sky there.
+  const size_t hill_px = differingAboveTheHorizon(east, east_flat);
+  EXPECT_GT(hill_px, 1000u) << "of the band's " << 320 * 43;
+  EXPECT_LT(differingAboveTheHorizon(west, driveNorthStreet(flat, 270.f)), hill_px / 10);
+  if (allocations >= 0) {
+    EXPECT_EQ(allocations, 0) << "blvd's heap allocations on the render thread after warm-up";
+  }
+
+  // The tiles' slots and scratch are in the plan, and the stats add up to it.
+  blvd_runtime_desc d{};
+  d.struct_size = sizeof d;
+  d.width = 320, d.height = 192;
+  uint64_t cpu_hill = 0, gpu_hill = 0, cpu_flat = 0, gpu_flat = 0;
+  d.package_path = hilly.c_str();
+  ASSERT_EQ(blvd_memory_required(&d, nullptr, &cpu_hill, &gpu_hill), BLVD_OK) << blvd_last_error(nullptr);
+  d.package_path = flat.c_str();
+  ASSERT_EQ(blvd_memory_required(&d, nullptr, &cpu_flat, &gpu_flat), BLVD_OK) << blvd_last_error(nullptr);
+  EXPECT_GT(east.stats.terrain_bytes, 0u);
+  EXPECT_EQ(east.stats.staging.capacity_bytes + east.stats.table_bytes + east.stats.tracking_bytes +
+                east.stats.terrain_bytes,
+            cpu_hill);
+  EXPECT_EQ(east.stats.gpu.capacity_bytes, gpu_hill);
+  // 64 slots of a 17 x 17 tile and its skirts.
+  EXPECT_GE(gpu_hill - gpu_flat, 64u * (17 * 17 + 4 * 17) * 36);
 }
 
 }  // namespace

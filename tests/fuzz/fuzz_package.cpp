@@ -119,6 +119,13 @@ void readEveryCell(const blvd::stream::City& city) {
     for (uint32_t b : city.streets().localBlocks(c)) (void)city.coverage(c, b), (void)city.block(b);
     for (uint32_t s : city.streets().successors(c)) (void)city.streets().halfedge(s);
   }
+  // Each terrain tile's record and heights (records checked at open).
+  if (const blvd::stream::TerrainPages* t = city.terrain()) {
+    std::vector<float> h(size_t(t->layout().grid) * t->layout().grid);
+    std::vector<uint8_t> hold;
+    std::string err;
+    for (uint32_t i = 0; i < t->layout().tiles() && i < 4096; ++i) check(city.terrainHeights(t->record(i), hold, h.data(), err), err);
+  }
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "graph/cell_tables.h"
 #include "graph/segment_grid.h"
 #include "graph/street_graph.h"
+#include "graph/terrain_table.h"
 #include "package/glb.h"
 #include "package/writer.h"
 #include "track/track_test_util.h"
@@ -83,6 +84,17 @@ inline void writeGridPackage(const std::string& path) {
     std::memcpy(elev.data() + 8 + 4 * i, &z, 4);
   }
   gw.addSection(kSectionElevation, std::move(elev));
+  // Terrain tiles (TERR): two levels of 3 x 3 heights over the grid.
+  blvd::graph::TerrainLayout terrain;
+  terrain.grid = 3, terrain.levels = 2, terrain.west = -50, terrain.south = -50, terrain.size = 200;
+  terrain.base_m = 0, terrain.step_m = 0.01f, terrain.level_error_m[0] = 0.5f, terrain.level_error_m[1] = 0.5f;
+  std::vector<blvd::graph::TerrainRecord> tiles(terrain.tiles());
+  for (uint32_t i = 0; i < tiles.size(); ++i) {
+    const float heights[9] = {0, 1, 2, 1, 2 + float(i), 3, 2, 3, 4};
+    tiles[i] = blvd::graph::TerrainRecord{gw.addBlob(blvd::graph::encodeTerrainHeights(heights, terrain)), 0.5f, 0,
+                                          4 + float(i)};
+  }
+  gw.addSection(kSectionTerrain, blvd::graph::serializeTerrain(terrain, tiles));
   gw.write(path);
 }
 
