@@ -13,6 +13,9 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kKnotsToMps = 1852.0 / 3600.0;
+// No NMEA field holds a number this large (a fix stores floats; a speed or
+// precision past it is garbage, not a value).
+constexpr double kMaxNumber = 1e9;
 constexpr double kKphToMps = 1.0 / 3.6;
 
 bool isHex(char c) { return (c >= '0' && c <= '9') || (c >= 'A' && c <= 'F') || (c >= 'a' && c <= 'f'); }
@@ -345,7 +348,18 @@ struct FieldReader {
       fail(i, what, "not a decimal number");
       return kNaN;
     }
+    if (std::fabs(v) > kMaxNumber) {  // a fix's fields are floats: 1e39 knots would become inf
+      fail(i, what, "out of range");
+      return kNaN;
+    }
     return v;
+  }
+  // The same within [lo, hi].
+  double number(size_t i, const char* what, double lo, double hi) {
+    const double v = number(i, what);
+    if (std::isnan(v) || (v >= lo && v <= hi)) return v;
+    fail(i, what, "out of range");
+    return kNaN;
   }
 
   int integer(size_t i, const char* what, int lo, int hi) {
@@ -507,7 +521,7 @@ void decodeRmc(FieldReader& f, NmeaRecord& r) {
   r.status = f.letter(2, "status", "AVD");
   r.has_pos = f.position(3, &r.lat, &r.lon);
   r.speed_mps = f.number(7, "speed") * kKnotsToMps;
-  r.track_deg = f.number(8, "track");
+  r.track_deg = f.number(8, "track", 0, 360);
   const std::string_view d = s.field(9);
   if (!d.empty()) {
     bool good = d.size() == 6;
@@ -562,12 +576,12 @@ void decodeGns(FieldReader& f, NmeaRecord& r) {
 void decodeVtg(FieldReader& f, NmeaRecord& r) {
   const Sentence& s = f.s;
   if (s.field(2) == "T") {
-    r.track_deg = f.number(1, "track");
+    r.track_deg = f.number(1, "track", 0, 360);
     r.speed_mps = f.number(5, "speed (knots)") * kKnotsToMps;
     if (std::isnan(r.speed_mps)) r.speed_mps = f.number(7, "speed (km/h)") * kKphToMps;
     if (s.field_count >= 9) r.faa = f.letter(9, "mode", kModeLetters);
   } else {
-    r.track_deg = f.number(1, "track");
+    r.track_deg = f.number(1, "track", 0, 360);
     r.speed_mps = f.number(3, "speed (knots)") * kKnotsToMps;
   }
 }

@@ -118,9 +118,14 @@ int run(const ViewOpts& o) {
       if (i > 0 || o.repeat <= 1) ms.push_back(fs.frame_ms);
     }
     writeFrame(rt, w, h, o.out, rgba);
-    std::printf("wrote %s (%s %.1f ms over %zu frames, %llu triangles, %u draw calls, cell %u, %u impostor layers)\n",
+    blvd_stats st{};
+    st.struct_size = sizeof st;
+    check(blvd_runtime_stats(rt, &st), rt, "stats");
+    std::printf("wrote %s (%s %.1f ms over %zu frames, %llu triangles, %u draw calls, cell %u, %u impostor layers, "
+                "%u terrain tiles)\n",
                 o.out.c_str(), ms.size() > 1 ? "median" : "frame", median(ms), ms.size(),
-                static_cast<unsigned long long>(fs.triangles), fs.draw_calls, fs.cell, fs.impostor_layers);
+                static_cast<unsigned long long>(fs.triangles), fs.draw_calls, fs.cell, fs.impostor_layers,
+                st.terrain_tiles);
     return 0;
   }
 

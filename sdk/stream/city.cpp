@@ -16,6 +16,8 @@ namespace {
 constexpr uint32_t kCellTablePages = 64, kCellTablePageBytes = 2048;
 // The block table's: 88-byte records, a cell's local blocks a few pages.
 constexpr uint32_t kBlockPages = 32, kBlockPageBytes = 2048;
+// ELEV's: 4 bytes a point, a street's points on one or two pages.
+constexpr uint32_t kGroundPages = 8, kGroundPageBytes = 2048;
 
 thread_local bool t_no_link_wait = false;
 
@@ -38,7 +40,8 @@ core::Status City::open(const std::string& path, std::string& err, Tables tables
   block_pages_.reset();
   max_cell_layers_ = 0;
   streets_ = nullptr;
-  ground_.clear();
+  ground_.reset();
+  ground_points_ = 0;
   terrain_.reset();
   core::Status st = package::PackageReader::open(path, reader_, err);
   if (st != core::Status::Ok) return st;
@@ -166,15 +169,26 @@ core::Status City::requiredSection(uint32_t tag, package::Span& s, std::string& 
   return st;
 }
 
+// ELEV through a page cache (4 bytes a point: a region's would be
+// megabytes), every height checked here unless its pages come over the link
+// (then each as it is read).
 core::Status City::openElevation(std::string& err) {
-  ground_.clear();
+  ground_.reset();
+  ground_points_ = 0;
   if (!reader_.hasSection(package::kSectionElevation)) return core::Status::Ok;
   package::Span s;
-  core::Status st = requiredSection(package::kSectionElevation, s, err);
+  core::Status st = tableSection(reader_, source(), package::kSectionElevation, s, err);
   if (st != core::Status::Ok) return st;
   const uint64_t points = streets_->pointCount();
   uint32_t head[2] = {0, 0};
+  try {
+    if (source()) link_pages_.ensure(s.offset, std::min<uint64_t>(s.size, 8));
+  } catch (const core::Error& e) {
+    err = e.what();
+    return e.status();
+  }
   if (s.size >= 8) std::memcpy(head, s.data, 8);
+  reader_.dropPages(s);
   if (s.size < 8 || head[0] != 1 || head[1] != points || s.size != 8 + 4 * points) {
     err = reader_.name() + ": elevation section ELEV at offset " + std::to_string(s.offset) + ": version " +
           std::to_string(head[0]) + ", " + std::to_string(head[1]) + " heights in " + std::to_string(s.size) +
@@ -182,17 +196,30 @@ core::Status City::openElevation(std::string& err) {
           std::to_string(8 + 4 * points);
     return core::Status::Corrupt;
   }
-  ground_.resize(points);
-  std::memcpy(ground_.data(), s.data + 8, 4 * points);
-  for (uint64_t i = 0; i < points; ++i)
-    if (!std::isfinite(ground_[i]) || std::abs(ground_[i]) > 1e4f) {
-      err = reader_.name() + ": elevation section ELEV at offset " + std::to_string(s.offset + 8 + 4 * i) +
-            ": point " + std::to_string(i) + " has no plausible height";
-      ground_.clear();
-      return core::Status::Corrupt;
-    }
-  reader_.dropPages(s);
+  ground_ = std::make_unique<PageCache>(reader_, kGroundPages, kGroundPageBytes, source());
+  ground_table_ = ground_->addTable(s.data + 8, points, 4);
+  ground_offset_ = s.offset + 8;
+  ground_points_ = points;
+  if (source()) return core::Status::Ok;
+  try {
+    for (uint64_t i = 0; i < points; ++i) (void)groundOf(i);
+  } catch (const core::Error& e) {
+    err = e.what();
+    ground_.reset();
+    ground_points_ = 0;
+    return e.status();
+  }
   return core::Status::Ok;
+}
+
+float City::groundOf(uint64_t point) const {
+  float h = 0;
+  ground_->read(ground_table_, uint32_t(point), &h);
+  if (!std::isfinite(h) || std::abs(h) > 1e4f)
+    throw core::Error(core::Status::Corrupt, reader_.name() + ": elevation section ELEV at offset " +
+                                                 std::to_string(ground_offset_ + 4 * point) + ": point " +
+                                                 std::to_string(point) + " has no plausible height");
+  return h;
 }
 
 core::Status City::openTerrain(std::string& err) {
@@ -220,20 +247,27 @@ core::Status City::terrainHeights(const graph::TerrainRecord& r, std::vector<uin
   return core::Status::Corrupt;
 }
 
-bool City::groundSegment(uint32_t cell, double arc_m, GroundSegment& out) const {
-  if (ground_.empty() || cell >= streets_->cellCount()) return false;
+// False too where a height cannot be read (its page not over the link yet,
+// a file cut short): the camera then keeps the pose's height for the frame.
+bool City::groundSegment(uint32_t cell, double arc_m, GroundSegment& out) const try {
+  if (!ground_ || cell >= streets_->cellCount()) return false;
   const graph::HalfEdge e = streets_->halfedge(cell);
-  if (e.pts_count == 0 || uint64_t(e.pts_begin) + e.pts_count > ground_.size()) return false;
-  out = GroundSegment{ground_[e.pts_begin], ground_[e.pts_begin], 0, 0};
+  if (e.pts_count == 0 || uint64_t(e.pts_begin) + e.pts_count > ground_points_) return false;
+  double h0 = groundOf(e.pts_begin);
+  out = GroundSegment{h0, h0, 0, 0};
   glm::dvec2 a = streets_->point(e.pts_begin);
   for (uint32_t i = 1; i < e.pts_count; ++i) {
     const glm::dvec2 b = streets_->point(e.pts_begin + i);
-    out = GroundSegment{ground_[e.pts_begin + i - 1], ground_[e.pts_begin + i], glm::length(b - a), arc_m};
+    const double h1 = groundOf(e.pts_begin + i);
+    out = GroundSegment{h0, h1, glm::length(b - a), arc_m};
+    h0 = h1;
     if (arc_m <= out.length) break;
     arc_m -= out.length;
     a = b;
   }
   return true;
+} catch (const core::Error&) {
+  return false;
 }
 
 double City::groundHeight(uint32_t cell, double arc_m) const {
@@ -345,7 +379,7 @@ uint64_t City::tableBytes() const {
                bytesOf(graph_.local_blocks) + bytesOf(blocks_) + bytesOf(tables_.visibility) +
                bytesOf(tables_.impostors) + (whole_ ? whole_->bytes() : 0) + (paged_ ? paged_->bytes() : 0) +
                (cell_pages_ ? cell_pages_->bytes() : 0) +
-               (block_pages_ ? block_pages_->bytes() : 0) + bytesOf(ground_) + (terrain_ ? terrain_->bytes() : 0);
+               (block_pages_ ? block_pages_->bytes() : 0) + (ground_ ? ground_->bytes() : 0) + (terrain_ ? terrain_->bytes() : 0);
   for (const auto& v : tables_.visibility) n += bytesOf(v.blocks) + bytesOf(v.ach);
   for (const auto& c : tables_.impostors) {
     n += bytesOf(c.layered) + bytesOf(c.single);

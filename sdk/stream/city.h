@@ -136,7 +136,7 @@ class City {
   // has the ground's height under its streets, and that height at arc length
   // `arc_m` along cell `cell` (linear between its polyline's points), metres
   // above the frame's origin height; 0 without ELEV. No allocation.
-  bool hasGround() const { return !ground_.empty(); }
+  bool hasGround() const { return ground_ != nullptr; }
   double groundHeight(uint32_t cell, double arc_m) const;
   // The same height and the road's grade there along the cell's direction
   // (rise over run of the polyline segment holding arc_m; 0 on a segment under
@@ -244,7 +244,11 @@ class City {
   uint32_t max_cell_layers_ = 0;
   const graph::GraphSource* streets_ = nullptr;  // whole_ or paged_
   std::unique_ptr<TerrainPages> terrain_;
-  std::vector<float> ground_;  // ELEV: the ground's height at each graph point (read whole: 4 bytes a point)
+  // ELEV: the ground's height at each graph point, through a page cache.
+  std::unique_ptr<PageCache> ground_;
+  uint32_t ground_table_ = 0;
+  uint64_t ground_points_ = 0, ground_offset_ = 0;
+  float groundOf(uint64_t point) const;  // throws core::Error(Corrupt) for an implausible height
   geo::LocalFrame frame_{0, 0, 0};
 };
 

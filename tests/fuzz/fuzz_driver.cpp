@@ -1,7 +1,7 @@
 // Stand-in for libFuzzer's main() when the compiler is not Clang: runs
 // LLVMFuzzerTestOneInput over the files (and the files in the directories)
-// named on the command line, and over variations of each one: every
-// truncation and single-byte flips. Every input is copied into a heap buffer
+// named on the command line, and over variations of each one: truncations
+// (every one of a small input) and single-byte flips. Every input is copied into a heap buffer
 // of exactly its size, as libFuzzer does, so ASan catches a read past the end.
 // Arguments starting with '-' (libFuzzer flags such as -runs=0) are ignored,
 // so CTest can call both kinds of binary the same way.
@@ -32,14 +32,21 @@ void runOne(const uint8_t* data, size_t size) {
   ++g_runs;
 }
 
+// Variations of an input read about this many bytes in all (each truncation
+// and flip is read whole), so that a larger input gets fewer, evenly spread,
+// and no seed file costs minutes under the sanitizers.
+constexpr size_t kBytesPerInput = size_t(8) << 20;
+
 void runVariations(const std::vector<uint8_t>& in) {
   runOne(in.data(), in.size());
-  // Every truncation for small inputs, a few hundred evenly spread otherwise.
-  const size_t step = std::max<size_t>(1, in.size() / 4096);
+  const size_t budget = kBytesPerInput / std::max<size_t>(in.size(), 1);
+  // Every truncation for inputs up to 2 KiB, then at least 64 evenly spread.
+  const size_t cuts = std::clamp<size_t>(budget, 64, 4096);
+  const size_t step = std::max<size_t>(1, in.size() / cuts);
   for (size_t n = 0; n < in.size(); n += step) runOne(in.data(), n);
-  // Single-byte flips at up to 512 evenly spread positions.
+  // Single-byte flips at up to 512 evenly spread positions, at least 32.
   std::vector<uint8_t> flipped = in;
-  const size_t fstep = std::max<size_t>(1, in.size() / 512);
+  const size_t fstep = std::max<size_t>(1, in.size() / std::clamp<size_t>(budget, 32, 512));
   for (size_t i = 0; i < in.size(); i += fstep) {
     flipped[i] ^= 0xFF;
     runOne(flipped.data(), flipped.size());
