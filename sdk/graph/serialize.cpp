@@ -122,6 +122,9 @@ void parseGraph(const uint8_t* data, size_t size, uint64_t file_offset, StreetGr
     p.x = r.get<double>();
     p.y = r.get<double>();
     if (!std::isfinite(p.x) || !std::isfinite(p.y)) r.fail("non-finite point");
+    // A package's local frame spans a city or a region: a point 10,000 km out
+    // is garbage (and would size a segment grid past any memory).
+    if (std::abs(p.x) > kMaxPointM || std::abs(p.y) > kMaxPointM) r.fail("point more than 10,000 km from the origin");
   }
   // Index checks up front so nothing downstream can go out of range.
   const size_t V = g.vertices.size(), H = g.halfedges.size(), F = g.faces.size(), P = g.points.size();

@@ -104,6 +104,9 @@ std::vector<std::string> checkInvariants(const StreetGraph& g);
 // runtime an out-of-range index.
 std::vector<uint8_t> serializeGraph(const StreetGraph& g);
 std::vector<uint8_t> serializeCells(const StreetGraph& g);
+// A graph point farther than this from the package's origin (metres, either
+// axis) is refused by the readers (parseGraph, stream::PagedGraph).
+constexpr double kMaxPointM = 1e7;
 void parseGraph(const uint8_t* data, size_t size, uint64_t file_offset, StreetGraph& g);
 void parseCells(const uint8_t* data, size_t size, uint64_t file_offset, StreetGraph& g);
 

@@ -219,6 +219,8 @@ glm::dvec2 PagedGraph::point(uint32_t i) const {
   double p[2];
   cache_->read(t_points_, i, p);
   if (!std::isfinite(p[0]) || !std::isfinite(p[1])) bad(at_points_, kPointBytes, i, "graph section GRPH: non-finite point");
+  if (std::abs(p[0]) > graph::kMaxPointM || std::abs(p[1]) > graph::kMaxPointM)
+    bad(at_points_, kPointBytes, i, "graph section GRPH: point more than 10,000 km from the origin");
   return {p[0], p[1]};
 }
 
