@@ -13,58 +13,107 @@ constexpr uint32_t kGridVersion = 1;
 
 int clampTo(int v, int n) { return v < 0 ? 0 : v >= n ? n - 1 : v; }
 
+// The grid's size is bounded by what it indexes, not by how far apart its
+// points lie: at most kCellsPerSegment grid cells per listed segment (and at
+// least kMinCells) and kEntriesPerSegment entries per segment. A graph spread
+// thinly (a package whose points lie thousands of kilometres apart) gets
+// coarser grid cells; a city keeps the cell size asked for.
+constexpr double kMinCells = 65536;
+constexpr double kCellsPerSegment = 4;
+constexpr double kEntriesPerSegment = 16;
+
+struct Box {
+  double minx = 1e300, miny = 1e300, maxx = -1e300, maxy = -1e300;
+  void add(glm::dvec2 p) {
+    minx = std::min(minx, p.x), miny = std::min(miny, p.y);
+    maxx = std::max(maxx, p.x), maxy = std::max(maxy, p.y);
+  }
+  bool empty() const { return minx > maxx; }
+};
+
+bool listed(uint32_t h, const HalfEdge& e, uint32_t halfedges) {
+  return e.pts_count >= 2 && (e.twin == kNone || e.twin > h || e.twin >= halfedges);
+}
+
+// Calls fn(a, b, point index of a) for each listed segment.
+template <class G, class Fn>
+void forEachSegment(const G& g, Fn&& fn) {
+  const uint32_t n = g.cellCount();
+  for (uint32_t h = 0; h < n; ++h) {
+    const HalfEdge e = g.halfedge(h);
+    if (!listed(h, e, n)) continue;
+    for (uint32_t i = 0; i + 1 < e.pts_count; ++i) fn(h, e.pts_begin + i);
+  }
+}
+
+// The grid cells the bounding box of segment ab touches.
+void cellSpan(const GridShape& s, glm::dvec2 a, glm::dvec2 b, int* x0, int* x1, int* y0, int* y1) {
+  const double inv = 1.0 / s.cell;
+  *x0 = clampTo(static_cast<int>((std::min(a.x, b.x) - s.ox) * inv), s.nx);
+  *x1 = clampTo(static_cast<int>((std::max(a.x, b.x) - s.ox) * inv), s.nx);
+  *y0 = clampTo(static_cast<int>((std::min(a.y, b.y) - s.oy) * inv), s.ny);
+  *y1 = clampTo(static_cast<int>((std::max(a.y, b.y) - s.oy) * inv), s.ny);
+}
+
+// The cell size, from cell_m up by doubling, at which the grid over box holds
+// at most the cells and entries its segments allow.
+template <class G>
+GridShape chooseShape(const G& g, const Box& box, double cell_m, double segments) {
+  GridShape s;
+  s.ox = box.minx;
+  s.oy = box.miny;
+  const double max_cells = std::max(kMinCells, kCellsPerSegment * segments);
+  const double max_entries = kEntriesPerSegment * segments;
+  for (s.cell = cell_m;; s.cell *= 2) {
+    const double nx = std::max(1.0, std::ceil((box.maxx - box.minx) / s.cell + 1e-9));
+    const double ny = std::max(1.0, std::ceil((box.maxy - box.miny) / s.cell + 1e-9));
+    if (nx * ny > max_cells) continue;
+    s.nx = static_cast<int>(nx);
+    s.ny = static_cast<int>(ny);
+    double entries = 0;
+    forEachSegment(g, [&](uint32_t, uint32_t pi) {
+      int x0, x1, y0, y1;
+      cellSpan(s, g.point(pi), g.point(pi + 1), &x0, &x1, &y0, &y1);
+      entries += double(x1 - x0 + 1) * (y1 - y0 + 1);
+    });
+    if (entries <= max_entries || s.nx * s.ny == 1) return s;
+  }
+}
+
 // Builds the grid over any graph G with halfedge(h), point(i) and cellCount().
 template <class G>
 void buildGrid(const G& g, double cell_m, GridShape& shape, std::vector<uint32_t>& offsets,
                std::vector<SegmentGrid::Entry>& entries) {
-  shape = GridShape{};
-  shape.cell = cell_m > 0 ? cell_m : 50.0;
-  const double inv = 1.0 / shape.cell;
   offsets.clear();
   entries.clear();
-  const uint32_t cells = g.cellCount();
-  auto listed = [&](uint32_t h, const HalfEdge& e) { return e.pts_count >= 2 && (e.twin == kNone || e.twin > h || e.twin >= cells); };
-  double minx = 1e300, miny = 1e300, maxx = -1e300, maxy = -1e300;
-  for (uint32_t h = 0; h < cells; ++h) {
-    const HalfEdge e = g.halfedge(h);
-    if (!listed(h, e)) continue;
-    for (uint32_t i = 0; i < e.pts_count; ++i) {
-      const glm::dvec2 p = g.point(e.pts_begin + i);
-      minx = std::min(minx, p.x), miny = std::min(miny, p.y);
-      maxx = std::max(maxx, p.x), maxy = std::max(maxy, p.y);
-    }
-  }
-  if (minx > maxx) {
+  Box box;
+  double segments = 0;
+  forEachSegment(g, [&](uint32_t, uint32_t pi) {
+    box.add(g.point(pi));
+    box.add(g.point(pi + 1));
+    ++segments;
+  });
+  shape = GridShape{};
+  shape.cell = cell_m > 0 ? cell_m : 50.0;
+  if (box.empty()) {
     offsets.assign(1, 0);
     return;
   }
-  shape.ox = minx;
-  shape.oy = miny;
-  shape.nx = std::max(1, static_cast<int>(std::ceil((maxx - minx) * inv + 1e-9)));
-  shape.ny = std::max(1, static_cast<int>(std::ceil((maxy - miny) * inv + 1e-9)));
+  shape = chooseShape(g, box, shape.cell, segments);
   const size_t n = shape.cellCount();
   // Two passes (count, then fill) so the CSR arrays are allocated once.
   std::vector<uint32_t> counts(n + 1, 0);
-  auto forEachCell = [&](glm::dvec2 a, glm::dvec2 b, auto&& fn) {
-    const int x0 = clampTo(static_cast<int>((std::min(a.x, b.x) - shape.ox) * inv), shape.nx);
-    const int x1 = clampTo(static_cast<int>((std::max(a.x, b.x) - shape.ox) * inv), shape.nx);
-    const int y0 = clampTo(static_cast<int>((std::min(a.y, b.y) - shape.oy) * inv), shape.ny);
-    const int y1 = clampTo(static_cast<int>((std::max(a.y, b.y) - shape.oy) * inv), shape.ny);
-    for (int gy = y0; gy <= y1; ++gy)
-      for (int gx = x0; gx <= x1; ++gx) fn(static_cast<size_t>(gy) * shape.nx + gx);
-  };
   for (int pass = 0; pass < 2; ++pass) {
-    for (uint32_t h = 0; h < cells; ++h) {
-      const HalfEdge e = g.halfedge(h);
-      if (!listed(h, e)) continue;
-      for (uint32_t i = 0; i + 1 < e.pts_count; ++i) {
-        const uint32_t pi = e.pts_begin + i;
-        forEachCell(g.point(pi), g.point(pi + 1), [&](size_t c) {
+    forEachSegment(g, [&](uint32_t h, uint32_t pi) {
+      int x0, x1, y0, y1;
+      cellSpan(shape, g.point(pi), g.point(pi + 1), &x0, &x1, &y0, &y1);
+      for (int gy = y0; gy <= y1; ++gy)
+        for (int gx = x0; gx <= x1; ++gx) {
+          const size_t c = static_cast<size_t>(gy) * shape.nx + gx;
           if (pass == 0) ++counts[c + 1];
           else entries[counts[c]++] = SegmentGrid::Entry{h, pi};
-        });
-      }
-    }
+        }
+    });
     if (pass == 0) {
       for (size_t c = 0; c < n; ++c) counts[c + 1] += counts[c];
       offsets = counts;

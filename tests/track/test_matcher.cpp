@@ -208,13 +208,9 @@ TEST(MapMatcher, FollowTakesTheOtherBranchJustPastAFork) {
   EXPECT_EQ(m.follow(m.project(left, e2, n2), e2, n2, half, 0.02).cell, left);
 }
 
-TEST(MapMatcher, GridFindsEverySegmentInReach) {
-  const auto g = blvd_test::makeGrid(6, 80);
-  graph::SegmentGrid grid;
-  grid.build(g, 50);
-  EXPECT_GT(grid.entryCount(), 0u);
-  // Brute force: every segment within r of p must be reported.
-  const double px = 123, py = 201, r = 45;
+// Every segment within r of (px, py) must be reported by the grid (brute force
+// over the graph's two-point streets).
+void expectGridFindsAll(const graph::StreetGraph& g, const graph::SegmentGrid& grid, double px, double py, double r) {
   std::set<uint32_t> listed, brute;
   grid.query(px, py, r, [&](const graph::SegmentGrid::Entry& e) { listed.insert(e.halfedge); });
   for (uint32_t h = 0; h < g.halfedges.size(); h += 2) {
@@ -224,7 +220,37 @@ TEST(MapMatcher, GridFindsEverySegmentInReach) {
     const double u = std::clamp(((px - a.x) * d.x + (py - a.y) * d.y) / (d.x * d.x + d.y * d.y), 0.0, 1.0);
     if (std::hypot(a.x + d.x * u - px, a.y + d.y * u - py) <= r) brute.insert(h);
   }
+  EXPECT_FALSE(brute.empty());
   for (uint32_t h : brute) EXPECT_TRUE(listed.count(h)) << "half-edge " << h;
+}
+
+TEST(MapMatcher, GridFindsEverySegmentInReach) {
+  const auto g = blvd_test::makeGrid(6, 80);
+  graph::SegmentGrid grid;
+  grid.build(g, 50);
+  EXPECT_GT(grid.entryCount(), 0u);
+  EXPECT_EQ(grid.cellSize(), 50.0);  // a town keeps the cell size asked for
+  expectGridFindsAll(g, grid, 123, 201, 45);
+}
+
+// A package's points may lie up to 10,000 km from its origin: the grid over a
+// graph spread that thin takes coarser cells instead of 400,000 x 400,000 of
+// 50 m (which a corrupt package once asked for), and still finds every street.
+TEST(MapMatcher, GridOverAGraphSpreadAcrossAContinentStaysSmall) {
+  blvd_test::GraphBuilder b;
+  const uint32_t a = b.vertex(-1e7, -1e7), c = b.vertex(1e7, 1e7), d = b.vertex(1e7, -1e7);
+  b.street(a, c);  // one diagonal segment 28,000 km long
+  b.street(c, d);
+  b.street(d, a);
+  const graph::StreetGraph g = b.finish();
+  graph::SegmentGrid grid;
+  grid.build(g, 50);
+  EXPECT_LE(grid.shape().cellCount(), 65536u);
+  EXPECT_LE(grid.entryCount(), 16u * 3);
+  EXPECT_GT(grid.cellSize(), 50.0);
+  expectGridFindsAll(g, grid, 0, 0, 10);
+  expectGridFindsAll(g, grid, 1e7 - 5, 0, 10);
+  expectGridFindsAll(g, grid, 0, -1e7 + 5, 10);
 }
 
 TEST(MapMatcher, StepsDoNotAllocate) {
