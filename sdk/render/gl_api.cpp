@@ -18,6 +18,8 @@ bool GlApi::load(Context& ctx, std::string& missing) {
   BLVD_GL_FUNCTIONS(BLVD_GL_LOAD)
 #undef BLVD_GL_LOAD
   ClearDepthf = reinterpret_cast<PFNGLCLEARDEPTHFPROC>(ctx.getProcAddress("glClearDepthf"));
+  DepthRangef = reinterpret_cast<PFNGLDEPTHRANGEFPROC>(ctx.getProcAddress("glDepthRangef"));
+  DepthRange = reinterpret_cast<decltype(DepthRange)>(ctx.getProcAddress("glDepthRange"));
   GetTexLevelParameteriv =
       reinterpret_cast<decltype(GetTexLevelParameteriv)>(ctx.getProcAddress("glGetTexLevelParameteriv"));
   return missing.empty();

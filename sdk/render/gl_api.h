@@ -103,6 +103,9 @@ struct GlApi {
 
   // Optional: GLES 3 and GL 4.1 have it, a GL 3.3 host context may not.
   PFNGLCLEARDEPTHFPROC ClearDepthf = nullptr;
+  // One of the two: GLES 3 and GL 4.1 have glDepthRangef, GL 3.3 glDepthRange.
+  PFNGLDEPTHRANGEFPROC DepthRangef = nullptr;
+  void(GL_APIENTRYP DepthRange)(double near_d, double far_d) = nullptr;
   // Optional: desktop GL and GLES 3.1 have it, GLES 3.0 does not (what the
   // driver allocated for each texture level: Renderer::measuredSlabBytes).
   void(GL_APIENTRYP GetTexLevelParameteriv)(GLenum target, GLint level, GLenum pname, GLint* params) = nullptr;

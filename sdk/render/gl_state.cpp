@@ -40,6 +40,7 @@ void GlStateSnapshot::capture(const GlApi& gl) {
   gl.ActiveTexture(static_cast<GLenum>(active_texture));
   gl.GetFloatv(GL_COLOR_CLEAR_VALUE, clear_color);
   gl.GetFloatv(GL_DEPTH_CLEAR_VALUE, &clear_depth);
+  gl.GetFloatv(GL_DEPTH_RANGE, depth_range);
   gl.GetIntegerv(GL_DEPTH_FUNC, &depth_func);
   gl.GetIntegerv(GL_CULL_FACE_MODE, &cull_face_mode);
   gl.GetIntegerv(GL_FRONT_FACE, &front_face);
@@ -79,6 +80,8 @@ void GlStateSnapshot::restore(const GlApi& gl) const {
   gl.ActiveTexture(static_cast<GLenum>(active_texture));
   gl.ClearColor(clear_color[0], clear_color[1], clear_color[2], clear_color[3]);
   if (gl.ClearDepthf) gl.ClearDepthf(clear_depth);
+  if (gl.DepthRangef) gl.DepthRangef(depth_range[0], depth_range[1]);
+  else if (gl.DepthRange) gl.DepthRange(depth_range[0], depth_range[1]);
   gl.DepthFunc(static_cast<GLenum>(depth_func));
   gl.CullFace(static_cast<GLenum>(cull_face_mode));
   gl.FrontFace(static_cast<GLenum>(front_face));

@@ -4,11 +4,12 @@
 //
 // Covered: program, VAO, array/element/pixel-pack buffers, draw/read
 // framebuffers, renderbuffer, viewport, scissor box, pixel-unpack buffer and
-// unpack alignment/row length, active texture, depth test/func/mask,
+// unpack alignment/row length, active texture, depth test/func/mask/range,
 // cull face/mode, front face, blend, polygon offset fill, scissor test,
 // stencil test, rasterizer discard, colour mask, pack alignment/row
-// length/skips. Not covered (never touched): depth range, clear values,
-// blend equation, textures and samplers, uniform buffers.
+// length/skips, clear colour and depth, texture unit 0's 2D binding. Not
+// covered (never touched): blend equation, other textures and samplers,
+// uniform buffers.
 #pragma once
 #include "render/gl_api.h"
 
@@ -23,6 +24,7 @@ struct GlStateSnapshot {
   GLint active_texture, texture0_2d, depth_func, cull_face_mode, front_face;
   GLfloat clear_color[4];
   GLfloat clear_depth;
+  GLfloat depth_range[2];
   GLint pack_alignment, pack_row_length, pack_skip_rows, pack_skip_pixels;
   GLboolean depth_test, depth_mask, cull_face, blend, polygon_offset_fill, scissor_test,
       stencil_test, rasterizer_discard;

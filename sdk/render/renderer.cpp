@@ -955,6 +955,11 @@ void drawBackground(const GlApi& gl, const Renderer::Impl& m, const Camera& cam,
   ++fs.draw_calls;
 }
 
+void setDepthRange(const GlApi& gl, float near_d, float far_d) {
+  if (gl.DepthRangef) gl.DepthRangef(near_d, far_d);
+  else if (gl.DepthRange) gl.DepthRange(near_d, far_d);
+}
+
 // The pass's target, viewport (clears stay inside this view: a frame may hold
 // several), fixed state, and cleared buffers.
 void beginPass(const GlApi& gl, const Renderer::Impl& m, const Camera& cam, Pass pass, bool scaled, bool shared) {
@@ -971,6 +976,7 @@ void beginPass(const GlApi& gl, const Renderer::Impl& m, const Camera& cam, Pass
   gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   gl.DepthMask(GL_TRUE);
   gl.Enable(GL_DEPTH_TEST);
+  setDepthRange(gl, 0.f, 1.f);
   if (gl.ClearDepthf) gl.ClearDepthf(1.0f);
   if (pass == Pass::Shaded) {
     gl.Clear(GL_DEPTH_BUFFER_BIT);
@@ -1050,9 +1056,9 @@ const char* Renderer::checkRender(const Camera& out, const MeshHandle* list, siz
   return nullptr;
 }
 
-// The meshes of `list` with (textured) or without a texture that the frustum
-// keeps, nearest first, with the pass's program.
-void Renderer::drawMeshes(const Camera& cam, const MeshHandle* list, size_t n, const RenderOptions& opt,
+// The meshes list[from, to) with (textured) or without a texture that the
+// frustum keeps, nearest first, with the pass's program.
+void Renderer::drawMeshes(const Camera& cam, const MeshHandle* list, size_t from, size_t to, const RenderOptions& opt,
                           const FrameView& v, bool textured, FrameStats& fs) {
   const GlApi& gl = *gl_;
   Impl& m = *impl_;
@@ -1060,7 +1066,7 @@ void Renderer::drawMeshes(const Camera& cam, const MeshHandle* list, size_t n, c
   const Uniforms* u = nullptr;
   if (!passProgram(m, opt.pass, textured, program, u)) return;
   m.order.clear();
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = from; i < to; ++i) {
     if (!isValid(list[i])) {
       if (!textured) ++fs.meshes_invalid;
       continue;
@@ -1138,9 +1144,18 @@ bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, Frame
     ScopedGlState guard(gl, shared_);
     if (shared_) m.host_fbo = guard.saved().draw_framebuffer;
     beginPass(gl, m, cam, opt.pass, scaled, shared_);
-    // Meshes: untextured with the pass's program, then the textured impostors with theirs.
-    drawMeshes(cam, list, n, opt, v, false, fs);
-    drawMeshes(cam, list, n, opt, v, true, fs);
+    // Meshes: untextured with the pass's program, then the textured impostors
+    // with theirs; those drawn behind them last, in the far depth range.
+    const size_t front = std::min(n, opt.behind_from);
+    if (front < n) setDepthRange(gl, 0.f, kBehindDepth);
+    drawMeshes(cam, list, 0, front, opt, v, false, fs);
+    drawMeshes(cam, list, 0, front, opt, v, true, fs);
+    if (front < n) {
+      setDepthRange(gl, kBehindDepth, 1.f);
+      drawMeshes(cam, list, front, n, opt, v, false, fs);
+      drawMeshes(cam, list, front, n, opt, v, true, fs);
+      setDepthRange(gl, 0.f, 1.f);
+    }
     if (opt.pass == Pass::Shaded) drawBackground(gl, m, cam, v, fs);
     if (scaled) stretchScaled(gl, m, out, cam, shared_, fs);
     gl.BindVertexArray(0);

@@ -127,7 +127,14 @@ struct RenderOptions {
   // view with linear filtering. Only colour reaches the destination (a host's
   // depth buffer is left as it was). 1 draws at full size; (0, 1].
   double scale = 1.0;
+  // The list's entries from this index on (the terrain) are drawn behind all
+  // before it, whatever their depths: in the far part of the depth range
+  // (kBehindDepth..1), the others in the near part, so that they show only
+  // where the others drew nothing and still hide one another. SIZE_MAX: none.
+  size_t behind_from = SIZE_MAX;
 };
+// Where the depth range is split when a list has entries drawn behind.
+inline constexpr float kBehindDepth = 0.75f;
 
 // Unpacks a CaptureDepth pixel to metres (0 where nothing was drawn).
 inline double unpackCaptureDepth(const uint8_t* rgba, double max_depth_m) {
@@ -237,7 +244,7 @@ class Renderer {
   struct Slab;
   explicit Renderer(Context& ctx);
   const char* checkRender(const Camera& out, const MeshHandle* list, size_t n, const RenderOptions& opt) const;
-  void drawMeshes(const Camera& cam, const MeshHandle* list, size_t n, const RenderOptions& opt,
+  void drawMeshes(const Camera& cam, const MeshHandle* list, size_t from, size_t to, const RenderOptions& opt,
                   const FrameView& v, bool textured, FrameStats& fs);
   // A mesh's slot and vertex array; copies its bytes unless `copied` (a
   // finished SlabUpload) says where they already are.

@@ -40,9 +40,11 @@ class DrawList {
   size_t size() const { return draw_.size(); }
   uint32_t impostors() const { return impostors_; }
   uint32_t blocks() const { return uint32_t(draw_.size()) - impostors_ - terrain_; }
-  // The terrain's tiles (runtime/terrain_set.h), after the rest, object id 0.
+  // The terrain's tiles (runtime/terrain_set.h), after the rest, object id 0,
+  // drawn behind the rest (RenderOptions::behind_from).
   void addTerrain(const render::MeshHandle* tiles, uint32_t n);
   uint32_t terrainTiles() const { return terrain_; }
+  size_t behindFrom() const { return terrain_ ? draw_.size() - terrain_ : SIZE_MAX; }
   bool degraded() const { return degraded_; }
   void clear();  // nothing to draw (the sky and ground remain)
   uint32_t lastDrawnCell() const { return last_drawn_cell_; }

@@ -36,6 +36,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   render::FrameStats fs;
   render::RenderOptions ro;
   ro.scale = budget_ ? budget_->scale() : 1.0;
+  ro.behind_from = draw_->behindFrom();
   uint64_t full_pixels = 0;
   if (!views) {
     full_pixels = uint64_t(cam_.width) * uint64_t(cam_.height);
@@ -188,6 +189,7 @@ void Runtime::readItems(uint32_t* ids, size_t count) {
   render::RenderOptions ro;
   ro.pass = render::Pass::ItemBuffer;
   ro.item_ids = draw_->items();
+  ro.behind_from = draw_->behindFrom();
   if (!renderer_->render(cam_, draw_->meshes(), draw_->size(), nullptr, ro))
     throw Error(Status::Internal, "item buffer failed: " + renderer_->lastError());
   items_drawn_ = true;

@@ -96,7 +96,7 @@ double TerrainSet::screenError(uint32_t tile, const render::Camera& cam) {
   }
   const graph::TerrainTile t = graph::terrainTileAt(tile);
   const double ts = layout_.tileSize(t.level), x0 = layout_.west + t.x * ts, y0 = layout_.south + t.y * ts;
-  const glm::dvec3 lo(x0, y0, r.min_m - layout_.level_error_m[t.level] - kLowerM), hi(x0 + ts, y0 + ts, r.max_m);
+  const glm::dvec3 lo(x0, y0, r.min_m), hi(x0 + ts, y0 + ts, r.max_m);
   const double d = std::max(glm::length(glm::clamp(cam.eye_enu, lo, hi) - cam.eye_enu), cam.near_m);
   return r.error_m * cam.height / (2 * d * std::tan(0.5 * cam.fov_y_deg * core::kDegToRad));
 }
@@ -219,15 +219,14 @@ void TerrainSet::tileMesh(const graph::TerrainLayout& l, uint32_t tile, const fl
   const graph::TerrainTile t = graph::terrainTileAt(tile);
   const uint32_t g = l.grid, last = (1u << t.level) - 1;
   const double ts = l.tileSize(t.level), step = ts / (g - 1), x0 = l.west + t.x * ts, y0 = l.south + t.y * ts;
-  const double level_error = l.level_error_m[t.level];
-  const double lower = level_error + kLowerM, skirt = level_error + 2.0 * l.level_error_m[0] + 1.0;
+  const double skirt = l.level_error_m[t.level] + 2.0 * l.level_error_m[0] + 1.0;
   auto at = [&](int i, int j) { return double(h[size_t(std::clamp(j, 0, int(g) - 1)) * g + size_t(std::clamp(i, 0, int(g) - 1))]); };
   auto vertex = [&](uint32_t i, uint32_t j, double drop) {
     const double e = x0 + i * step, n = y0 + j * step;
     const double de = (at(int(i) + 1, int(j)) - at(int(i) - 1, int(j))) / (step * ((i > 0) + (i + 1 < g)));
     const double dn = (at(int(i), int(j) + 1) - at(int(i), int(j) - 1)) / (step * ((j > 0) + (j + 1 < g)));
     const glm::dvec3 nrm = glm::normalize(glm::dvec3(-de, 1.0, dn));  // glTF: x east, y up, z south
-    out.positions.insert(out.positions.end(), {float(e), float(at(int(i), int(j)) - lower - drop), float(-n)});
+    out.positions.insert(out.positions.end(), {float(e), float(at(int(i), int(j)) - drop), float(-n)});
     out.normals.insert(out.normals.end(), {float(nrm.x), float(nrm.y), float(nrm.z)});
     out.colors.insert(out.colors.end(), {rgba[0], rgba[1], rgba[2], rgba[3]});
   };

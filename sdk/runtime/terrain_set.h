@@ -12,14 +12,15 @@
 //   draw    from the root down through the tree, a tile's children when all
 //           four are resident, else the tile itself.
 //
-// A tile's mesh: its grid, two triangles a square (split as the bake
-// measured its error), lowered by its level's largest error and half a
-// metre so that the city's own draped ground covers it where both are (the
-// tiles of a level alike, so that they stay joined), with skirts hanging
-// from its inner edges (not the root's outline) deep enough to close any
-// crack between levels: its level's error plus twice the root's (a
-// neighbour's error, and the difference of two levels' lowering, are at
-// most the root's) plus a metre. Its colour is the look's ground.
+// A tile's mesh: its grid at the heights the bake stored, two triangles a
+// square (split as the bake measured its error), with skirts hanging from
+// its inner edges (not the root's outline) deep enough to close any crack
+// between levels: its level's error plus twice the root's (a neighbour's
+// error is at most the root's) plus a metre. Its colour is the look's
+// ground. The runtime draws the tiles behind the city (the far part of the
+// depth range, RenderOptions::behind_from): they show only where no block or
+// impostor drew, so the city's draped ground never fights them and they need
+// not be lowered under it.
 //
 // Memory: slots, scratch and the mesh pool entries are made at create
 // (plan()); a frame allocates nothing. A tile that fails to load is
@@ -47,7 +48,6 @@ class TerrainSet {
  public:
   static constexpr uint32_t kMaxSlots = 64;
   static constexpr uint32_t kLoadsPerFrame = 4;
-  static constexpr float kLowerM = 0.5f;
 
   static TerrainPlan plan(const stream::City& city);
 

@@ -49,15 +49,22 @@ Camera boxCamera() {
   return cam;
 }
 
-class BackendScene : public ::testing::TestWithParam<Backend> {};
+// A renderer of kW x kH on the backend of the parameter (egl-device is
+// skipped where there is none).
+class BackendScene : public ::testing::TestWithParam<Backend> {
+ protected:
+  void SetUp() override {
+    rig = makeRig(GetParam(), kW, kH, why);
+    if (GetParam() == Backend::EglDevice && !rig.ctx) {
+      GTEST_SKIP() << "egl-device unavailable here: " << why;
+    }
+    ASSERT_NE(rig.renderer, nullptr) << why;
+  }
+  std::string why;
+  Rig rig;
+};
 
 TEST_P(BackendScene, BoxInFrontOfTheCamera) {
-  std::string why;
-  Rig rig = makeRig(GetParam(), kW, kH, why);
-  if (GetParam() == Backend::EglDevice && !rig.ctx) {
-    GTEST_SKIP() << "egl-device unavailable here: " << why;
-  }
-  ASSERT_NE(rig.renderer, nullptr) << why;
   Renderer& r = *rig.renderer;
 
   // 4 m cube whose near face is 8 m north of the eye (glTF z = -north).
@@ -118,6 +125,53 @@ TEST_P(BackendScene, BoxInFrontOfTheCamera) {
   std::printf("%s: PSNR vs golden %.1f dB, frame %.2f ms\n", backendName(GetParam()), db,
               stats.frame_ms);
   EXPECT_GT(db, 35.0) << "compare " << test::outPath(name) << " with " << golden;
+}
+
+// Meshes drawn behind (the terrain) show only where the others drew
+// nothing, however near they are, and still hide one another.
+// On every backend: GLES has glDepthRangef, desktop GL 3.3 glDepthRange.
+TEST_P(BackendScene, MeshesDrawnBehindShowOnlyWhereNothingElseDrew) {
+  Renderer& r = *rig.renderer;
+  const uint8_t green[4] = {40, 200, 40, 255}, blue[4] = {40, 40, 220, 255};
+  // The red box 8 m ahead; a wide green wall 5 m ahead, in front of it; a
+  // blue wall 6 m ahead behind the green one, wider still.
+  const MeshHandle list[3] = {r.upload(test::makeBox(0, 2, -10, 4, 4, 4, kRed)),
+                              r.upload(test::makeBox(0, 2, -5.5f, 6, 1.4f, 1, green)),
+                              r.upload(test::makeBox(0, 2, -6.5f, 8, 3, 1, blue))};
+  for (const MeshHandle& h : list) ASSERT_TRUE(r.isValid(h)) << r.lastError();
+  std::vector<uint8_t> img(static_cast<size_t>(kW) * kH * 4);
+  auto at = [&](int x, int y) { return test::pixel(img, kW, x, y); };
+  auto isRed = [](Rgb c) { return c.r > 150 && c.g < 90 && c.b < 90; };
+  auto isGreen = [](Rgb c) { return c.g > 120 && c.r < 90 && c.b < 90; };
+  auto isBlue = [](Rgb c) { return c.b > 120 && c.r < 90 && c.g < 90; };
+
+  // Drawn as one: the green wall hides the box's middle.
+  ASSERT_TRUE(r.render(boxCamera(), list, 3, nullptr)) << r.lastError();
+  ASSERT_TRUE(r.readPixels(img.data())) << r.lastError();
+  EXPECT_TRUE(isGreen(at(kW / 2, kH / 2)));
+
+  // The walls behind the box: the box shows whole; beside it the walls, the
+  // green one in front of the blue one; above the green wall the blue one.
+  RenderOptions opt;
+  opt.behind_from = 1;
+  ASSERT_TRUE(r.render(boxCamera(), list, 3, nullptr, opt)) << r.lastError();
+  ASSERT_TRUE(r.readPixels(img.data())) << r.lastError();
+  EXPECT_TRUE(isRed(at(kW / 2, kH / 2)));
+  int green_px = 0, blue_px = 0, red_px = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) green_px += isGreen(at(x, y)), blue_px += isBlue(at(x, y)), red_px += isRed(at(x, y));
+  EXPECT_GT(green_px, 200);
+  EXPECT_GT(blue_px, 200);
+  EXPECT_GT(red_px, 1000);
+  // The green wall's row beside the box is green, not blue.
+  const int row = kH / 2;
+  for (int x = 0; x < kW; ++x) {
+    const Rgb c = at(x, row);
+    if (!isRed(c)) {
+      EXPECT_TRUE(isGreen(c)) << "column " << x << ": " << c.r << "," << c.g << "," << c.b;
+    }
+  }
+  for (const MeshHandle& h : list) r.release(h);
 }
 
 INSTANTIATE_TEST_SUITE_P(Render, BackendScene,

@@ -70,6 +70,7 @@ const std::vector<std::pair<GLenum, int>> kWatched = {
     {GL_DEPTH_TEST, 1},
     {GL_DEPTH_FUNC, 1},
     {GL_DEPTH_WRITEMASK, 1},
+    {GL_DEPTH_RANGE, 2},
     {GL_CULL_FACE, 1},
     {GL_CULL_FACE_MODE, 1},
     {GL_FRONT_FACE, 1},
@@ -168,6 +169,7 @@ TEST(SharedContext, RestoresHostStateAndDrawsIntoHostFramebuffer) {
   gl.Disable(GL_DEPTH_TEST);
   gl.DepthFunc(GL_GREATER);
   gl.DepthMask(GL_FALSE);
+  gl.DepthRangef(0.1f, 0.9f);
   gl.Enable(GL_CULL_FACE);
   gl.CullFace(GL_FRONT);
   gl.FrontFace(GL_CW);
@@ -197,8 +199,13 @@ TEST(SharedContext, RestoresHostStateAndDrawsIntoHostFramebuffer) {
   cam.width = kW;
   cam.height = kH;
   FrameStats stats;
-  ASSERT_TRUE(renderer->render(cam, &box, 1, &stats)) << renderer->lastError();
-  EXPECT_EQ(stats.meshes_drawn, 1u);
+  // With a wall in front of the box drawn behind it (as the terrain is).
+  const uint8_t green[4] = {40, 200, 40, 255};
+  const MeshHandle list[2] = {box, renderer->upload(test::makeBox(0, 2, -5.5f, 6, 1.4f, 1, green))};
+  RenderOptions behind;
+  behind.behind_from = 1;
+  ASSERT_TRUE(renderer->render(cam, list, 2, &stats, behind)) << renderer->lastError();
+  EXPECT_EQ(stats.meshes_drawn, 2u);
   expectSame(before, snapshot(gl), "render");
 
   std::vector<uint8_t> img(static_cast<size_t>(kW) * kH * 4);
@@ -236,6 +243,7 @@ TEST(SharedContext, RestoresHostStateAndDrawsIntoHostFramebuffer) {
   expectSame(before, snapshot(gl), "slab copy");
 
   renderer->release(box);
+  renderer->release(list[1]);
   expectSame(before, snapshot(gl), "release");
   renderer.reset();
   expectSame(before, snapshot(gl), "destroy");

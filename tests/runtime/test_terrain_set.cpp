@@ -117,5 +117,34 @@ TEST(TerrainSet, NoCrackBetweenAnyTwoLevelsThatMeet) {
   RecordProperty("background_pixels_without_skirts", std::to_string(without));
 }
 
+// Drawn behind the city, a tile needs no lowering under the city's ground:
+// its grid stands at the heights the bake stored, and its skirts hang from
+// them by its level's error, twice the root's and a metre.
+TEST(TerrainSet, ATileStandsAtItsStoredHeights) {
+  bake::TerrainTileOptions o;
+  o.grid = 9, o.spacing_m = 15, o.margin_m = 0, o.error_step_m = 5;
+  const bake::TerrainTileSet set =
+      bake::buildTerrainTiles([](glm::dvec2 p) { return rough(p.x, p.y); }, {0, 0}, {1000, 1000}, o);
+  const graph::TerrainLayout& l = set.layout;
+  const uint32_t tile = graph::terrainIndex({2, 1, 2}), g = l.grid;
+  const graph::TerrainRecord& r = set.records[tile];
+  std::vector<float> h(size_t(g) * g);
+  graph::decodeTerrainHeights(set.blobs[r.blob].data(), set.blobs[r.blob].size(), l, h.data());
+  const uint8_t grey[4] = {120, 120, 110, 255};
+  geo::MeshData m;
+  runtime::TerrainSet::tileMesh(l, tile, h.data(), grey, true, m);
+  ASSERT_EQ(m.vertexCount(), size_t(g) * g + 4 * g);  // an inner tile: skirts on all four sides
+  for (size_t k = 0; k < size_t(g) * g; ++k) ASSERT_EQ(m.positions[3 * k + 1], h[k]) << "vertex " << k;
+  // Each skirt vertex hangs under a border vertex of the grid.
+  const double skirt = l.level_error_m[2] + 2.0 * l.level_error_m[0] + 1.0;
+  for (size_t k = size_t(g) * g; k < m.vertexCount(); ++k) {
+    bool under = false;
+    for (size_t b = 0; b < size_t(g) * g && !under; ++b)
+      under = m.positions[3 * b] == m.positions[3 * k] && m.positions[3 * b + 2] == m.positions[3 * k + 2] &&
+              std::abs(double(m.positions[3 * b + 1]) - skirt - m.positions[3 * k + 1]) < 1e-3;
+    EXPECT_TRUE(under) << "skirt vertex " << k;
+  }
+}
+
 }  // namespace
 }  // namespace blvd
