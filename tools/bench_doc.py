@@ -77,10 +77,17 @@ def memory(j):
 
 
 def decode(j):
+    def cell(p, k):
+        c = p.get("cell_impostors")
+        return num(c[k], 2) if c and c.get("meshes") else "–"
+    def slot(p):
+        m = p.get("memory")
+        return num(m["slab_bytes"] / 1048576, 1) if m else "–"
     rows = [[os.path.basename(p["package"]), f"{p['bytes']:,}", num(p["bytes_vs_first"]),
-             num(p["blocks"]["ms_total"], 0), num(p["impostors"]["ms_total"], 0), num(p["ms_total"], 0),
-             num(p["ms_total_vs_first"])] for p in j]
-    return table(["package", "bytes", "÷ first", "block decode ms", "impostor decode ms", "total ms", "÷ first"], rows)
+             num(p["blocks"]["ms_total"], 0), num(p["impostors"]["ms_total"], 0), cell(p, "ms_p50"),
+             cell(p, "ms_max"), num(p["ms_total"], 0), num(p["ms_total_vs_first"]), slot(p)] for p in j]
+    return table(["package", "bytes", "÷ first", "block decode ms", "impostor decode ms",
+                  "a cell's impostors ms p50", "max", "total ms", "÷ first", "GPU MiB a cell slot"], rows)
 
 
 def track(j):

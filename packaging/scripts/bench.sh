@@ -40,8 +40,10 @@ monaco() {
   run route.demo "$blvd" bench route "$out/demo.blvd" --route auto:12 --seed 7 --step 12 --json "$out/route.demo.json"
   "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-webp.blvd" --impostor both \
     --impostor-route auto:200 --seed 1 --texture-codec webp
-  run decode "$blvd" bench decode "$out/osrm.blvd" "$out/osrm-webp.blvd" "$out/osrm-none.blvd" --rounds 3 \
-    --json "$out/decode.json"
+  "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-w2.blvd" --impostor both \
+    --impostor-route auto:200 --seed 1 --texture-codec webp --cell-texels 327680
+  run decode "$blvd" bench decode "$out/osrm.blvd" "$out/osrm-webp.blvd" "$out/osrm-w2.blvd" "$out/osrm-none.blvd" \
+    --rounds 3 --json "$out/decode.json"
   "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/m1.blvd" --impostor both --impostor-route auto:40 --seed 7
   "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/m4.blvd" --impostor both --impostor-route auto:40 \
     --seed 7 --tile 2x2

@@ -4,8 +4,11 @@
 // prepared into the renderer's staging layout exactly as the loader does, the
 // packages taking turns mesh kind by mesh kind, and timed by the thread's CPU
 // clock (what the decode takes from the other threads on its core). Reported:
-// per package and kind the meshes, p50 / p90 / max and the total in ms, the
-// package bytes, and each package's total against the first's.
+// per package and kind the meshes, p50 / p90 / max and the total in ms, a
+// cell's impostors together (p50 / max: what one cell load decodes), the
+// package bytes, the memory plan at the default descriptor (GPU bytes of one
+// cell slot, all of the GPU and CPU pools), and each package's total against
+// the first's.
 #include <sys/stat.h>
 #include <time.h>
 
@@ -44,7 +47,9 @@ struct Kind {
 struct Package {
   stream::City city;
   Kind blocks, impostors;
+  Kind cell_impostors;  // one entry per cell with impostors: its layers' sum
   uint64_t bytes = 0;
+  runtime::MemoryPlan plan;  // at the default descriptor
 };
 
 // Decodes and stages one mesh; returns its thread CPU ms (the least of `rounds`).
@@ -73,6 +78,11 @@ nlohmann::json summary(const Kind& k) {
           {"ms_max", pct(k.ms, 100)}, {"ms_total", sum}};
 }
 
+nlohmann::json memoryJson(const runtime::MemoryPlan& m) {
+  return {{"resident_cells", m.resident_cells}, {"slab_bytes", render::slabGpuBytes(m.slab)},
+          {"slab_textures", m.slab.textures}, {"gpu_bytes", m.gpu_bytes}, {"cpu_bytes", m.cpu_bytes}};
+}
+
 int runDecode(const DecodeOpts& o) {
   std::vector<std::unique_ptr<Package>> pkgs;
   uint64_t arena_size = 0;  // the loader's staging arena for the largest of the packages
@@ -85,7 +95,9 @@ int runDecode(const DecodeOpts& o) {
     if (::stat(path.c_str(), &sb) == 0) p->bytes = uint64_t(sb.st_size);
     blvd_runtime_desc d{};
     d.struct_size = sizeof d;
-    arena_size = std::max(arena_size, runtime::planMemory(d, p->city).staging_arena_bytes);
+    d = blvd_runtime_desc_defaults(&d);
+    p->plan = runtime::planMemory(d, p->city);
+    arena_size = std::max(arena_size, p->plan.staging_arena_bytes);
     pkgs.push_back(std::move(p));
   }
   // One arena as the loader carves it (a whole cell's meshes fit), reset per mesh.
@@ -117,18 +129,23 @@ int runDecode(const DecodeOpts& o) {
     for (const auto& p : pkgs) {
       if (c >= p->city.cellTables().impostors.size()) continue;
       const graph::CellImpostors& ci = p->city.cellTables().impostors[c];
+      double cell_ms = 0;
       for (const auto* list : {&ci.layered, &ci.single})
-        for (const graph::ImpostorLayer& layer : *list)
+        for (const graph::ImpostorLayer& layer : *list) {
           p->impostors.ms.push_back(timeMesh(
               [&](geo::MeshData& m, std::string& e) { return p->city.decodeImpostor(layer, m, e); }, scratch,
               arena, o.rounds));
+          cell_ms += p->impostors.ms.back();
+        }
+      if (!ci.layered.empty() || !ci.single.empty()) p->cell_impostors.ms.push_back(cell_ms);
     }
   nlohmann::json out = nlohmann::json::array();
   double first_total = 0;
   for (size_t i = 0; i < pkgs.size(); ++i) {
     const Package& p = *pkgs[i];
     nlohmann::json j = {{"package", o.packages[i]}, {"bytes", p.bytes}, {"blocks", summary(p.blocks)},
-                        {"impostors", summary(p.impostors)}};
+                        {"impostors", summary(p.impostors)}, {"cell_impostors", summary(p.cell_impostors)},
+                        {"memory", memoryJson(p.plan)}};
     const double total = j["blocks"]["ms_total"].get<double>() + j["impostors"]["ms_total"].get<double>();
     if (i == 0) first_total = total;
     j["ms_total"] = total;
