@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `blvd bench memory`, `scale` and `budget` end to end on small inputs: the
+# `blvd bench memory`, `scale`, `decode` and `budget` end to end on small inputs: the
 # JSON keys scripts rely on are there and hold numbers, and the checks that do
 # not depend on the machine's speed hold: no heap allocation by blvd on the
 # render thread after warm-up (1x and a 2x2-tiled 4x package), the same route
@@ -31,6 +31,17 @@ for r in (a, b):
 assert set(s["checks"]) == {"blvd_ms_within", "rss_within"}, s["checks"]
 PY
 [ "$(grep -o '<svg' "$work/scale_html/index.html" | wc -l)" -ge 2 ] || { echo "FAIL: bench scale --html lacks its plots"; exit 1; }
+# What each mesh's decode costs, and a cell's impostors together; the plan's cell slot.
+"$blvd" bench decode "$work/1x1.blvd" --json "$work/decode.json" > /dev/null 2>&1
+python3 - "$work/decode.json" <<'PY'
+import json, sys
+d, = json.load(open(sys.argv[1]))
+imp, cell, mem = d["impostors"], d["cell_impostors"], d["memory"]
+assert 0 < cell["meshes"] <= imp["meshes"], (cell, imp)  # the route's cells have impostors, one or more layers each
+assert abs(cell["ms_total"] - imp["ms_total"]) < 1e-6 * max(1.0, imp["ms_total"]) and cell["ms_max"] >= imp["ms_max"], (cell, imp)
+assert mem["resident_cells"] == 4 and mem["slab_textures"] > 0, mem  # the default descriptor
+assert 0 < mem["resident_cells"] * mem["slab_bytes"] <= mem["gpu_bytes"] and mem["cpu_bytes"] > 0, mem
+PY
 "$blvd" bench budget "$pkg" --route auto:6 --seed 7 --laps 2 --size 320x192 --json "$work/budget.json" \
   --html "$work/budget_html" --csv "$work/budget.csv" > /dev/null
 # Paced like a host at vsync (120 Hz, 216 km/h: 0.5 m a frame); --speed-kmh needs --fps.
