@@ -32,7 +32,10 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
     draw_->clear();  // sky and ground, in every mode
   else
     draw_->build(mode_, radius_m_, cell, arc_m, cam_, *slots_, budget_.get());
-  if (!off_map_) draw_->addTerrain(terrain_tiles_.data(), terrain_->frame(cam_, terrain_tiles_.data()));
+  if (!off_map_) {
+    draw_->addTerrain(terrain_tiles_.data(), terrain_->frame(cam_, terrain_tiles_.data()));
+    link_prefetch_->wantTerrain(terrain_->uncachedBlobs());  // a package on a server: tiles not cached yet
+  }
   render::FrameStats fs;
   render::RenderOptions ro;
   ro.scale = budget_ ? budget_->scale() : 1.0;

@@ -30,6 +30,7 @@ LinkPrefetch::LinkPrefetch(const stream::City& city) : city_(city), remote_(city
   next_.reserve(kMaxCells);
   ways_.reserve(kMaxCells + 1);
   wanted_.reserve(64);
+  terrain_.reserve(kMaxTerrain);
   walk_.reserve(kMaxCells);
   const uint64_t blobs = remote_->blobCount() ? remote_->blobCount() : 1;
   uint64_t total = 0;
@@ -115,6 +116,18 @@ void LinkPrefetch::planFrom(uint32_t cell, const stream::Residency& residency, d
   cv_.notify_one();
 }
 
+void LinkPrefetch::wantTerrain(const std::vector<uint32_t>& blobs) {
+  if (!remote_) return;
+  const size_t n = std::min(blobs.size(), kMaxTerrain);
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (terrain_.size() == n && std::equal(blobs.begin(), blobs.begin() + n, terrain_.begin())) return;
+    terrain_.assign(blobs.begin(), blobs.begin() + n);
+    terrain_new_ = n > 0;
+  }
+  if (n) cv_.notify_one();
+}
+
 double LinkPrefetch::measureAhead(const std::vector<uint32_t>& cells, size_t road, std::vector<uint32_t>& scratch) const {
   double m = 0;
   for (size_t i = 0; i < road && i < cells.size(); ++i) {
@@ -148,7 +161,8 @@ void LinkPrefetch::fetchAhead(const std::vector<uint32_t>& cells, const std::vec
 }
 
 void LinkPrefetch::run() {
-  std::vector<uint32_t> cells, wanted, scratch;
+  std::vector<uint32_t> cells, wanted, scratch, terrain;
+  terrain.reserve(kMaxTerrain);
   size_t road = 0;
   uint64_t seen = ~0ull;
   std::string err;
@@ -159,8 +173,10 @@ void LinkPrefetch::run() {
     {
       std::unique_lock<std::mutex> lock(mu_);
       cv_.wait_for(lock, std::chrono::milliseconds(500),
-                   [&] { return stop_ || plan_id_ != seen || remote_->tablesWanted(); });
+                   [&] { return stop_ || plan_id_ != seen || terrain_new_ || remote_->tablesWanted(); });
       if (stop_) return;
+      terrain.assign(terrain_.begin(), terrain_.end());  // asked for again at each wake until cached
+      terrain_new_ = false;
       cells = next_;
       wanted = wanted_;
       road = road_n_;
@@ -172,6 +188,9 @@ void LinkPrefetch::run() {
         remote_->clearWantedTables();  // the link failed: the frames ask again
         break;
       }
+    // The terrain a frame wanted: small, and in view now.
+    if (!terrain.empty() && remote_->mode() == remote::LinkMode::Online && !remote_->changed())
+      remote_->fetchBlobs(terrain.data(), terrain.size(), err, true);
     try {
       fetchAhead(cells, wanted, road, id, scratch, err);
     } catch (const core::Error&) {

@@ -10,7 +10,9 @@
 // blob cache's bytes, so the prefetch never evicts what it fetched. A slow
 // link thus looks further ahead: each cell takes longer to arrive.
 //
-// Threads: plan() on the render thread, when the cell changes and every 32
+// The terrain tiles a frame wanted and the cache lacks are fetched first.
+//
+// Threads: plan() and wantTerrain() on the render thread, when the cell changes and every 32
 // frames (a mutex for a copy of a few hundred ids, no allocation after the
 // first frames); the fetching on a thread of its
 // own, which yields the link to the loader's requests (RemotePackage's
@@ -44,6 +46,7 @@ class LinkPrefetch {
   static constexpr size_t kMaxCells = 512;
   static constexpr double kRevalidateS = 60.0;  // online with nothing to fetch: is the package still this one?
   static constexpr double kFillTablesIdleS = 5.0;  // online with nothing to fetch: the rest of the tables
+  static constexpr size_t kMaxTerrain = 64;
 
   explicit LinkPrefetch(const stream::City& city);  // a thread only for a package on a server
   ~LinkPrefetch();
@@ -53,6 +56,11 @@ class LinkPrefetch {
   // Render thread, every frame: the current cell, the route ahead of it
   // (residency's route, else its wanted cells) and the speed.
   void plan(uint32_t cell, const stream::Residency& residency, double speed_mps);
+  // Render thread, every frame: the terrain tiles' blobs the frame wanted and
+  // the cache lacks (TerrainSet::uncachedBlobs), fetched before the road
+  // ahead (a few kilobytes each, and what the view shows now), at each of
+  // its wakes until the frames stop asking. At most kMaxTerrain are kept.
+  void wantTerrain(const std::vector<uint32_t>& blobs);
   // Metres of road ahead, the current cell's rest included, whose cells are
   // all cached (measured by the thread after each cell; 0 for a local package).
   double cachedAheadM() const { return cached_ahead_m_.load(std::memory_order_relaxed); }
@@ -74,6 +82,8 @@ class LinkPrefetch {
   std::vector<uint32_t> next_;    // the newest plan: the road ahead, in order (under mu_)
   std::vector<uint32_t> wanted_;  // its cells the slots load themselves: not fetched here (under mu_)
   size_t road_n_ = 0;             // next_[0 .. road_n_) is the road ahead, the rest other turns (under mu_)
+  std::vector<uint32_t> terrain_;  // terrain blobs wanted (under mu_)
+  bool terrain_new_ = false;       // terrain_ changed since the thread copied it (under mu_)
   uint64_t plan_id_ = 0;        // bumped when the plan's first cell changes
   std::vector<uint32_t> walk_;  // plan() scratch, render thread
   std::vector<std::pair<uint32_t, double>> ways_;  // addWaysAhead's queue: cell, metres to its start

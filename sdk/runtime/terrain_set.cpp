@@ -57,6 +57,7 @@ TerrainSet::TerrainSet(const stream::City& city, render::Renderer& renderer, con
   first_child_.reserve(plan.slots);
   stack_.reserve(plan.slots);
   failed_.reserve(kFailedKept);
+  uncached_.reserve(plan.slots);
   const uint32_t g = layout_.grid, v = tileVertices(g), i = tileIndices(g);
   heights_.resize(size_t(g) * g);
   blob_.reserve(size_t(g) * g * 2);
@@ -130,13 +131,16 @@ void TerrainSet::choose(const render::Camera& cam) {
 
 void TerrainSet::loadMissing(uint32_t max_loads) {
   uint32_t loaded = 0;
+  uncached_.clear();
   for (size_t k = 0; k < tree_.size() && loaded < max_loads; ++k) {
     const uint32_t t = tree_[k];
     if (residentSlot(t) != kNoTile || std::find(failed_.begin(), failed_.end(), t) != failed_.end()) continue;
     const uint32_t s = victim();
     if (s == kNoTile) break;
+    const core::Status st = load(t, s);
+    if (st == core::Status::Unavailable) continue;  // recorded in uncached_ by load()
     ++loaded;
-    if (load(t, s)) continue;
+    if (st == core::Status::Ok) continue;
     ++load_errors_;
     if (failed_.size() < kFailedKept) failed_.push_back(t);
   }
@@ -154,36 +158,40 @@ uint32_t TerrainSet::victim() const {
   return best;
 }
 
-bool TerrainSet::load(uint32_t tile, uint32_t slot) {
+core::Status TerrainSet::load(uint32_t tile, uint32_t slot) {
   try {
     const graph::TerrainRecord r = city_.terrain()->record(tile);
+    if (!city_.terrainCached(r)) {  // the link prefetch brings it; asked for again next frame
+      if (uncached_.size() < uncached_.capacity()) uncached_.push_back(r.blob);
+      return core::Status::Unavailable;
+    }
     std::string err;
-    if (city_.terrainHeights(r, blob_, heights_.data(), err) != core::Status::Ok) {
+    if (const core::Status st = city_.terrainHeights(r, blob_, heights_.data(), err); st != core::Status::Ok) {
       last_error_ = err;
-      return false;
+      return st == core::Status::Unavailable ? core::Status::Io : st;  // evicted meanwhile: an error like any read
     }
     tileMesh(layout_, tile, heights_.data(), colour_, true, mesh_data_);
     render::StagingArena arena{arena_bytes_.data(), arena_bytes_.size(), 0};
     render::PreparedMesh prepared;
     if (!render::prepareMesh(mesh_data_, arena, prepared, err)) {
       last_error_ = "terrain tile " + std::to_string(tile) + ": " + err;
-      return false;
+      return core::Status::Internal;
     }
     renderer_.resetSlab(slab_[slot]);
     tile_[slot] = kNoTile;
     mesh_[slot] = renderer_.uploadToSlab(slab_[slot], prepared);
     if (!mesh_[slot].id) {
       last_error_ = "terrain tile " + std::to_string(tile) + ": " + renderer_.lastError();
-      return false;
+      return core::Status::Internal;
     }
   } catch (const core::Error& e) {  // a record that breaks the rules, a read that failed
     last_error_ = e.what();
-    return false;
+    return e.status() == core::Status::Unavailable ? core::Status::Unavailable : e.status();
   }
   tile_[slot] = tile;
   used_[slot] = tick_;
   ++loads_;
-  return true;
+  return core::Status::Ok;
 }
 
 uint32_t TerrainSet::residentSlot(uint32_t tile) const {

@@ -24,7 +24,8 @@
 //
 // Memory: slots, scratch and the mesh pool entries are made at create
 // (plan()); a frame allocates nothing. A tile that fails to load is
-// counted and not asked for again.
+// counted and not asked for again; one whose bytes a package on a server has
+// not brought yet is asked for again (uncachedBlobs()).
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -69,6 +70,10 @@ class TerrainSet {
   // The tiles of the tree chosen last frame (draw() may show coarser ones
   // where children are not resident yet).
   uint32_t chosen() const { return chosen_; }
+  // The blobs of the tiles last frame wanted and could not load because a
+  // package on a server has not brought them yet (not errors: asked for
+  // again each frame; the link prefetch fetches them). At most slots().
+  const std::vector<uint32_t>& uncachedBlobs() const { return uncached_; }
 
   // The mesh of tile `tile` (heights[grid²]) as drawn: exposed for
   // the crack tests, which draw chosen levels side by side. `skirts` false
@@ -80,7 +85,7 @@ class TerrainSet {
   double screenError(uint32_t tile, const render::Camera& cam);
   void choose(const render::Camera& cam);
   void loadMissing(uint32_t max_loads);
-  bool load(uint32_t tile, uint32_t slot);
+  core::Status load(uint32_t tile, uint32_t slot);
   uint32_t victim() const;
   uint32_t residentSlot(uint32_t tile) const;
   bool inTree(uint32_t tile) const;
@@ -105,6 +110,7 @@ class TerrainSet {
   std::vector<uint32_t> stack_;
   uint32_t chosen_ = 0;
   std::vector<uint32_t> failed_;   // tiles that failed to load
+  std::vector<uint32_t> uncached_; // blobs of tiles not over the link yet
   // Load scratch, reserved at create.
   std::vector<float> heights_;
   std::vector<uint8_t> blob_;

@@ -230,6 +230,8 @@ core::Status City::openTerrain(std::string& err) {
   return st;
 }
 
+bool City::terrainCached(const graph::TerrainRecord& r) const { return !remote_ || remote_->cached(r.blob); }
+
 core::Status City::terrainHeights(const graph::TerrainRecord& r, std::vector<uint8_t>& hold, float* out,
                                   std::string& err) const {
   if (remote_ && !remote_->cached(r.blob)) {

@@ -155,6 +155,9 @@ class City {
   // cache does not hold the tile (a frame never waits for the link).
   core::Status terrainHeights(const graph::TerrainRecord& r, std::vector<uint8_t>& hold, float* out,
                               std::string& err) const;
+  // Whether terrainHeights(r) can read its blob without the link (always for
+  // a local package); allocates nothing.
+  bool terrainCached(const graph::TerrainRecord& r) const;
   // Heap bytes of the tables above (graph, cells, blocks, visibility,
   // impostor lists): what holding the city costs besides the mapped file.
   uint64_t tableBytes() const;

@@ -8,11 +8,14 @@
 
 #include <sys/stat.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -23,6 +26,7 @@
 #include "cli/malloc_probe.h"
 #include "common/osm_writer.h"
 #include "imaging/image.h"
+#include "remote/servers.h"
 #include "stream/city.h"
 
 namespace blvd {
@@ -239,10 +243,12 @@ struct Frame {
 // Frames along the north street at heading `heading`, east from x = 60 m,
 // the last one's pixels and the runtime's stats; `allocations` (optional):
 // blvd's own on this thread over the frames after the first ten.
-Frame driveNorthStreet(const std::string& package, float heading, long* allocations = nullptr) {
+Frame driveNorthStreet(const std::string& package, float heading, long* allocations = nullptr,
+                       const char* cache = nullptr) {
   blvd_runtime_desc d{};
   d.struct_size = sizeof d;
   d.package_path = package.c_str();
+  d.cache_path = cache;
   d.width = 320, d.height = 192;
   blvd_runtime* rt = nullptr;
   Frame f;
@@ -257,6 +263,14 @@ Frame driveNorthStreet(const std::string& package, float heading, long* allocati
       EXPECT_EQ(blvd_wait_resident(rt, 60000), BLVD_OK) << blvd_last_error(rt);
     }
     EXPECT_EQ(blvd_render(rt, nullptr), BLVD_OK) << blvd_last_error(rt);
+    if (cache && i == 0) {  // over the link: frames at the first pose until the tiles came (at most 30 s)
+      blvd_stats st{};
+      st.struct_size = sizeof st;
+      for (int k = 0; k < 600 && blvd_runtime_stats(rt, &st) == BLVD_OK && st.terrain_loads < 8; ++k) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        EXPECT_EQ(blvd_render(rt, nullptr), BLVD_OK) << blvd_last_error(rt);
+      }
+    }
   }
   if (counter) *allocations = counter->count();
   EXPECT_EQ(blvd_read_pixels(rt, f.px.data(), f.px.size()), BLVD_OK) << blvd_last_error(rt);
@@ -333,6 +347,28 @@ TEST(TerrainBake, TheHillsBeyondTheCityAreDrawnFromStreamedTiles) {
   EXPECT_EQ(east.stats.gpu.capacity_bytes, gpu_hill);
   // 64 slots of a 17 x 17 tile and its skirts.
   EXPECT_GE(gpu_hill - gpu_flat, 64u * (17 * 17 + 4 * 17) * 36);
+}
+
+// The same package on a server (a real nginx), from a cold cache: the tiles
+// a frame wants and the cache lacks are no load errors, the link prefetch
+// fetches them, and the frames then show the hill as the local file does.
+TEST(TerrainBake, TilesOverTheLinkAreFetchedAndDrawn) {
+  const std::string hilly = bake("hill", hill);
+  const std::string work = std::string(BLVD_BINARY_DIR) + "/terrain_bake/served";
+  std::filesystem::remove_all(work);
+  std::filesystem::create_directories(work + "/www");
+  std::filesystem::create_directories(work + "/nginx");
+  std::filesystem::copy_file(hilly, work + "/www/hill.blvd");
+  test::ServerProcess nginx;
+  std::string why;
+  ASSERT_TRUE(nginx.startNginx(work + "/nginx", work + "/www", 1 << 20, why)) << why;
+  const std::string cache = work + "/cache";
+  const Frame remote = driveNorthStreet(nginx.url("/hill.blvd"), 90.f, nullptr, cache.c_str());
+  const Frame local = driveNorthStreet(hilly, 90.f);
+  EXPECT_EQ(remote.stats.terrain_load_errors, 0u);
+  EXPECT_GT(remote.stats.terrain_tiles, 0u);
+  EXPECT_EQ(remote.stats.terrain_tiles, local.stats.terrain_tiles);
+  EXPECT_GT(imaging::psnr(remote.px.data(), local.px.data(), remote.px.size() / 4), 40.0);
 }
 
 }  // namespace
