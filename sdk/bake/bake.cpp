@@ -391,7 +391,10 @@ std::string bakeIdentityJson(const BakeOptions& opt, const std::vector<uint32_t>
         i.landmark_height_m, i.landmark_scale, int(i.texture_codec), i.texture_quality}},
       {"route", route},
   };
-  return j.dump();
+  if (opt.dem.empty()) return j.dump();  // a flat bake's identity as it was
+  nlohmann::json with_dem = j;
+  for (const std::string& f : opt.dem) with_dem["dem"].push_back(sha256FileHex(f));
+  return with_dem.dump();
 }
 
 BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, const BakeOptions& opt) {
@@ -399,8 +402,9 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   checkLodOptions(opt.lod);
   if (opt.shard.count > 0 && (opt.tile.nx * opt.tile.ny > 1 || opt.on_impostors))
     throw core::Error(core::Status::InvalidArg, "a shard of a bake cannot be tiled or reported: merge the shards first");
-  if (!opt.dem.empty() && (opt.shard.count > 0 || opt.tile.nx * opt.tile.ny > 1))
-    throw core::Error(core::Status::InvalidArg, "--dem cannot be combined with --shard or --tile yet");
+  if (!opt.dem.empty() && opt.tile.nx * opt.tile.ny > 1)
+    throw core::Error(core::Status::InvalidArg,
+                      "--dem cannot be combined with --tile: the copies would stand on ground the DEM does not hold");
   if (opt.shard.count > 0 && opt.shard.index >= opt.shard.count)
     throw core::Error(core::Status::InvalidArg, "shard " + std::to_string(opt.shard.index) + " of " +
                                                     std::to_string(opt.shard.count) + ": the index must be below the count");
@@ -432,6 +436,10 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   std::vector<graph::BlockRecord> blocks;
   std::vector<geo::MeshData> block_meshes;
   buildBlocks(city, map, face_buildings, opt, terrain ? &terrain : nullptr, writer, blocks, block_meshes, sum, progress);
+  // The terrain's blobs next, before any impostor's: every shard writes them
+  // alike, so a merge copies them with the blocks'.
+  std::vector<uint8_t> terrain_section;
+  if (dem) terrain_section = terrainTiles(*dem, city, g, opt.terrain_tiles, writer, sum);
 
   // Chosen on the city before any tiling, so the same cells in a 1x and a tiled package.
   const std::vector<uint32_t> route = opt.select_cells ? opt.select_cells(g) : std::vector<uint32_t>{};
@@ -446,9 +454,6 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   TileLayout tiles = tileCity(g, blocks, tables, writer, opt.tile);  // 1x1: no change
   if (opt.shard.count > 0) tiles.blobs = 0;  // the package's blob count: the merge sets it (metaWithBlobCount)
   if (tiled) scaleForTiles(tiles, sum);
-
-  std::vector<uint8_t> terrain_section;
-  if (dem) terrain_section = terrainTiles(*dem, city, g, opt.terrain_tiles, writer, sum);
 
   progress.stage("writing package");
   const std::vector<std::string> bad = graph::checkInvariants(g);

@@ -30,7 +30,7 @@ struct ShardManifest {
   uint32_t index = 0, count = 0;
   std::string input_name, input_sha256, options_sha256, generator;
   uint64_t input_bytes = 0;
-  uint32_t block_blobs = 0;           // blobs 0 .. block_blobs-1 are the blocks', the rest this shard's impostors
+  uint32_t block_blobs = 0;           // blobs 0 .. block_blobs-1 are the blocks' and the terrain's, the rest this shard's impostors
   std::vector<uint32_t> streets;      // this shard's streets (lower half-edges), ascending
   uint64_t plan_streets = 0;          // streets of all shards together
   std::string plan_sha256;            // of every shard's street list: the same plan in every shard

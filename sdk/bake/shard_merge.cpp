@@ -43,9 +43,11 @@ bool sameBytes(const package::Span& a, const package::Span& b) {
   return a.size == b.size && std::equal(a.data, a.data + a.size, b.data);
 }
 
-// The sections and blobs every shard computes alike.
+// The sections and blobs every shard computes alike; a bake with --dem has
+// the optional ones too (the ground under the streets, the terrain's tiles).
 constexpr uint32_t kShared[] = {package::kSectionGraph, package::kSectionCells, package::kSectionSpatialIndex,
                                 package::kSectionBlocks, package::kSectionMeta};
+constexpr uint32_t kSharedOptional[] = {package::kSectionElevation, package::kSectionTerrain};
 
 // `s` belongs with `first`: the same bake, split the same way.
 void checkSameBake(const OpenShard& first, const OpenShard& s) {
@@ -61,8 +63,16 @@ void checkSameBake(const OpenShard& first, const OpenShard& s) {
   if (b.generator != a.generator) throw refuse(s.path + ": baked by " + b.generator + vs + a.generator + ")");
   if (b.plan_sha256 != a.plan_sha256 || b.block_blobs != a.block_blobs)
     throw refuse(s.path + ": its shard plan differs from " + first.path + "'s");
+  for (uint32_t tag : kSharedOptional)
+    if (s.reader.hasSection(tag) != first.reader.hasSection(tag))
+      throw refuse(s.path + (s.reader.hasSection(tag) ? " has" : " lacks") + " the " + package::tagToString(tag) +
+                   " section that " + first.path + (s.reader.hasSection(tag) ? " lacks" : " has") +
+                   " (baked with --dem and without)");
   for (uint32_t tag : kShared)
     if (!sameBytes(s.reader.section(tag), first.reader.section(tag)))
+      throw refuse(s.path + ": its " + package::tagToString(tag) + " section differs from " + first.path + "'s");
+  for (uint32_t tag : kSharedOptional)
+    if (first.reader.hasSection(tag) && !sameBytes(s.reader.section(tag), first.reader.section(tag)))
       throw refuse(s.path + ": its " + package::tagToString(tag) + " section differs from " + first.path + "'s");
   for (uint32_t i = 0; i < a.block_blobs; ++i)
     if (i >= s.reader.blobCount() || s.reader.blobInfo(i).crc != first.reader.blobInfo(i).crc ||
@@ -177,6 +187,8 @@ MergeSummary mergeShards(const std::vector<std::string>& paths, const std::strin
                      {copyOf(gs), copyOf(cs), copyOf(first.reader.section(package::kSectionSpatialIndex)),
                       copyOf(bs), std::vector<uint8_t>(meta.begin(), meta.end())},
                      merged);
+  for (uint32_t tag : kSharedOptional)  // after the rest, as a single bake adds them
+    if (first.reader.hasSection(tag)) w.addSection(tag, copyOf(first.reader.section(tag)));
   w.write(out);
 
   MergeSummary sum;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A bake in shards: shards named explicitly (I/N) and by a scheduler's
 # environment (Slurm, Kubernetes) merge into the package a single bake
-# writes, byte for byte, in any order; with no impostors too. The merge
+# writes, byte for byte, in any order; with no impostors and on terrain too. The merge
 # refuses a missing or repeated shard, a shard of other options or other
 # input, a package, and a corrupt shard, naming the file and the reason; the
 # runtime refuses to open a shard.
@@ -28,6 +28,14 @@ for i in 0 1; do "$blvd" bake "$osm" -o none$i.blvdshard --quiet --impostor none
 "$blvd" pack merge none0.blvdshard none1.blvdshard -o none-merged.blvd > /dev/null
 cmp none.blvd none-merged.blvd || fail "merge without impostors differs from the single bake"
 
+# On terrain (--dem): the ground under the streets and the terrain's tiles are every shard's alike.
+dem=$(dirname "$osm")/../dem/N43E007.hgt.zip
+"$blvd" bake "$osm" -o dem.blvd "${opts[@]}" --dem "$dem" > /dev/null
+for i in 0 1; do "$blvd" bake "$osm" -o dem$i.blvdshard "${opts[@]}" --dem "$dem" --shard $i/2 > /dev/null; done
+"$blvd" pack merge dem1.blvdshard dem0.blvdshard -o dem-merged.blvd > /dev/null
+cmp dem.blvd dem-merged.blvd || fail "merge on terrain differs from the single bake"
+"$blvd" pack info dem-merged.blvd | grep -q "TERR" || fail "merged package on terrain lacks its TERR section"
+
 refused() {  # refused EXPECTED_TEXT COMMAND...
   local want=$1 msg rc
   shift
@@ -53,5 +61,8 @@ refused "corrupt.blvdshard" "$blvd" pack merge s0.blvdshard corrupt.blvdshard s2
 refused "a shard of a bake, not a package" "$blvd" pack info s0.blvdshard
 refused "index 3 is out of range for 3 shards" "$blvd" bake "$osm" -o bad.blvd "${opts[@]}" --shard 3/3
 refused "cannot be tiled" "$blvd" bake "$osm" -o bad.blvd --quiet --impostor none --tile 2x2 --shard 0/2
+"$blvd" bake "$osm" -o flat1.blvdshard "${opts[@]}" --shard 1/2 > /dev/null
+refused "flat1.blvdshard: baked with other options" "$blvd" pack merge dem0.blvdshard flat1.blvdshard -o bad.blvd
+refused "cannot be combined with --tile" "$blvd" bake "$osm" -o bad.blvd --quiet --impostor none --tile 2x2 --dem "$dem"
 refused "--report: not with --shard" "$blvd" bake "$osm" -o bad.blvd "${opts[@]}" --shard 0/2 --report rep
-echo "bake shards: 3 shards (explicit, JOB_COMPLETION_INDEX, SLURM_ARRAY_TASK_ID) merge to $(stat -c %s merged.blvd) bytes identical to the single bake; 11 refusals named"
+echo "bake shards: 3 shards (explicit, JOB_COMPLETION_INDEX, SLURM_ARRAY_TASK_ID) merge to $(stat -c %s merged.blvd) bytes identical to the single bake, on terrain too; 13 refusals named"
