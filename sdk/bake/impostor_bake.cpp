@@ -73,21 +73,41 @@ std::vector<double> runHeadings(const graph::StreetGraph& g, const graph::HalfEd
 }
 
 // The runs of a cell (S97 §4.2's vantage point, repeated): a cell longer
-// than run_length_m or turning more than run_turn_deg gets several, equal
-// in length, at most max_runs. Each run's impostors are drawn only while the
+// than run_length_m, turning more than run_turn_deg or (on terrain) whose
+// ground rises or falls more than run_climb_m gets several, equal in length,
+// at most max_runs: a viewer above or below the vantage point sees roofs and
+// ground the capture did not. Each run's impostors are drawn only while the
 // viewer is on it, so each is captured from where its viewer stands.
+}  // namespace
+
+// The most the ground rises or falls along the cell (0 without a terrain),
+// from heights every 5 m.
+double cellClimb(const graph::StreetGraph& g, const graph::HalfEdge& e, const ImpostorOptions& opt) {
+  if (!opt.ground) return 0.0;
+  double lo = 1e300, hi = -1e300;
+  const int steps = std::max(1, static_cast<int>(std::ceil(e.length / 5.0)));
+  for (int k = 0; k <= steps; ++k) {
+    const double h = opt.ground(pointAt(g, e, e.length * k / steps));
+    lo = std::min(lo, h), hi = std::max(hi, h);
+  }
+  return hi - lo;
+}
+
 std::vector<std::pair<double, double>> cellRuns(const graph::StreetGraph& g, const graph::HalfEdge& e,
                                                 const ImpostorOptions& opt) {
   const std::vector<double> hd = runHeadings(g, e, 0.0, e.length);
   double turn = 0, lo = 0, hi = 0;
   for (size_t i = 1; i < hd.size(); ++i) turn += wrap180(hd[i] - hd[i - 1]), lo = std::min(lo, turn), hi = std::max(hi, turn);
-  const int n = std::clamp(std::max(static_cast<int>(std::ceil(e.length / opt.run_length_m - 1e-9)),
-                                    static_cast<int>(std::ceil((hi - lo) / opt.run_turn_deg - 1e-9))),
-                           1, opt.max_runs);
+  int want = std::max(static_cast<int>(std::ceil(e.length / opt.run_length_m - 1e-9)),
+                      static_cast<int>(std::ceil((hi - lo) / opt.run_turn_deg - 1e-9)));
+  if (opt.run_climb_m > 0) want = std::max(want, static_cast<int>(std::ceil(cellClimb(g, e, opt) / opt.run_climb_m - 1e-9)));
+  const int n = std::clamp(want, 1, opt.max_runs);
   std::vector<std::pair<double, double>> runs;
   for (int k = 0; k < n; ++k) runs.emplace_back(e.length * k / n, e.length * (k + 1) / n);
   return runs;
 }
+
+namespace {
 
 // The vantage point sits at the run's start, pulled back along its chord so
 // a viewer anywhere across the carriageway stays in front of it (K06 §4.4.4,

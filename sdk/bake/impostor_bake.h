@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "geo/mesh.h"
@@ -43,6 +44,7 @@ struct ImpostorOptions {
   int cell_texels = 163840;       // texel budget of a cell's captures together (capture_plan.h)
   double run_length_m = 100.0;    // a longer cell gets several runs (vantage points) ...
   double run_turn_deg = 90.0;     // ... and so does one turning more than this
+  double run_climb_m = 3.0;       // ... or whose ground rises or falls more than this (on terrain; 0: off)
   int max_runs = 4;
   double landmark_height_m = 60.0;  // blocks with a building at least this tall ...
   double landmark_scale = 2.0;      // ... get their D99 weights scaled by this
@@ -100,5 +102,10 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
 
 // Horizontal field of view of the display (degrees).
 double displayFovX(const ImpostorOptions& opt);
+// The runs of cell `e` ([from, to) arc lengths): their rule is in impostor_bake.cpp.
+std::vector<std::pair<double, double>> cellRuns(const graph::StreetGraph& g, const graph::HalfEdge& e,
+                                                const ImpostorOptions& opt);
+// The most the ground (opt.ground) rises or falls along cell `e`; 0 without one.
+double cellClimb(const graph::StreetGraph& g, const graph::HalfEdge& e, const ImpostorOptions& opt);
 
 }  // namespace blvd::bake

@@ -129,6 +129,9 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->add_option("--run-length", o->bake.impostor.run_length_m,
                   "a cell longer than this gets several impostor runs (vantage points), metres")
       ->capture_default_str()->check(CLI::Range(10.0, 100000.0));
+  cmd->add_option("--run-climb", o->bake.impostor.run_climb_m,
+                  "with --dem, a cell whose ground rises or falls more than this gets several runs, metres (0: off)")
+      ->capture_default_str()->check(CLI::Range(0.0, 10000.0));
   cmd->add_option("--max-runs", o->bake.impostor.max_runs, "most impostor runs a cell gets")
       ->capture_default_str()->check(CLI::Range(1, 16));
   cmd->add_option("--max-span", o->bake.impostor.max_span_deg,

@@ -8,6 +8,8 @@
 
 #include "bake/capture.h"
 #include "bake/capture_plan.h"
+#include "bake/impostor_bake.h"
+#include "track/track_test_util.h"
 
 namespace blvd::bake {
 namespace {
@@ -93,6 +95,31 @@ TEST(CapturePlan, GroundTheScoutSeesNeedsNoOutline) {
   EXPECT_TRUE(held(bare, 0, 41) && held(bare, 0, 199) && held(bare, -25, 150) && held(bare, 25, 150));
   ASSERT_EQ(with.size(), bare.size());
   for (size_t i = 0; i < bare.size(); ++i) EXPECT_EQ(with[i].tan_x, bare[i].tan_x);
+}
+
+// The runs of a straight 80 m street (shorter than a run, no turn): one on
+// level ground; on a 10 % grade (8 m of climb) one per 3 m of it, three.
+TEST(CellRuns, OnTerrainACellIsSplitWhereItClimbs) {
+  blvd_test::GraphBuilder b;
+  b.street(b.vertex(0, 0), b.vertex(80, 0));
+  const graph::StreetGraph g = b.finish();
+  const graph::HalfEdge& e = g.halfedges[0];
+  ImpostorOptions opt;
+  EXPECT_EQ(cellRuns(g, e, opt).size(), 1u);  // no terrain
+  opt.ground = [](glm::dvec2 p) { return 50.0 + 0.1 * p.x; };
+  EXPECT_NEAR(cellClimb(g, e, opt), 8.0, 1e-9);
+  const auto runs = cellRuns(g, e, opt);
+  ASSERT_EQ(runs.size(), 3u);
+  EXPECT_DOUBLE_EQ(runs.front().first, 0.0);
+  EXPECT_NEAR(runs[1].first, 80.0 / 3, 1e-4);  // the length is a float
+  EXPECT_NEAR(runs.back().second, 80.0, 1e-4);
+  opt.run_climb_m = 0;  // off
+  EXPECT_EQ(cellRuns(g, e, opt).size(), 1u);
+  opt.run_climb_m = 1, opt.max_runs = 4;  // 8 runs wanted, at most 4
+  EXPECT_EQ(cellRuns(g, e, opt).size(), 4u);
+  opt.run_climb_m = 3;
+  opt.ground = [](glm::dvec2) { return 120.0; };  // level, high up
+  EXPECT_EQ(cellRuns(g, e, opt).size(), 1u);
 }
 
 }  // namespace
