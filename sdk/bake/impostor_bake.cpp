@@ -100,7 +100,8 @@ std::vector<std::pair<double, double>> cellRuns(const graph::StreetGraph& g, con
   for (size_t i = 1; i < hd.size(); ++i) turn += wrap180(hd[i] - hd[i - 1]), lo = std::min(lo, turn), hi = std::max(hi, turn);
   int want = std::max(static_cast<int>(std::ceil(e.length / opt.run_length_m - 1e-9)),
                       static_cast<int>(std::ceil((hi - lo) / opt.run_turn_deg - 1e-9)));
-  if (opt.run_climb_m > 0) want = std::max(want, static_cast<int>(std::ceil(cellClimb(g, e, opt) / opt.run_climb_m - 1e-9)));
+  if (opt.run_climb_m > 0)
+    want = std::max(want, static_cast<int>(std::ceil(cellClimb(g, e, opt) / opt.run_climb_m - 1e-9)));
   const int n = std::clamp(want, 1, opt.max_runs);
   std::vector<std::pair<double, double>> runs;
   for (int k = 0; k < n; ++k) runs.emplace_back(e.length * k / n, e.length * (k + 1) / n);

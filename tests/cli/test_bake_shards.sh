@@ -61,8 +61,7 @@ refused "corrupt.blvdshard" "$blvd" pack merge s0.blvdshard corrupt.blvdshard s2
 refused "a shard of a bake, not a package" "$blvd" pack info s0.blvdshard
 refused "index 3 is out of range for 3 shards" "$blvd" bake "$osm" -o bad.blvd "${opts[@]}" --shard 3/3
 refused "cannot be tiled" "$blvd" bake "$osm" -o bad.blvd --quiet --impostor none --tile 2x2 --shard 0/2
-"$blvd" bake "$osm" -o flat1.blvdshard "${opts[@]}" --shard 1/2 > /dev/null
-refused "flat1.blvdshard: baked with other options" "$blvd" pack merge dem0.blvdshard flat1.blvdshard -o bad.blvd
+refused "none1.blvdshard: baked with other options" "$blvd" pack merge dem0.blvdshard none1.blvdshard -o bad.blvd
 refused "cannot be combined with --tile" "$blvd" bake "$osm" -o bad.blvd --quiet --impostor none --tile 2x2 --dem "$dem"
 refused "--report: not with --shard" "$blvd" bake "$osm" -o bad.blvd "${opts[@]}" --shard 0/2 --report rep
 echo "bake shards: 3 shards (explicit, JOB_COMPLETION_INDEX, SLURM_ARRAY_TASK_ID) merge to $(stat -c %s merged.blvd) bytes identical to the single bake, on terrain too; 13 refusals named"
