@@ -72,12 +72,6 @@ std::vector<double> runHeadings(const graph::StreetGraph& g, const graph::HalfEd
   return out;
 }
 
-// The runs of a cell (S97 §4.2's vantage point, repeated): a cell longer
-// than run_length_m, turning more than run_turn_deg or (on terrain) whose
-// ground rises or falls more than run_climb_m gets several, equal in length,
-// at most max_runs: a viewer above or below the vantage point sees roofs and
-// ground the capture did not. Each run's impostors are drawn only while the
-// viewer is on it, so each is captured from where its viewer stands.
 }  // namespace
 
 // The most the ground rises or falls along the cell (0 without a terrain),
@@ -93,6 +87,12 @@ double cellClimb(const graph::StreetGraph& g, const graph::HalfEdge& e, const Im
   return hi - lo;
 }
 
+// The runs of a cell (S97 §4.2's vantage point, repeated): a cell longer
+// than run_length_m, turning more than run_turn_deg or (on terrain) whose
+// ground rises or falls more than run_climb_m gets several, equal in length,
+// at most max_runs: a viewer above or below the vantage point sees roofs and
+// ground the capture did not. Each run's impostors are drawn only while the
+// viewer is on it, so each is captured from where its viewer stands.
 std::vector<std::pair<double, double>> cellRuns(const graph::StreetGraph& g, const graph::HalfEdge& e,
                                                 const ImpostorOptions& opt) {
   const std::vector<double> hd = runHeadings(g, e, 0.0, e.length);

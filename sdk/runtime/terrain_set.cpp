@@ -186,7 +186,7 @@ core::Status TerrainSet::load(uint32_t tile, uint32_t slot) {
     }
   } catch (const core::Error& e) {  // a record that breaks the rules, a read that failed
     last_error_ = e.what();
-    return e.status() == core::Status::Unavailable ? core::Status::Unavailable : e.status();
+    return e.status();  // Unavailable: a table page over the link, asked for again next frame
   }
   tile_[slot] = tile;
   used_[slot] = tick_;
