@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/status.h"
+#include "render/slab_atlas.h"
 
 namespace blvd::bake {
 namespace {
@@ -22,6 +23,28 @@ T fit(uint64_t v, const char* field) {
 template <typename T>
 void raise(T& field, uint64_t v, const char* name) {
   field = std::max(field, fit<T>(v, name));
+}
+
+// The atlas a cell slot holds its impostor images in (render/slab_atlas.h):
+// its width from the maxima above, its height the most any cell's layers
+// (layered then single, the order the runtime's loader packs them in) take.
+void fillAtlasSize(const graph::CellTables& tables, package::PackageHeader& h) {
+  if (h.max_impostor_texture_width == 0) return;
+  const int width = render::atlasWidth(h.max_impostor_texture_width, h.max_cell_impostor_texture_bytes / 4);
+  std::vector<int> w, ht, x, y;
+  std::vector<uint32_t> order;
+  int height = 0;
+  for (const graph::CellImpostors& ci : tables.impostors) {
+    w.clear(), ht.clear();
+    for (const auto* list : {&ci.layered, &ci.single})
+      for (const graph::ImpostorLayer& l : *list) w.push_back(l.texture_width), ht.push_back(l.texture_height);
+    x.resize(w.size()), y.resize(w.size()), order.resize(w.size());
+    const int used = render::packSlabAtlas(w.data(), ht.data(), uint32_t(w.size()), width, x.data(), y.data(), order.data());
+    if (used < 0) throw core::Error(core::Status::Internal, "impostor atlas: a layer is wider than the atlas");
+    height = std::max(height, used);
+  }
+  h.impostor_atlas_width = fit<uint16_t>(uint64_t(width), "impostor_atlas_width");
+  h.impostor_atlas_height = fit<uint16_t>(uint64_t(height), "impostor_atlas_height");
 }
 
 }  // namespace
@@ -77,6 +100,7 @@ void fillPoolSizing(const graph::StreetGraph& g, const std::vector<graph::BlockR
     raise(h.max_cell_impostor_blob_bytes, bytes, "max_cell_impostor_blob_bytes");
     raise(h.max_cell_impostor_texture_bytes, tex, "max_cell_impostor_texture_bytes");
   }
+  fillAtlasSize(tables, h);
 }
 
 }  // namespace blvd::bake

@@ -14,8 +14,8 @@
 
 namespace blvd::bake {
 
-// Fills max_block_blob_bytes, max_cell_blob_bytes and every max_block_* /
-// max_cell_* / max_impostor_* field of `h`. `blob_bytes(i)` is blob i's size.
+// Fills max_block_blob_bytes, max_cell_blob_bytes, every max_block_* /
+// max_cell_* / max_impostor_* field of `h` and the impostor atlas's size. `blob_bytes(i)` is blob i's size.
 // Throws core::Error(Internal) when a sum does not fit its field.
 void fillPoolSizing(const graph::StreetGraph& g, const std::vector<graph::BlockRecord>& blocks,
                     const graph::CellTables& tables, const std::function<uint64_t(uint32_t)>& blob_bytes,

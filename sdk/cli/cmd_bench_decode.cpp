@@ -79,8 +79,12 @@ nlohmann::json summary(const Kind& k) {
 }
 
 nlohmann::json memoryJson(const runtime::MemoryPlan& m) {
-  return {{"resident_cells", m.resident_cells}, {"slab_bytes", render::slabGpuBytes(m.slab)},
-          {"slab_textures", m.slab.textures}, {"gpu_bytes", m.gpu_bytes}, {"cpu_bytes", m.cpu_bytes}};
+  return {{"resident_cells", m.resident_cells},
+          {"slab_bytes", render::slabGpuBytes(m.slab)},
+          {"slab_atlas_width", m.slab.atlas_width},
+          {"slab_atlas_height", m.slab.atlas_height},
+          {"gpu_bytes", m.gpu_bytes},
+          {"cpu_bytes", m.cpu_bytes}};
 }
 
 int runDecode(const DecodeOpts& o) {

@@ -211,6 +211,8 @@ core::Status parseHeader(const uint8_t* data, size_t size, uint64_t file_size,
   ph.max_impostor_texture_bytes = get<uint32_t>(data + h::kMaxImpostorTextureBytes);
   ph.max_impostor_texture_width = get<uint16_t>(data + h::kMaxImpostorTextureWidth);
   ph.max_impostor_texture_height = get<uint16_t>(data + h::kMaxImpostorTextureHeight);
+  ph.impostor_atlas_width = get<uint16_t>(data + h::kImpostorAtlasWidth);
+  ph.impostor_atlas_height = get<uint16_t>(data + h::kImpostorAtlasHeight);
 
   if (out.file_size != file_size)
     return corrupt(err, at(name, "header", h::kFileSize) + "header records " +
@@ -260,6 +262,8 @@ std::vector<PoolSizingField> poolSizing(const PackageHeader& h) {
       {"max_impostor_texture_bytes", h.max_impostor_texture_bytes},
       {"max_impostor_texture_width", h.max_impostor_texture_width},
       {"max_impostor_texture_height", h.max_impostor_texture_height},
+      {"impostor_atlas_width", h.impostor_atlas_width},
+      {"impostor_atlas_height", h.impostor_atlas_height},
   };
 }
 

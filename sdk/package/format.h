@@ -31,9 +31,10 @@ constexpr uint32_t fourcc(char a, char b, char c, char d) {
 inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
 // 2.0: BLCK records carry the levels of detail, IMPO layers their vertex
 // counts, the header the pool sizing fields; 3.0: IMPO layers the run of the
-// cell they serve; 3.2: TPCR, a CRC per table page (docs/package-format.md).
+// cell they serve; 3.2: TPCR, a CRC per table page; 3.3: the impostor atlas's
+// size in the header (docs/package-format.md).
 inline constexpr uint16_t kVersionMajor = 3;  // a reader opens only its own major
-inline constexpr uint16_t kVersionMinor = 2;  // minors add, never change (see spec)
+inline constexpr uint16_t kVersionMinor = 3;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
 inline constexpr uint32_t kSectionSpatialIndex = fourcc('S', 'I', 'D', 'X');  // graph spatial index
@@ -87,6 +88,9 @@ struct PackageHeader {
   uint64_t max_cell_impostor_texture_bytes = 0;                        // a cell's layers' w × h × 4
   uint32_t max_impostor_texture_bytes = 0;                             // one layer's w × h × 4
   uint16_t max_impostor_texture_width = 0, max_impostor_texture_height = 0;  // over all layers
+  // 3.3: the atlas a cell slot holds its impostor images in, packed by
+  // render/slab_atlas.h, that every cell's fit (0 before 3.3, or no impostors).
+  uint16_t impostor_atlas_width = 0, impostor_atlas_height = 0;
 };
 
 // The pool sizing fields by name (max_block_blob_bytes, max_cell_blob_bytes

@@ -75,7 +75,9 @@ constexpr size_t kMaxCellImpostorTriangles = 196;  // u32
 constexpr size_t kMaxImpostorTextureBytes = 200;   // u32
 constexpr size_t kMaxImpostorTextureWidth = 204;   // u16
 constexpr size_t kMaxImpostorTextureHeight = 206;  // u16
-constexpr size_t kReservedTail = 208; // zero up to header_size
+constexpr size_t kImpostorAtlasWidth = 208;        // u16, 3.3
+constexpr size_t kImpostorAtlasHeight = 210;       // u16, 3.3
+constexpr size_t kReservedTail = 212; // zero up to header_size
 }  // namespace hdr
 
 namespace dir {  // one 32-byte directory entry

@@ -171,6 +171,8 @@ PackageWriter::Layout PackageWriter::layout() const {
   put<uint32_t>(hp + h::kMaxImpostorTextureBytes, header_.max_impostor_texture_bytes);
   put<uint16_t>(hp + h::kMaxImpostorTextureWidth, header_.max_impostor_texture_width);
   put<uint16_t>(hp + h::kMaxImpostorTextureHeight, header_.max_impostor_texture_height);
+  put<uint16_t>(hp + h::kImpostorAtlasWidth, header_.impostor_atlas_width);
+  put<uint16_t>(hp + h::kImpostorAtlasHeight, header_.impostor_atlas_height);
   put<uint32_t>(hp + h::kCrc, detail::headerCrc(hp, kHeaderSize));
   return L;
 }

@@ -40,6 +40,9 @@ struct PreparedMesh {
   const uint8_t* rgba = nullptr;
   int texture_width = 0, texture_height = 0;
   int mip_levels = 0;
+  // Where a slab's atlas holds the image (slab_atlas.h: the loader's
+  // packSlabAtlas); -1 when not placed (an upload() of its own needs none).
+  int atlas_x = -1, atlas_y = -1;
   double center[3] = {0, 0, 0};       // box centre and half extents, glTF axes
   double half[3] = {0, 0, 0};
 

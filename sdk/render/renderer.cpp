@@ -34,29 +34,53 @@ constexpr uint32_t kIndexBits = 20;
 constexpr uint32_t kIndexMask = (1u << kIndexBits) - 1;
 constexpr uint32_t kGenerationMask = (1u << (32 - kIndexBits)) - 1;
 
-// Texels repeated past an image's right and bottom edges in a slab texture
-// level (tw x th): a slab texture holds a smaller image in its corner, the
-// rest is what earlier cells' images left there. The shader maps the image by
-// one scale for every level (w / tw of level 0), but a level of the image is
+// Texels repeated past an image's right and bottom edges in its place in a
+// slab's atlas level: the place (tw x th at that level, the image's size
+// rounded up to the atlas grid) holds a smaller image in its corner, the rest
+// is what earlier cells' images left there. The shader maps the image by one
+// scale for every level (w / W of level 0), but a level of the image is
 // floor(w / 2^l) texels wide, so linear filtering of a level reads up to two
 // texels past the texels written. Repeating the edge makes those texels the
 // image's own (the clamp-to-edge rule an image of its own would get) and the
 // frame independent of what the slab held before (SlotHistory.* test).
 constexpr int kEdgePad = 2;
 
-void padLevel(const GlApi& gl, int level, const uint8_t* texels, int w, int h, int tw, int th) {
+void padLevel(const GlApi& gl, int level, const uint8_t* texels, int x0, int y0, int w, int h, int tw, int th) {
   const int x_end = std::min(w + kEdgePad, tw), y_end = std::min(h + kEdgePad, th);
   const uint8_t* last_column = texels + uint64_t(w - 1) * 4;
   const uint8_t* last_row = texels + uint64_t(h - 1) * uint64_t(w) * 4;
   gl.PixelStorei(GL_UNPACK_ROW_LENGTH, w);  // one texel of each row
-  for (int x = w; x < x_end; ++x) gl.TexSubImage2D(GL_TEXTURE_2D, level, x, 0, 1, h, GL_RGBA, GL_UNSIGNED_BYTE, last_column);
+  for (int x = w; x < x_end; ++x)
+    gl.TexSubImage2D(GL_TEXTURE_2D, level, x0 + x, y0, 1, h, GL_RGBA, GL_UNSIGNED_BYTE, last_column);
   gl.PixelStorei(GL_UNPACK_ROW_LENGTH, 0);
   for (int y = h; y < y_end; ++y) {
-    gl.TexSubImage2D(GL_TEXTURE_2D, level, 0, y, w, 1, GL_RGBA, GL_UNSIGNED_BYTE, last_row);
+    gl.TexSubImage2D(GL_TEXTURE_2D, level, x0, y0 + y, w, 1, GL_RGBA, GL_UNSIGNED_BYTE, last_row);
     for (int x = w; x < x_end; ++x)
-      gl.TexSubImage2D(GL_TEXTURE_2D, level, x, y, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, last_row + uint64_t(w - 1) * 4);
+      gl.TexSubImage2D(GL_TEXTURE_2D, level, x0 + x, y0 + y, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE,
+                       last_row + uint64_t(w - 1) * 4);
   }
 }
+
+// The image's level that fills atlas level l of its place: its own, or past
+// the end of its chain its last (1 x 1), which is all a place that small
+// shows.
+const uint8_t* atlasSource(const PreparedMesh& p, int l, int& w, int& h) {
+  return mipLevel(p, std::min(l, p.mip_levels - 1), w, h);
+}
+
+// Bytes an image's levels copy into an atlas (kAtlasLevels of them).
+uint64_t atlasUploadBytes(const PreparedMesh& p) {
+  uint64_t n = 0;
+  for (int l = 0; l < kAtlasLevels; ++l) {
+    int w = 0, h = 0;
+    atlasSource(p, l, w, h);
+    n += uint64_t(w) * uint64_t(h) * 4;
+  }
+  return n;
+}
+
+// The texels of an image's place in an atlas, every level.
+uint64_t placeBytes(int w, int h) { return atlasBytes(atlasRound(w), atlasRound(h)); }
 
 void setTextureSampling(const GlApi& gl) {
   gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
@@ -74,7 +98,8 @@ struct MeshSlot {
   uint64_t vertex_offset = 0; // bytes into vbo
   uint32_t vertex_count = 0;
   uint32_t slab = 0;          // slab index + 1, or 0: the mesh owns its GL objects
-  float uv_scale[2] = {1, 1}; // image size over the slab texture's size
+  float uv_scale[2] = {1, 1}; // image size over the slab atlas's size
+  float uv_offset[2] = {0, 0}; // the image's place in the atlas, in atlas units
   uint32_t generation = 1;
   bool live = false;
   glm::dvec3 center{0.0};  // glTF axes, package frame
@@ -88,7 +113,7 @@ struct Uniforms {
         inv_fog2 = -1;
   GLint ray_basis = -1, zenith = -1, ground = -1, eye_height = -1;  // background
   GLint viewproj = -1, offset = -1;                                 // meshes
-  GLint item = -1, forward = -1, depth_scale = -1, texture = -1, uv_scale = -1;    // capture, impostors
+  GLint item = -1, forward = -1, depth_scale = -1, texture = -1, uv_scale = -1, uv_offset = -1;  // capture, impostors
   GLint uv_clamp = -1;                                                            // upscale
 };
 
@@ -102,11 +127,15 @@ const void* byteOffset(size_t n) { return reinterpret_cast<const void*>(n); }
 
 struct Renderer::Slab {
   SlabDesc desc;
-  GLuint vbo = 0, ibo = 0;
-  std::vector<GLuint> vaos, textures;  // made once, handed out in order
+  GLuint vbo = 0, ibo = 0, atlas = 0;
+  std::vector<GLuint> vaos;            // made once, handed out in order
   std::vector<uint32_t> meshes;        // slot indices placed here, reserved for desc.meshes
-  uint64_t vertex_used = 0, index_used = 0;
-  uint32_t vaos_used = 0, textures_used = 0;
+  struct Place {
+    int x, y, w, h;  // rounded to the atlas grid
+  };
+  std::vector<Place> places;  // the images' places in the atlas, reserved for desc.meshes
+  uint64_t vertex_used = 0, index_used = 0, texture_used = 0;
+  uint32_t vaos_used = 0;
   uint32_t resets = 0;  // abandons the SlabUploads begun before
 };
 
@@ -235,6 +264,7 @@ Uniforms locate(const GlApi& gl, GLuint p) {
   u.depth_scale = gl.GetUniformLocation(p, "u_depth_scale");
   u.texture = gl.GetUniformLocation(p, "u_texture");
   u.uv_scale = gl.GetUniformLocation(p, "u_uv_scale");
+  u.uv_offset = gl.GetUniformLocation(p, "u_uv_offset");
   u.uv_clamp = gl.GetUniformLocation(p, "u_uv_clamp");
   return u;
 }
@@ -386,7 +416,7 @@ Renderer::~Renderer() {
     gl.DeleteBuffers(1, &s.vbo);
     gl.DeleteBuffers(1, &s.ibo);
     if (!s.vaos.empty()) gl.DeleteVertexArrays(static_cast<GLsizei>(s.vaos.size()), s.vaos.data());
-    if (!s.textures.empty()) gl.DeleteTextures(static_cast<GLsizei>(s.textures.size()), s.textures.data());
+    if (s.atlas) gl.DeleteTextures(1, &s.atlas);
   }
   for (MeshSlot& s : impl_->slots) {
     if (!s.live || s.slab) continue;
@@ -475,16 +505,32 @@ bool Renderer::reserve(Slab& slab, const PreparedMesh& p, SlabUpload& up) {
   if (voff + vbytes > slab.desc.vertex_bytes || ioff + ibytes > slab.desc.index_bytes)
     return fail("slab full: vertex or index bytes exceed its size");
   if (slab.vaos_used >= slab.vaos.size()) return fail("slab full: mesh count exceeds its size");
-  if (p.rgba && (slab.textures_used >= slab.textures.size() || p.texture_width > slab.desc.texture_width ||
-                 p.texture_height > slab.desc.texture_height))
-    return fail("slab full: no texture slot of the image's size left");
+  if (p.rgba && !placeImage(slab, p)) return false;
   up.voff = voff;
   up.ioff = ioff;
-  up.texture = p.rgba ? slab.textures[slab.textures_used++] : 0;
-  up.total = vbytes + ibytes + (p.rgba ? mipChainBytes(p.texture_width, p.texture_height) : 0);
+  up.texture = p.rgba ? slab.atlas : 0;
+  up.total = vbytes + ibytes + (p.rgba ? atlasUploadBytes(p) : 0);
   up.resets = slab.resets;
   slab.vertex_used = voff + vbytes;
   slab.index_used = ioff + ibytes;
+  return true;
+}
+
+// Takes the image's place in the slab's atlas: on the grid, inside, and clear
+// of every image placed since the last reset.
+bool Renderer::placeImage(Slab& slab, const PreparedMesh& p) {
+  if (!slab.atlas) return fail("slab has no atlas for a textured mesh");
+  const Slab::Place at{p.atlas_x, p.atlas_y, atlasRound(p.texture_width), atlasRound(p.texture_height)};
+  if (at.x < 0 || at.y < 0 || at.x % kAtlasAlign || at.y % kAtlasAlign)
+    return fail("atlas place of the image is not on the atlas grid");
+  if (at.x + at.w > slab.desc.atlas_width || at.y + at.h > slab.desc.atlas_height)
+    return fail("slab full: the image's place is outside the atlas");
+  for (const Slab::Place& o : slab.places)
+    if (at.x < o.x + o.w && o.x < at.x + at.w && at.y < o.y + o.h && o.y < at.y + at.h)
+      return fail("atlas place of the image overlaps another image");
+  if (slab.places.size() >= slab.desc.meshes) return fail("slab full: mesh count exceeds its size");
+  slab.places.push_back(at);
+  slab.texture_used += placeBytes(p.texture_width, p.texture_height);
   return true;
 }
 
@@ -573,8 +619,8 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
       copyBuffer(slab.ibo, up.ioff, p.indices, vbytes, ibytes);
     }
     if (p.rgba && allowance > 0 && up.copied < up.total) {
-      // Mip levels in order, whole rows at a time, each level into the
-      // image's corner of the slab texture's level (uv_scale maps it).
+      // The atlas's levels in order, whole rows at a time, each from the
+      // image's level into its place's corner (uv_scale and uv_offset map it).
       gl.ActiveTexture(GL_TEXTURE0);
       gl.BindTexture(GL_TEXTURE_2D, up.texture);
       if (shared_) {
@@ -584,22 +630,21 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
       }
       gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
       uint64_t level_begin = vbytes + ibytes;
-      // The texture held other images before (the slab's earlier cells) and
-      // has levels past the image's chain: never sample those.
-      if (up.copied == level_begin) gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, p.mip_levels - 1);
-      for (int l = 0; l < p.mip_levels && allowance > 0; ++l) {
+      const int x0 = p.atlas_x, y0 = p.atlas_y, cw = atlasRound(p.texture_width), ch = atlasRound(p.texture_height);
+      for (int l = 0; l < kAtlasLevels && allowance > 0; ++l) {
         int w = 0, h = 0;
-        const uint8_t* texels = mipLevel(p, l, w, h);
+        const uint8_t* texels = atlasSource(p, l, w, h);
         const uint64_t row = uint64_t(w) * 4, size = row * uint64_t(h);
         if (up.copied < level_begin + size) {
           const int y = static_cast<int>((up.copied - level_begin) / row);
           const int rows = static_cast<int>(std::clamp<uint64_t>(allowance / row, 1, uint64_t(h - y)));
-          gl.TexSubImage2D(GL_TEXTURE_2D, l, 0, y, w, rows, GL_RGBA, GL_UNSIGNED_BYTE, texels + row * uint64_t(y));
+          gl.TexSubImage2D(GL_TEXTURE_2D, l, x0 >> l, (y0 >> l) + y, w, rows, GL_RGBA, GL_UNSIGNED_BYTE,
+                           texels + row * uint64_t(y));
           const uint64_t n = row * uint64_t(rows);
           up.copied += n;
           allowance -= std::min(allowance, n);
           if (y + rows < h) break;  // the level is not done: the allowance is
-          padLevel(gl, l, texels, w, h, std::max(1, slab.desc.texture_width >> l), std::max(1, slab.desc.texture_height >> l));
+          padLevel(gl, l, texels, x0 >> l, y0 >> l, w, h, std::max(1, cw >> l), std::max(1, ch >> l));
         }
         level_begin += size;
       }
@@ -688,8 +733,10 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUp
     if (p.rgba && slab) {
       // Texels and mip levels are in already (continueSlabUpload).
       s.texture = copied->texture;
-      s.uv_scale[0] = float(p.texture_width) / float(slab->desc.texture_width);
-      s.uv_scale[1] = float(p.texture_height) / float(slab->desc.texture_height);
+      s.uv_scale[0] = float(p.texture_width) / float(slab->desc.atlas_width);
+      s.uv_scale[1] = float(p.texture_height) / float(slab->desc.atlas_height);
+      s.uv_offset[0] = float(p.atlas_x) / float(slab->desc.atlas_width);
+      s.uv_offset[1] = float(p.atlas_y) / float(slab->desc.atlas_height);
     } else if (p.rgba) {
       // Impostor texture, with mipmaps so a far impostor does not shimmer.
       // A host's bound unpack buffer or row length would redirect the copy.
@@ -729,9 +776,7 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUp
   return MeshHandle{(s.generation << kIndexBits) | (index + 1)};
 }
 
-uint64_t slabGpuBytes(const SlabDesc& d) {
-  return d.vertex_bytes + d.index_bytes + uint64_t(d.textures) * mipChainBytes(d.texture_width, d.texture_height);
-}
+uint64_t slabGpuBytes(const SlabDesc& d) { return d.vertex_bytes + d.index_bytes + atlasBytes(d.atlas_width, d.atlas_height); }
 
 SlabHandle Renderer::createSlab(const SlabDesc& d) {
   Impl& m = *impl_;
@@ -745,9 +790,10 @@ SlabHandle Renderer::createSlab(const SlabDesc& d) {
     fail("slab larger than 2 GiB");
     return {};
   }
-  if (d.textures && (d.texture_width <= 0 || d.texture_height <= 0 || d.texture_width > 16384 ||
-                     d.texture_height > 16384)) {
-    fail("slab texture size out of range");
+  if ((d.atlas_width || d.atlas_height) &&
+      (d.atlas_width <= 0 || d.atlas_height <= 0 || d.atlas_width > 16384 || d.atlas_height > 16384 ||
+       d.atlas_width % kAtlasAlign || d.atlas_height % kAtlasAlign)) {
+    fail("slab atlas size out of range (1..16384, a multiple of 16)");
     return {};
   }
   if (!ctx_.makeCurrent()) {
@@ -758,8 +804,8 @@ SlabHandle Renderer::createSlab(const SlabDesc& d) {
   Slab& s = m.slabs.back();
   s.desc = d;
   s.vaos.resize(d.meshes);
-  s.textures.resize(d.textures);
   s.meshes.reserve(d.meshes);
+  s.places.reserve(d.meshes);
   const GlApi& gl = *gl_;
   ScopedGlState guard(gl, shared_);
   gl.GenBuffers(1, &s.vbo);
@@ -771,20 +817,16 @@ SlabHandle Renderer::createSlab(const SlabDesc& d) {
   gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(d.index_bytes), nullptr, GL_DYNAMIC_DRAW);
   gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
   gl.GenVertexArrays(static_cast<GLsizei>(d.meshes), s.vaos.data());
-  if (d.textures) {
-    gl.GenTextures(static_cast<GLsizei>(d.textures), s.textures.data());
+  if (d.atlas_width) {
+    // Every level is allocated here; uploads only fill them.
+    gl.GenTextures(1, &s.atlas);
     gl.ActiveTexture(GL_TEXTURE0);
-    for (GLuint t : s.textures) {
-      gl.BindTexture(GL_TEXTURE_2D, t);
-      // The whole mip chain is allocated here, so GenerateMipmap later fills
-      // levels that exist instead of allocating them.
-      for (int level = 0, w = d.texture_width, h = d.texture_height;; ++level, w = std::max(1, w / 2),
-               h = std::max(1, h / 2)) {
-        gl.TexImage2D(GL_TEXTURE_2D, level, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-        if (w == 1 && h == 1) break;
-      }
-      setTextureSampling(gl);
-    }
+    gl.BindTexture(GL_TEXTURE_2D, s.atlas);
+    for (int level = 0; level < kAtlasLevels; ++level)
+      gl.TexImage2D(GL_TEXTURE_2D, level, GL_RGBA8, d.atlas_width >> level, d.atlas_height >> level, 0, GL_RGBA,
+                    GL_UNSIGNED_BYTE, nullptr);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, kAtlasLevels - 1);
+    setTextureSampling(gl);
     gl.BindTexture(GL_TEXTURE_2D, 0);
   }
   // A driver that cannot back the slab says so here (GL_OUT_OF_MEMORY leaves
@@ -795,13 +837,13 @@ SlabHandle Renderer::createSlab(const SlabDesc& d) {
     gl.DeleteBuffers(1, &s.vbo);
     gl.DeleteBuffers(1, &s.ibo);
     gl.DeleteVertexArrays(static_cast<GLsizei>(s.vaos.size()), s.vaos.data());
-    if (!s.textures.empty()) gl.DeleteTextures(static_cast<GLsizei>(s.textures.size()), s.textures.data());
+    if (s.atlas) gl.DeleteTextures(1, &s.atlas);
     m.slabs.pop_back();
     out_of_memory_ = e == GL_OUT_OF_MEMORY;
     char msg[200];
-    std::snprintf(msg, sizeof msg, "GL %s allocating a cell slab (%llu vertex, %llu index bytes, %u textures of %dx%d)",
+    std::snprintf(msg, sizeof msg, "GL %s allocating a cell slab (%llu vertex, %llu index bytes, a %dx%d atlas)",
                   out_of_memory_ ? "out of memory" : "error", static_cast<unsigned long long>(d.vertex_bytes),
-                  static_cast<unsigned long long>(d.index_bytes), d.textures, d.texture_width, d.texture_height);
+                  static_cast<unsigned long long>(d.index_bytes), d.atlas_width, d.atlas_height);
     fail(msg);
     return {};
   }
@@ -824,17 +866,14 @@ uint64_t Renderer::measuredSlabBytes(bool& textures_known) {
       gl.GetBufferParameteri64v(GL_ARRAY_BUFFER, GL_BUFFER_SIZE, &size);
       bytes += uint64_t(size);
     }
-    if (!textures_known) continue;
-    for (GLuint t : s.textures) {
-      gl.BindTexture(GL_TEXTURE_2D, t);
-      for (GLint level = 0;; ++level) {
-        GLint w = 0, h = 0;
-        gl.GetTexLevelParameteriv(GL_TEXTURE_2D, level, kTextureWidth, &w);
-        gl.GetTexLevelParameteriv(GL_TEXTURE_2D, level, kTextureHeight, &h);
-        if (w <= 0 || h <= 0) break;
-        bytes += uint64_t(w) * uint64_t(h) * 4;
-        if (w == 1 && h == 1) break;
-      }
+    if (!textures_known || !s.atlas) continue;
+    gl.BindTexture(GL_TEXTURE_2D, s.atlas);
+    for (GLint level = 0; level < kAtlasLevels; ++level) {
+      GLint w = 0, h = 0;
+      gl.GetTexLevelParameteriv(GL_TEXTURE_2D, level, kTextureWidth, &w);
+      gl.GetTexLevelParameteriv(GL_TEXTURE_2D, level, kTextureHeight, &h);
+      if (w <= 0 || h <= 0) break;
+      bytes += uint64_t(w) * uint64_t(h) * 4;
     }
   }
   gl.BindBuffer(GL_ARRAY_BUFFER, 0);
@@ -851,8 +890,9 @@ void Renderer::resetSlab(SlabHandle h) {
     const MeshSlot& ms = impl_->slots[index];
     release(MeshHandle{(ms.generation << kIndexBits) | (index + 1)});
   }
-  s.vertex_used = s.index_used = 0;
-  s.vaos_used = s.textures_used = 0;
+  s.vertex_used = s.index_used = s.texture_used = 0;
+  s.vaos_used = 0;
+  s.places.clear();
   ++s.resets;
 }
 
@@ -863,7 +903,8 @@ SlabUsage Renderer::slabUsage(SlabHandle h) const {
   u.vertex_bytes = s.vertex_used;
   u.index_bytes = s.index_used;
   u.meshes = s.vaos_used;
-  u.textures = s.textures_used;
+  u.textures = static_cast<uint32_t>(s.places.size());
+  u.texture_bytes = s.texture_used;
   return u;
 }
 
@@ -1111,6 +1152,7 @@ void Renderer::drawMeshes(const Camera& cam, const MeshHandle* list, size_t from
     if (shaded_tex) {
       gl.BindTexture(GL_TEXTURE_2D, s.texture);
       gl.Uniform2f(u->uv_scale, s.uv_scale[0], s.uv_scale[1]);
+      gl.Uniform2f(u->uv_offset, s.uv_offset[0], s.uv_offset[1]);
     }
     gl.Uniform3f(u->offset, static_cast<float>(rel.x), static_cast<float>(rel.y), static_cast<float>(rel.z));
     gl.BindVertexArray(s.vao);

@@ -16,6 +16,7 @@
 #include "geo/mesh.h"
 #include "render/camera.h"
 #include "render/prepared_mesh.h"
+#include "render/slab_atlas.h"
 
 namespace blvd::render {
 
@@ -55,16 +56,16 @@ struct MeshHandle {
 };
 
 // A fixed GPU arena: one vertex buffer, one index buffer, `meshes`
-// vertex arrays and `textures` RGBA8 textures of texture_width × texture_height
-// with their mip chains, all allocated by createSlab. Meshes are then placed
-// into it in order with uploadToSlab (glBufferSubData / glTexSubImage2D only:
-// no GL allocation) and released together by resetSlab.
+// vertex arrays and one RGBA8 texture of atlas_width × atlas_height with
+// kAtlasLevels mip levels (slab_atlas.h), all allocated by createSlab. Meshes
+// are then placed into it in order with uploadToSlab (glBufferSubData /
+// glTexSubImage2D only: no GL allocation), each textured one's image at the
+// place its PreparedMesh names, and released together by resetSlab.
 struct SlabDesc {
   uint64_t vertex_bytes = 0;
   uint64_t index_bytes = 0;  // 4-byte aligned placements; budget 3 bytes per mesh for it
   uint32_t meshes = 0;
-  uint32_t textures = 0;
-  int texture_width = 0, texture_height = 0;
+  int atlas_width = 0, atlas_height = 0;  // multiples of kAtlasAlign; 0: no texture
 };
 struct SlabHandle {
   uint32_t id = 0;  // index + 1; 0 is invalid
@@ -87,15 +88,16 @@ struct SlabUpload {
   uint32_t source_resets = 0;         // and its slab's reset count at begin
   PreparedMesh shape;                 // a copy: the source's counts, index type and box
   uint64_t voff = 0, ioff = 0;        // placement in the slab's buffers
-  uint32_t texture = 0;               // the slab texture taken (GL name), 0 without one
+  uint32_t texture = 0;               // the slab's atlas (GL name) for a textured mesh, else 0
   uint64_t copied = 0, total = 0;     // bytes, in the order vertices, indices, texture levels
   uint32_t resets = 0;                // the slab's reset count at begin
 };
 struct SlabUsage {
   uint64_t vertex_bytes = 0, index_bytes = 0;
   uint32_t meshes = 0, textures = 0;
+  uint64_t texture_bytes = 0;  // the atlas's texels the images' places take, every level
 };
-// GPU bytes a slab holds: buffers plus textures with a third for mips.
+// GPU bytes a slab holds: buffers plus the atlas with its levels.
 uint64_t slabGpuBytes(const SlabDesc& desc);
 
 struct FrameStats {
@@ -181,8 +183,11 @@ class Renderer {
   // fails at once with the same error and touches no GL. The owner destroys
   // the renderer (its runtime) and creates a new one.
   bool contextLost() const { return context_lost_; }
-  // Places a prepared mesh after the slab's last one. Invalid handle when the
-  // slab or the mesh pool is full. The only GL calls are sub-data copies.
+  // Places a prepared mesh after the slab's last one, its image (if any) at
+  // (atlas_x, atlas_y) of the slab's atlas. Invalid handle when the slab or
+  // the mesh pool is full, or the image's place is outside the atlas, not on
+  // its kAtlasAlign grid or overlaps an image already there. The only GL calls
+  // are sub-data copies.
   MeshHandle uploadToSlab(SlabHandle slab, const PreparedMesh& mesh);
   // The same in steps (see SlabUpload). begin: false with lastError() set
   // when the slab or the mesh pool has no room. continueSlabUpload copies at
@@ -252,6 +257,7 @@ class Renderer {
   // Takes room for `mesh` in `slab` (no GL): its offsets, texture and byte
   // count into `up`. False with lastError() set when it has none.
   bool reserve(Slab& slab, const PreparedMesh& mesh, SlabUpload& up);
+  bool placeImage(Slab& slab, const PreparedMesh& mesh);
   bool init(const RendererDesc& desc);
   bool fail(const char* what);
 

@@ -143,13 +143,14 @@ layout(location = 0) in vec3 a_position;
 layout(location = 3) in vec2 a_uv;
 uniform mat4 u_viewproj;
 uniform vec3 u_offset;
-uniform vec2 u_uv_scale;  // image size over the texture's (slab textures hold smaller images)
+uniform vec2 u_uv_scale;   // image size over the texture's (a slab's atlas holds many images)
+uniform vec2 u_uv_offset;  // the image's corner in the texture
 out vec3 v_rel;
 out vec2 v_uv;
 void main() {
   vec3 p = a_position + u_offset;
   v_rel = p;
-  v_uv = a_uv * u_uv_scale;
+  v_uv = u_uv_offset + a_uv * u_uv_scale;
   gl_Position = u_viewproj * vec4(p, 1.0);
 }
 )";

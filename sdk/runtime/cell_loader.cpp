@@ -77,7 +77,8 @@ CellLoader::CellLoader(const stream::City& city, const Allocator& alloc, uint64_
   }
   // The heap's part first: a failure here (std::bad_alloc) leaves no host
   // allocation behind.
-  for (Staging& s : slots_) s.layers.resize(city_.maxCellLayers());
+  for (Staging& s : slots_) s.layers.resize(city_.maxCellLayers()), s.atlas.resize(city_.maxCellLayers());
+  atlas_width_ = impostorAtlasWidth(city_.header());
   for (Staging& s : slots_) {
     void* arena = alloc_.allocate(arena_bytes);
     void* table = arena ? alloc_.allocate(sizeof(StagedMesh) * meshes) : nullptr;
@@ -374,6 +375,23 @@ bool CellLoader::markFailed(Staging& s, const std::string& what, core::Status st
   return true;
 }
 
+// Layer j's decoded image at its place in the slot's atlas. The places were
+// packed from the layer table's sizes: an image of another size is corrupt.
+bool CellLoader::placeImage(Staging& s, render::PreparedMesh& m, uint32_t j) {
+  const stream::LayerInfo& l = s.layers[j];
+  if (m.rgba && (m.texture_width != l.texture_width || m.texture_height != l.texture_height)) {
+    markFailed(s,
+               "impostor layer " + std::to_string(j) + " has a " +
+                   std::to_string(m.texture_width) + "x" + std::to_string(m.texture_height) + " image, its table says " +
+                   std::to_string(l.texture_width) + "x" + std::to_string(l.texture_height),
+               core::Status::Corrupt);
+    return false;
+  }
+  m.atlas_x = s.atlas.x[j];
+  m.atlas_y = s.atlas.y[j];
+  return true;
+}
+
 bool CellLoader::decodeCell(Staging& s) {
   s.arena.reset();  // the slot was free: release() / give_back() uncounted its bytes
   s.mesh_count = 0;
@@ -452,6 +470,8 @@ bool CellLoader::decodeCell(Staging& s) {
   }
   uint32_t layered = 0, single = 0;
   city_.cellLayers(s.cell, s.layers.data(), static_cast<uint32_t>(s.layers.size()), &layered, &single);
+  if (layered + single > 0 && s.atlas.pack(s.layers.data(), layered + single, atlas_width_) < 0)
+    return fail("an impostor image is wider than the slot's atlas");
   for (uint32_t j = 0; j < layered + single; ++j) {
     const stream::LayerInfo& l = s.layers[j];
     const bool in_single = j >= layered;
@@ -461,7 +481,9 @@ bool CellLoader::decodeCell(Staging& s) {
     const int64_t cpu0 = threadCpuNs();
     const core::Status st = city_.decodeImpostorBlob(l.blob, s.scratch, err, &s.impostor_bytes);
     if (st != core::Status::Ok) return fail(err, st);
+    const uint32_t staged = s.mesh_count;
     if (!stage(in_single ? MeshKind::Single : MeshKind::Layered, in_single ? j - layered : j, 0)) return true;
+    if (s.mesh_count > staged && !placeImage(s, s.meshes[staged].mesh, j)) return true;
     measured(s, true, units, threadCpuNs() - cpu0);
   }
   std::lock_guard<std::mutex> lock(mu_);

@@ -21,6 +21,7 @@
 
 #include "blvd/blvd.h"
 #include "render/prepared_mesh.h"
+#include "runtime/impostor_atlas.h"
 #include "stream/city.h"
 
 namespace blvd::runtime {
@@ -73,6 +74,7 @@ struct Staging {
   stream::City::BlockBlob blob;       // the block being decoded; its bytes kept between cells
   std::vector<uint8_t> impostor_bytes;  // an impostor's blob, likewise
   std::vector<stream::LayerInfo> layers;  // the cell's impostor layers, sized at create
+  ImpostorAtlas atlas;                    // their images' places in the slot's atlas, likewise
 };
 
 class CellLoader {
@@ -166,6 +168,7 @@ class CellLoader {
   bool decode(Staging& s);
   bool decodeCell(Staging& s);  // decode() without its catch
   bool markFailed(Staging& s, const std::string& what, core::Status st);  // Failed (unavailable when the link's)
+  bool placeImage(Staging& s, render::PreparedMesh& m, uint32_t layer);
   // Background jobs: waits for a gap between frames to fit a unit of `units`
   // (block: triangles + vertices; impostor: texels + triangles + vertices)
   // at the rate measured so far for its kind.
@@ -184,6 +187,7 @@ class CellLoader {
 
   const stream::City& city_;
   Allocator alloc_;
+  int atlas_width_ = 0;  // the slots' impostor atlas (impostorAtlasWidth)
   Staging slots_[kStagingSlots];
   uint64_t order_[kStagingSlots] = {};  // request sequence, to finish oldest first
   uint64_t seq_ = 0;

@@ -19,8 +19,8 @@ CellSlots::CellSlots(const stream::City& city, render::Renderer& renderer, CellL
                         "cell slab: " + renderer.lastError());
     slot.blocks.reserve(plan.max_local_blocks);
     slot.copies.reserve(copies);
-    slot.layered.reserve(plan.slab.textures);
-    slot.single.reserve(plan.slab.textures);
+    slot.layered.reserve(plan.max_cell_layers);
+    slot.single.reserve(plan.max_cell_layers);
     slot.layers.resize(plan.max_cell_layers);
   }
   failed_cells_.assign(8, graph::kNone);

@@ -25,7 +25,8 @@ void addMesh(CellNeed& n, uint64_t v, uint64_t t, int tw, int th) {
 
 }  // namespace
 
-CellNeed cellNeed(const stream::City& city, uint32_t cell, stream::LayerInfo* layers) {
+CellNeed cellNeed(const stream::City& city, uint32_t cell, int atlas_width, stream::LayerInfo* layers,
+                  ImpostorAtlas& atlas) {
   CellNeed n;
   for (const uint32_t b : city.streets().localBlocks(cell)) {
     const graph::BlockRecord r = city.block(b);
@@ -40,6 +41,7 @@ CellNeed cellNeed(const stream::City& city, uint32_t cell, stream::LayerInfo* la
     n.texture_width = std::max(n.texture_width, l.texture_width);
     n.texture_height = std::max(n.texture_height, l.texture_height);
   }
+  if (n.textures) n.atlas_height = atlas.pack(layers, layered + single, atlas_width);
   return n;
 }
 
@@ -58,7 +60,7 @@ static void planFromHeader(const stream::City& city, MemoryPlan& p) {
   p.slab.vertex_bytes = v * render::kVertexBytes;
   p.slab.index_bytes = t * 3 * 4 + 3ull * meshes;
   p.slab.meshes = meshes;
-  p.slab.textures = h.max_cell_impostor_layers;
+  if (h.max_cell_impostor_layers) p.slab.atlas_height = impostorAtlasHeightBound(h, p.slab.atlas_width);
   p.staging_arena_bytes = p.slab.vertex_bytes + t * 3 * 4 + h.max_cell_impostor_texture_bytes * 4 / 3 +
                           h.max_cell_impostor_layers * rounding + 64ull * meshes;
   p.largest_cell = graph::kNone;
@@ -71,6 +73,7 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   p.resident_cells = desc.max_resident_cells;
   const int tw = city.header().max_impostor_texture_width, th = city.header().max_impostor_texture_height;
   p.max_local_blocks = city.header().max_cell_local_blocks;
+  p.slab.atlas_width = impostorAtlasWidth(city.header());
   uint64_t most = 0;
   // The header's maxima size scratch arrays and slab textures: a package whose
   // tables exceed them is corrupt, not a reason to write past an array.
@@ -78,16 +81,19 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
     throw core::Error(core::Status::Corrupt, city.package().name() + ": header pool sizing is below the tables: " + what);
   };
   std::vector<stream::LayerInfo> layers(city.maxCellLayers());
+  ImpostorAtlas atlas;
+  atlas.resize(layers.size());
   if (city.tablesOverLink()) planFromHeader(city, p);
   for (uint32_t c = 0; !city.tablesOverLink() && c < city.streets().cellCount(); ++c) {
     if (city.streets().localBlocks(c).size() > p.max_local_blocks)
       corrupt("cell " + std::to_string(c) + " has more local blocks than the header says");
-    const CellNeed n = cellNeed(city, c, layers.data());
-    if (n.texture_width > tw || n.texture_height > th) corrupt("an impostor texture is larger than the header says");
+    const CellNeed n = cellNeed(city, c, p.slab.atlas_width, layers.data(), atlas);
+    if (n.texture_width > tw || n.texture_height > th || n.atlas_height < 0)
+      corrupt("cell " + std::to_string(c) + " has an impostor texture larger than the header says");
     p.slab.vertex_bytes = std::max(p.slab.vertex_bytes, n.vertex_bytes);
     p.slab.index_bytes = std::max(p.slab.index_bytes, n.index_bytes);
     p.slab.meshes = std::max(p.slab.meshes, n.meshes);
-    p.slab.textures = std::max(p.slab.textures, n.textures);
+    p.slab.atlas_height = std::max(p.slab.atlas_height, n.atlas_height);
     p.staging_arena_bytes = std::max(p.staging_arena_bytes, n.staging_bytes);
     const uint64_t total = n.vertex_bytes + n.index_bytes + n.staging_bytes;
     if (total > most) most = total, p.largest_cell = c;
@@ -96,8 +102,14 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   p.slab.vertex_bytes = std::max<uint64_t>(p.slab.vertex_bytes, render::kVertexBytes);
   p.slab.index_bytes = std::max<uint64_t>(p.slab.index_bytes, 8);
   p.slab.meshes = std::max(p.slab.meshes, 1u);
-  p.slab.texture_width = p.slab.textures ? tw : 0;
-  p.slab.texture_height = p.slab.textures ? th : 0;
+  // A 3.3 header names the atlas the bake packed every cell into: the same
+  // slots whether the tables are read whole or over the link a page at a time.
+  if (city.header().impostor_atlas_height && !city.tablesOverLink()) {
+    if (p.slab.atlas_height > city.header().impostor_atlas_height)
+      corrupt("a cell's impostor images take more of the atlas than the header says");
+    p.slab.atlas_height = city.header().impostor_atlas_height;
+  }
+  if (p.slab.atlas_height == 0) p.slab.atlas_width = 0;
   p.staging_meshes = p.slab.meshes;
   p.staging_bytes = kStagingSlots * (p.staging_arena_bytes + stagingTableBytes(p.staging_meshes));
   p.table_bytes = city.tableBytes();

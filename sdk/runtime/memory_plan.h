@@ -5,7 +5,10 @@
 // Pools:
 //   GPU   one slab per resident-cell slot, sized for the package's largest
 //         cell in each dimension (vertex bytes, index bytes, meshes, impostor
-//         textures): the current cell's local blocks and its impostors.
+//         atlas height): the current cell's local blocks and its impostors,
+//         whose images share one atlas texture (render/slab_atlas.h), so a
+//         slot's texels follow the bake's texel budget a cell, not the
+//         number of layers or runs times the largest image.
 //   CPU   staging: kStagingSlots arenas the loader thread decodes a cell into
 //         (the render thread copies them to a slab), each for the largest cell;
 //         tables: the package's graph, cell and block tables the runtime holds;
@@ -16,6 +19,7 @@
 
 #include "blvd/blvd.h"
 #include "runtime/cell_loader.h"
+#include "runtime/impostor_atlas.h"
 #include "runtime/terrain_set.h"
 #include "render/renderer.h"
 #include "stream/city.h"
@@ -30,9 +34,11 @@ struct CellNeed {
   uint64_t staging_bytes = 0;  // render::preparedBytes summed over the meshes
   uint32_t meshes = 0, textures = 0;
   uint16_t texture_width = 0, texture_height = 0;  // the largest impostor texture's
+  int atlas_height = 0;  // the impostor images packed into an atlas `atlas_width` wide (-1: one is wider)
 };
-// `layers`: scratch of at least city.maxCellLayers() entries.
-CellNeed cellNeed(const stream::City& city, uint32_t cell, stream::LayerInfo* layers);
+// `layers` and `atlas`: scratch of at least city.maxCellLayers() entries.
+CellNeed cellNeed(const stream::City& city, uint32_t cell, int atlas_width, stream::LayerInfo* layers,
+                  ImpostorAtlas& atlas);
 
 struct MemoryPlan {
   uint32_t resident_cells = 0;

@@ -122,8 +122,7 @@ void CellSlots::finishSlot(CellSlot& slot) {
                    &slot.single_count);
   for (SlotBlock& b : slot.blocks) b.ach = city_.coverage(slot.cell, b.block), b.record = city_.block(b.block);
   const render::SlabUsage u = renderer_.slabUsage(slot.slab);
-  const uint64_t tex = render::mipChainBytes(plan_.slab.texture_width, plan_.slab.texture_height);
-  slot.bytes = u.vertex_bytes + u.index_bytes + u.textures * tex;
+  slot.bytes = u.vertex_bytes + u.index_bytes + u.texture_bytes;
   slot.state = CellSlot::Resident;
   high_water_ = std::max(high_water_, usedBytes());
 }

@@ -39,7 +39,7 @@ d, = json.load(open(sys.argv[1]))
 imp, cell, mem = d["impostors"], d["cell_impostors"], d["memory"]
 assert 0 < cell["meshes"] <= imp["meshes"], (cell, imp)  # the route's cells have impostors, one or more layers each
 assert abs(cell["ms_total"] - imp["ms_total"]) < 1e-6 * max(1.0, imp["ms_total"]) and cell["ms_max"] >= imp["ms_max"], (cell, imp)
-assert mem["resident_cells"] == 4 and mem["slab_textures"] > 0, mem  # the default descriptor
+assert mem["resident_cells"] == 4 and mem["slab_atlas_width"] > 0 and mem["slab_atlas_height"] > 0, mem  # the default descriptor
 assert 0 < mem["resident_cells"] * mem["slab_bytes"] <= mem["gpu_bytes"] and mem["cpu_bytes"] > 0, mem
 PY
 "$blvd" bench budget "$pkg" --route auto:6 --seed 7 --laps 2 --size 320x192 --json "$work/budget.json" \

@@ -91,6 +91,8 @@ inline PackageHeader sampleHeader() {
   h.max_impostor_texture_bytes = 1555;
   h.max_impostor_texture_width = 516;
   h.max_impostor_texture_height = 517;
+  h.impostor_atlas_width = 560;
+  h.impostor_atlas_height = 568;
   return h;
 }
 

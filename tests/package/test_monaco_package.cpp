@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include "common/monaco_city.h"
+#include "render/slab_atlas.h"
 
 namespace blvd {
 namespace {
@@ -122,8 +123,10 @@ TEST(MonacoPackage, HeaderPoolSizingEqualsABruteForceScan) {
   }
   ASSERT_TRUE(city().hasImpostors()) << "the fixture bakes impostors on a route";
   size_t layers_seen = 0;
+  std::vector<std::vector<int>> cell_w, cell_h;  // each cell's decoded image sizes, layered then single
   for (const graph::CellImpostors& ci : city().cellTables().impostors) {
     uint64_t n = 0, sv = 0, st = 0, sb = 0, stex = 0;
+    cell_w.emplace_back(), cell_h.emplace_back();
     for (const auto* list : {&ci.layered, &ci.single})
       for (const graph::ImpostorLayer& l : *list) {
         geo::MeshData m;
@@ -137,6 +140,7 @@ TEST(MonacoPackage, HeaderPoolSizingEqualsABruteForceScan) {
         EXPECT_EQ(m.triangleCount(), l.triangles);
         const uint64_t blob = pkg.blobInfo(l.blob).size, tex = uint64_t{w} * h * 4;
         ++n, ++layers_seen, sv += m.vertexCount(), st += m.triangleCount(), sb += blob, stex += tex;
+        cell_w.back().push_back(int(w)), cell_h.back().push_back(int(h));
         e.max_cell_blob_bytes = std::max<uint32_t>(e.max_cell_blob_bytes, uint32_t(blob));
         e.max_impostor_texture_bytes = std::max<uint32_t>(e.max_impostor_texture_bytes, uint32_t(tex));
         e.max_impostor_texture_width = std::max<uint16_t>(e.max_impostor_texture_width, uint16_t(w));
@@ -149,6 +153,18 @@ TEST(MonacoPackage, HeaderPoolSizingEqualsABruteForceScan) {
     e.max_cell_impostor_texture_bytes = std::max(e.max_cell_impostor_texture_bytes, stex);
   }
   EXPECT_GT(layers_seen, 0u);
+  // The slots' atlas: every cell's images packed as the loader packs them.
+  e.impostor_atlas_width = uint16_t(render::atlasWidth(e.max_impostor_texture_width, e.max_cell_impostor_texture_bytes / 4));
+  for (size_t c = 0; c < cell_w.size(); ++c) {
+    const uint32_t n = uint32_t(cell_w[c].size());
+    std::vector<int> x(n), y(n);
+    std::vector<uint32_t> order(n);
+    const int used = render::packSlabAtlas(cell_w[c].data(), cell_h[c].data(), n, e.impostor_atlas_width, x.data(),
+                                           y.data(), order.data());
+    ASSERT_GE(used, 0) << "cell " << c;
+    e.impostor_atlas_height = std::max<uint16_t>(e.impostor_atlas_height, uint16_t(used));
+  }
+  EXPECT_GT(e.impostor_atlas_height, 0u);
   const package::PackageHeader& h = city().header();
   const auto got = package::poolSizing(h), want = package::poolSizing(e);
   ASSERT_EQ(got.size(), want.size());

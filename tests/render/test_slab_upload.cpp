@@ -151,6 +151,7 @@ struct Prepared {
       PreparedMesh p;
       std::string err;
       EXPECT_TRUE(prepareMesh(m, arena, p, err)) << err;
+      if (p.rgba) p.atlas_x = p.atlas_y = 0;  // alone in its slab's atlas
       meshes.push_back(p);
     }
   }
@@ -163,9 +164,8 @@ SlabDesc slabFor(const Prepared& p) {
     d.index_bytes += m.indexBytes() + 3;
   }
   d.meshes = 4;
-  d.textures = 1;
-  d.texture_width = 512;  // larger than the image: it lands in a corner
-  d.texture_height = 256;
+  d.atlas_width = 512;  // larger than the image: it lands in a corner
+  d.atlas_height = 256;
   return d;
 }
 
@@ -237,10 +237,17 @@ TEST(SlabUpload, ManySmallStepsDrawWhatOneCopyDraws) {
     ASSERT_NE(h.id, 0u) << r->lastError();
     chunked.push_back(h);
   }
-  // At most 4 KiB (or one texture row, if longer) a step.
+  // At most 4 KiB (or one texture row, if longer) a step; an atlas takes an
+  // image's first kAtlasLevels levels.
   uint64_t total = 0;
-  for (const PreparedMesh& m : prep.meshes)
-    total += m.vertexBytes() + m.indexBytes() + mipChainBytes(m.texture_width, m.texture_height);
+  for (const PreparedMesh& m : prep.meshes) {
+    total += m.vertexBytes() + m.indexBytes();
+    for (int l = 0; m.rgba && l < kAtlasLevels; ++l) {
+      int w = 0, h = 0;
+      mipLevel(m, l, w, h);
+      total += uint64_t(w) * uint64_t(h) * 4;
+    }
+  }
   EXPECT_GE(uint64_t(steps), total / 4096);
   const std::vector<uint8_t> b = draw(*r, chunked);
   EXPECT_EQ(a, b) << "a mesh copied in steps draws differently";
@@ -265,8 +272,8 @@ geo::MeshData farWall(int tw, int th, F texel) {
   return wall;
 }
 
-// A slab texture keeps what earlier images left outside the current image's
-// corner; filtering the image's coarse levels must not reach it (the frames of
+// A slab's atlas keeps what earlier images left outside the current image's
+// place; filtering the image's coarse levels must not reach it (the frames of
 // a runtime then depended on which cells its slots had held: SlotHistory.*).
 TEST(SlabUpload, AnImageIsNotBledIntoByWhatItsTextureHeldBefore) {
   Rig rig;
@@ -282,13 +289,13 @@ TEST(SlabUpload, AnImageIsNotBledIntoByWhatItsTextureHeldBefore) {
   std::string err;
   ASSERT_TRUE(prepareMesh(big, arena, pb, err)) << err;
   ASSERT_TRUE(prepareMesh(small, arena, ps, err)) << err;
+  pb.atlas_x = pb.atlas_y = ps.atlas_x = ps.atlas_y = 0;
   SlabDesc d;
   d.vertex_bytes = 2 * pb.vertexBytes();
   d.index_bytes = 2 * pb.indexBytes() + 8;
   d.meshes = 2;
-  d.textures = 1;
-  d.texture_width = 512;
-  d.texture_height = 256;
+  d.atlas_width = 512;
+  d.atlas_height = 256;
   const SlabHandle fresh = r->createSlab(d), used = r->createSlab(d);
   // The used slab's texture held a magenta image of its full size first.
   ASSERT_NE(r->uploadToSlab(used, pb).id, 0u) << r->lastError();
@@ -467,6 +474,144 @@ TEST(SlabCopy, AResetOfTheSourceAbandonsAnUnfinishedCopy) {
   EXPECT_EQ(r->continueSlabUpload(up, 1 << 20, finished).id, 0u);
   EXPECT_TRUE(finished);
   EXPECT_NE(r->lastError().find("source mesh is gone"), std::string::npos) << r->lastError();
+}
+
+
+// Packing: every image on the grid, inside the width, clear of the others,
+// within NFDH's height bound; the same sizes give the same places.
+TEST(SlabAtlas, ImagesArePackedApartWithinTheBound) {
+  uint32_t seed = 7;
+  auto next = [&seed](int n) { return int((seed = seed * 1664525u + 1013904223u) >> 8) % n; };
+  for (int trial = 0; trial < 200; ++trial) {
+    const uint32_t n = 1 + uint32_t(next(40));
+    std::vector<int> w(n), h(n), x(n), y(n), x2(n), y2(n);
+    std::vector<uint32_t> order(n);
+    uint64_t area = 0;
+    int tallest = 0, widest = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      w[i] = 1 + next(600), h[i] = 1 + next(trial % 2 ? 40 : 400);
+      area += uint64_t(atlasRound(w[i])) * uint64_t(atlasRound(h[i]));
+      tallest = std::max(tallest, h[i]), widest = std::max(widest, w[i]);
+    }
+    const int width = atlasWidth(widest, area);
+    const int height = packSlabAtlas(w.data(), h.data(), n, width, x.data(), y.data(), order.data());
+    ASSERT_GT(height, 0);
+    EXPECT_EQ(height % kAtlasAlign, 0);
+    EXPECT_LE(height, atlasHeightBound(area, tallest, width));
+    for (uint32_t i = 0; i < n; ++i) {
+      EXPECT_EQ(x[i] % kAtlasAlign, 0);
+      EXPECT_EQ(y[i] % kAtlasAlign, 0);
+      EXPECT_LE(x[i] + w[i], width);
+      EXPECT_LE(y[i] + h[i], height);
+      for (uint32_t j = 0; j < i; ++j)
+        EXPECT_FALSE(x[i] < x[j] + atlasRound(w[j]) && x[j] < x[i] + atlasRound(w[i]) && y[i] < y[j] + atlasRound(h[j]) &&
+                     y[j] < y[i] + atlasRound(h[i]))
+            << "images " << i << " and " << j << " overlap";
+    }
+    EXPECT_EQ(packSlabAtlas(w.data(), h.data(), n, width, x2.data(), y2.data(), order.data()), height);
+    EXPECT_EQ(x, x2);
+    EXPECT_EQ(y, y2);
+  }
+  const int w[2] = {100, 40}, h[2] = {10, 0};
+  int x[2], y[2];
+  uint32_t order[2];
+  EXPECT_EQ(packSlabAtlas(w, h, 2, 96, x, y, order), -1);  // wider than the atlas
+  EXPECT_EQ(packSlabAtlas(w, h, 2, 160, x, y, order), 16);  // the image without texels takes no place
+}
+
+// Two images in one atlas, the second beside a magenta one: each draws as it
+// does alone in an atlas of the same size, and the neighbour never bleeds in,
+// from the finest level to the coarsest the atlas has.
+TEST(SlabAtlas, AnImageDrawsTheSameBesideAnother) {
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
+  const geo::MeshData pink = farWall(150, 130, [](int, int, uint8_t* t) { t[0] = 255, t[1] = 0, t[2] = 255, t[3] = 255; });
+  // As the bake's layer images are: a gutter of 4 texels (kAtlasGutter)
+  // around what the mesh maps.
+  geo::MeshData wall = farWall(203, 117, [](int x, int y, uint8_t* t) {
+    t[0] = uint8_t(40 + (x * 7) % 60), t[1] = uint8_t(60 + (y * 5) % 80), t[2] = 70, t[3] = 255;
+  });
+  const float u0 = 4.f / 203, u1 = 1 - u0, v0 = 4.f / 117, v1 = 1 - v0;
+  wall.texcoords = {u0, v0, u1, v0, u1, v1, u0, v1};
+  std::vector<uint8_t> block(preparedBytes(4, 6, 150, 130) + 2 * preparedBytes(4, 6, 203, 117));
+  StagingArena arena{block.data(), block.size(), 0};
+  PreparedMesh pp, alone, beside;
+  std::string err;
+  ASSERT_TRUE(prepareMesh(pink, arena, pp, err)) << err;
+  ASSERT_TRUE(prepareMesh(wall, arena, alone, err)) << err;
+  ASSERT_TRUE(prepareMesh(wall, arena, beside, err)) << err;
+  const int w[2] = {150, 203}, h[2] = {130, 117};
+  int x[2], y[2];
+  uint32_t order[2];
+  SlabDesc d;
+  d.vertex_bytes = 2 * pp.vertexBytes();
+  d.index_bytes = 2 * pp.indexBytes() + 8;
+  d.meshes = 2;
+  d.atlas_width = 360;
+  d.atlas_height = packSlabAtlas(w, h, 2, d.atlas_width, x, y, order);
+  ASSERT_EQ(d.atlas_height, 136);
+  pp.atlas_x = x[0], pp.atlas_y = y[0];
+  beside.atlas_x = x[1], beside.atlas_y = y[1];
+  ASSERT_EQ(beside.atlas_x, 152);  // right after the (taller) pink image's place
+  alone.atlas_x = alone.atlas_y = 0;
+  const SlabHandle one = r->createSlab(d), two = r->createSlab(d);
+  const MeshHandle a = r->uploadToSlab(one, alone);
+  ASSERT_NE(r->uploadToSlab(two, pp).id, 0u) << r->lastError();
+  const MeshHandle b = r->uploadToSlab(two, beside);
+  ASSERT_NE(a.id, 0u) << r->lastError();
+  ASSERT_NE(b.id, 0u) << r->lastError();
+  EXPECT_EQ(r->slabUsage(two).textures, 2u);
+  EXPECT_EQ(r->slabUsage(two).texture_bytes, atlasBytes(152, 136) + atlasBytes(208, 120));
+  for (double back : {0.0, -300.0, -700.0}) {  // 260 to 960 m: finer to coarser than the atlas's last level
+    Camera cam = viewCamera();
+    cam.eye_enu.y = back;
+    std::vector<uint8_t> fa(size_t(kW) * kH * 4), fb(fa.size()), empty(fa.size());
+    ASSERT_TRUE(r->render(cam, nullptr, 0, nullptr)) << r->lastError();
+    ASSERT_TRUE(r->readPixels(empty.data()));
+    ASSERT_TRUE(r->render(cam, &a, 1, nullptr)) << r->lastError();
+    ASSERT_TRUE(r->readPixels(fa.data()));
+    ASSERT_TRUE(r->render(cam, &b, 1, nullptr)) << r->lastError();
+    ASSERT_TRUE(r->readPixels(fb.data()));
+    int wall_px = 0, magenta = 0, worst = 0;
+    for (size_t i = 0; i < fb.size(); i += 4) {
+      wall_px += std::memcmp(&fa[i], &empty[i], 3) != 0;
+      magenta += fb[i] > 150 && fb[i + 1] < 100 && fb[i + 2] > 150;
+      for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(int(fa[i + k]) - int(fb[i + k])));
+    }
+    EXPECT_GT(wall_px, 0) << "the wall is not in the frame " << back << " m back";
+    EXPECT_EQ(magenta, 0) << back << " m back";
+    EXPECT_LE(worst, 2) << back << " m back";
+  }
+}
+
+// A place off the grid, outside the atlas or over another image is refused,
+// and nothing of the refused mesh stays in the slab.
+TEST(SlabAtlas, ABadPlaceIsRefused) {
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
+  const Scene scene;
+  Prepared prep(scene);
+  const SlabHandle slab = r->createSlab(slabFor(prep));
+  PreparedMesh m = prep.meshes[1];  // 256 x 128
+  ASSERT_NE(r->uploadToSlab(slab, m).id, 0u) << r->lastError();
+  m.atlas_x = 4;
+  EXPECT_EQ(r->uploadToSlab(slab, m).id, 0u);
+  EXPECT_NE(r->lastError().find("grid"), std::string::npos) << r->lastError();
+  m.atlas_x = 240;
+  EXPECT_EQ(r->uploadToSlab(slab, m).id, 0u);
+  EXPECT_NE(r->lastError().find("overlaps"), std::string::npos) << r->lastError();
+  m.atlas_x = 256, m.atlas_y = 144;
+  EXPECT_EQ(r->uploadToSlab(slab, m).id, 0u);
+  EXPECT_NE(r->lastError().find("outside the atlas"), std::string::npos) << r->lastError();
+  m.atlas_x = -1;
+  EXPECT_EQ(r->uploadToSlab(slab, m).id, 0u);
+  EXPECT_EQ(r->slabUsage(slab).textures, 1u);
+  EXPECT_EQ(r->slabUsage(slab).meshes, 1u);
+  m.atlas_x = 256, m.atlas_y = 128;
+  EXPECT_NE(r->uploadToSlab(slab, m).id, 0u) << r->lastError();
+  EXPECT_EQ(r->slabUsage(slab).textures, 2u);
 }
 
 }  // namespace
