@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """Rewrites the measured tables of docs/benchmarks.md from the benches' JSON.
 
-    tools/bench_doc.py OUT_DIR docs/benchmarks.md
+    tools/bench_doc.py OUT_DIR docs/benchmarks.md [NAME ...]
 
 OUT_DIR is what packaging/scripts/bench.sh writes: NAME.json per benchmark and
 commands.tsv (NAME <tab> the command that produced it). Each table sits
 between `<!-- bench:NAME -->` and `<!-- /bench:NAME -->` in the document and
 is replaced whole, with the command under it; the prose around the markers is
 kept. A marker whose JSON is missing is an error: a table is never left stale
-beside fresh ones.
+beside fresh ones. With NAMEs, only those tables are rewritten (a partial
+re-measurement; the rest stay as they were).
 """
 import json
 import os
@@ -148,15 +149,20 @@ def command_text(cmd):
 
 
 def main():
-    out_dir, doc = sys.argv[1], sys.argv[2]
+    out_dir, doc, only = sys.argv[1], sys.argv[2], set(sys.argv[3:])
     commands = {}
     for line in open(os.path.join(out_dir, "commands.tsv")):
         name, cmd = line.rstrip("\n").split("\t", 1)
         commands[name] = command_text(cmd)
     text = open(doc).read()
 
+    rewritten = []
+
     def replace(m):
         name = m.group(1)
+        if only and name not in only:
+            return m.group(0)
+        rewritten.append(name)
         if name not in commands:
             sys.exit(f"bench_doc: {doc}: no run of '{name}' in {out_dir}/commands.tsv")
         if name.startswith("bake."):
@@ -169,7 +175,7 @@ def main():
     if n == 0:
         sys.exit(f"bench_doc: {doc} has no <!-- bench:NAME --> markers")
     open(doc, "w").write(text)
-    print(f"bench_doc: {n} tables rewritten in {doc}")
+    print(f"bench_doc: {len(rewritten)} of {n} tables rewritten in {doc}")
 
 
 if __name__ == "__main__":

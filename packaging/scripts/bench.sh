@@ -38,12 +38,13 @@ monaco() {
     "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/demo.blvd" > "$out/bake-demo.txt"
   "$blvd" pack info --json "$out/demo.blvd" > "$out/bake-demo.json"
   run route.demo "$blvd" bench route "$out/demo.blvd" --route auto:12 --seed 7 --step 12 --json "$out/route.demo.json"
-  "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-webp.blvd" --impostor both \
-    --impostor-route auto:200 --seed 1 --texture-codec webp
-  "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-w2.blvd" --impostor both \
-    --impostor-route auto:200 --seed 1 --texture-codec webp --cell-texels 327680
-  run decode "$blvd" bench decode "$out/osrm.blvd" "$out/osrm-webp.blvd" "$out/osrm-w2.blvd" "$out/osrm-none.blvd" \
-    --rounds 3 --json "$out/decode.json"
+  # The former bake defaults (decision 0015), and the same in WebP.
+  "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-jpeg1x.blvd" --impostor both \
+    --impostor-route auto:200 --seed 1 --texture-codec jpeg --cell-texels 163840 --run-length 100 --max-runs 4
+  "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-webp1x.blvd" --impostor both \
+    --impostor-route auto:200 --seed 1 --cell-texels 163840 --run-length 100 --max-runs 4
+  run decode "$blvd" bench decode "$out/osrm.blvd" "$out/osrm-jpeg1x.blvd" "$out/osrm-webp1x.blvd" \
+    "$out/osrm-none.blvd" --rounds 3 --json "$out/decode.json"
   "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/m1.blvd" --impostor both --impostor-route auto:40 --seed 7
   "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/m4.blvd" --impostor both --impostor-route auto:40 \
     --seed 7 --tile 2x2

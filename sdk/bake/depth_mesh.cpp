@@ -1032,4 +1032,30 @@ size_t hangSkirt(CaptureImage& img, int rows) {
   return count;
 }
 
+size_t dropEdgeOnTriangles(geo::MeshData& mesh, const glm::dvec3& eye, const glm::dvec3& viewer, double max_cos) {
+  if (!(max_cos > 0.0)) return 0;
+  auto at = [&](uint32_t i) {
+    return glm::dvec3(mesh.positions[3 * size_t(i)], mesh.positions[3 * size_t(i) + 1], mesh.positions[3 * size_t(i) + 2]);
+  };
+  size_t kept = 0;
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const glm::dvec3 a = at(mesh.indices[t]), b = at(mesh.indices[t + 1]), c = at(mesh.indices[t + 2]);
+    const glm::dvec3 n = glm::cross(b - a, c - a), mid = (a + b + c) / 3.0;
+    const double len = glm::length(n);
+    bool drop = false;
+    if (len > 0.0 && glm::length(mid - eye) > 0.0 && glm::length(mid - viewer) > 0.0) {
+      const glm::dvec3 u = n / len;
+      const double from_eye = std::abs(glm::dot(u, glm::normalize(mid - eye)));
+      const double from_viewer = std::abs(glm::dot(u, glm::normalize(mid - viewer)));
+      drop = std::abs(u.y) < 0.9 && from_eye < max_cos && from_viewer > 2.0 * from_eye;
+    }
+    if (drop) continue;
+    for (size_t k = 0; k < 3; ++k) mesh.indices[kept * 3 + k] = mesh.indices[t + k];
+    ++kept;
+  }
+  const size_t dropped = mesh.indices.size() / 3 - kept;
+  mesh.indices.resize(kept * 3);
+  return dropped;
+}
+
 }  // namespace blvd::bake

@@ -128,6 +128,19 @@ bool buildDepthMesh(const CaptureImage& img, const PinholeCamera& cam, const Dep
                     geo::MeshData& out, DepthMeshStats* stats, std::string& why,
                     DepthMeshDebug* debug = nullptr);
 
+// Triangles of a depth mesh captured from `eye` that stand edge-on to it and
+// face a viewer at `viewer` (the run's far end) at least twice as squarely:
+// |n . ray| below `max_cos` from the eye (0.2: within 12 degrees of edge-on)
+// and more than twice that from the viewer. A triangle the capture saw
+// edge-on holds almost no texels and mostly spans a depth step the
+// discrepancy lines missed (S97 §4.2: a triangle across a step is a "rubber
+// sheet"); from the run's end it opens into a needle across the near street.
+// Horizontal triangles (ground, roofs: |n.y| >= 0.9) are kept: ground is seen
+// edge-on from every eye on a street, and stays thin from each. Both points
+// in the mesh's frame (glTF axes). Returns the triangles dropped; unused
+// vertices stay.
+size_t dropEdgeOnTriangles(geo::MeshData& mesh, const glm::dvec3& eye, const glm::dvec3& viewer, double max_cos);
+
 // A skirt under the captured geometry, as terrain LOD hangs one under a
 // tile's edges to hide cracks: every covered pixel with background (alpha 0,
 // not an underside) below it is continued `rows` pixels straight down at its

@@ -20,6 +20,7 @@
 #include "bake/visibility_bake.h"
 #include "core/log.h"
 #include "package/glb.h"
+#include "render/camera.h"
 
 namespace blvd::bake {
 namespace {
@@ -222,11 +223,12 @@ AtlasLayout layoutAtlas(std::vector<CaptureShot>& shots, const CapturePlanOption
 
 // A layer's captures made into one textured depth mesh blob `glb` (S97 §4.2):
 // each capture's depth mesh, its texture coordinates moved into the atlas,
-// and the atlas as the texture. False when nothing survives (nothing covered,
-// or Draco kept nothing).
+// and the atlas as the texture, less the triangles the capture saw edge-on
+// and the viewer at the run's `end` faces (dropEdgeOnTriangles). False when
+// nothing survives (nothing covered, or Draco kept nothing).
 bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::vector<uint32_t>& blocks,
-                  const ImpostorOptions& opt, const CapturePlanOptions& popt, graph::ImpostorLayer& il,
-                  ImpostorRecord& rec, std::vector<uint8_t>& glb) {
+                  const ImpostorOptions& opt, const CapturePlanOptions& popt, const glm::dvec3& end,
+                  graph::ImpostorLayer& il, ImpostorRecord& rec, std::vector<uint8_t>& glb) {
   const auto tl = Clock::now();
   const AtlasLayout layout = layoutAtlas(shots, popt);
   CaptureImage atlas;
@@ -248,6 +250,7 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
       BLVD_LOG_DEBUG("cell %u layer %u capture %zu: nothing (%s)", rec.cell, rec.layer, k, why.c_str());
       continue;
     }
+    dropEdgeOnTriangles(part, pin.eye, end, opt.edge_on_cos);
     const auto [x0, y0] = layout.at[k];
     for (int y = 0; y < img.height; ++y) {
       const size_t src = size_t(y) * img.width, dst = size_t(y0 + y) * atlas.width + x0;
@@ -356,6 +359,7 @@ struct CaptureJob {
   bool single;
   float run_from;
   std::vector<uint32_t> blocks;
+  glm::dvec3 end{0.0};  // the eye at the run's far end, glTF axes
 };
 
 // One cell's impostors as a worker makes them; committed in cell order.
@@ -381,11 +385,12 @@ CellImpostors bakeCellImpostors(const CellBake& cb, CaptureRig& rig, uint32_t h,
   std::vector<std::vector<CaptureShot>> plans;
   for (const auto& [s0, s1] : cellRuns(cb.g, e, opt)) {
     const CellView view = cellView(cb.g, e, s0, s1, opt, rig);
+    const glm::dvec3 end = render::enuToGltf(eyeAt(view.Q, opt.ground));
     std::vector<CaptureJob> run;
     if (opt.mode == ImpostorMode::Layered || opt.mode == ImpostorMode::Both)
       for (auto& blocks : layerBlocks(view, far, cb.info, opt, cb.T, out.counters))
-        run.push_back({false, float(s0), blocks});
-    if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both) run.push_back({true, float(s0), far});
+        run.push_back({false, float(s0), blocks, end});
+    if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both) run.push_back({true, float(s0), far, end});
     for (CaptureJob& j : run) {
       plans.push_back(
           planCaptures(rig, view.eye_enu, view.heading_deg, view.az_lo, view.az_hi, j.blocks, cb.popt, &cb.outlines));
@@ -402,7 +407,8 @@ CellImpostors bakeCellImpostors(const CellBake& cb, CaptureRig& rig, uint32_t h,
     l.rec.layer = layer_index++;
     l.rec.run_from_m = jobs[j].run_from;
     l.il.run_from_m = jobs[j].run_from;
-    if (captureLayer(rig, plans[j], jobs[j].blocks, opt, cb.popt, l.il, l.rec, l.glb)) out.layers.push_back(std::move(l));
+    if (captureLayer(rig, plans[j], jobs[j].blocks, opt, cb.popt, jobs[j].end, l.il, l.rec, l.glb))
+      out.layers.push_back(std::move(l));
   }
   return out;
 }

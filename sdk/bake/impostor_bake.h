@@ -36,21 +36,23 @@ struct ImpostorOptions {
   double display_fov_y_deg = 45.0;
   int grid_px = 24;               // S97 grid spacing inside the contour, texture pixels
   int skirt_px = 1;               // rows hung under far geometry's lower edge (depth_mesh.h hangSkirt)
+  double edge_on_cos = 0.2;       // depth-mesh triangles seen this edge-on are dropped (depth_mesh.h dropEdgeOnTriangles; 0: none)
   int positions_per_cell = 8;     // item-buffer positions along a street, ends included (Marvie: 8 × 6 directions)
   int item_resolution = 128;      // item buffer size per direction (square, 90°)
   double pullback_m = 6.0;        // capture eye behind the cell start
   double max_span_deg = 45.0;     // widest azimuth one capture holds (capture_plan.h)
   double view_margin_deg = 10.0;  // azimuths covered past half the display's field, each side
-  int cell_texels = 163840;       // texel budget of a cell's captures together (capture_plan.h)
-  double run_length_m = 100.0;    // a longer cell gets several runs (vantage points) ...
+  int cell_texels = 327680;       // texel budget of a cell's captures together (capture_plan.h)
+  double run_length_m = 35.0;     // a longer cell gets several runs (vantage points) ...
   double run_turn_deg = 90.0;     // ... and so does one turning more than this
   double run_climb_m = 3.0;       // ... or whose ground rises or falls more than this (on terrain; 0: off)
-  int max_runs = 4;
+  int max_runs = 16;
   double landmark_height_m = 60.0;  // blocks with a building at least this tall ...
   double landmark_scale = 2.0;      // ... get their D99 weights scaled by this
-  // How the atlases are stored: JPEG, or lossy WebP (EXT_texture_webp), at
-  // this quality (0..100; decision 0010 chose 75 for JPEG).
-  TextureCodec texture_codec = TextureCodec::Jpeg;
+  // How the atlases are stored: lossy WebP (EXT_texture_webp), or JPEG, at
+  // this quality (0..100; decision 0010 chose 75 for JPEG). The defaults
+  // above and this one: decision 0015 (WebP pays for twice the texels).
+  TextureCodec texture_codec = TextureCodec::Webp;
   int texture_quality = 75;
   std::vector<uint32_t> only_cells; // bake impostors only for these cells (empty: all)
   // Capture workers, each with its own GL context (0: one per CPU). The

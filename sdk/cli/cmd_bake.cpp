@@ -76,7 +76,7 @@ void addBake(CLI::App& app, Runner& run) {
     bake::BakeOptions bake;
     bool no_draco = false;
     std::string block_codec = "meshopt";
-    std::string impostor = "layered", texture_codec = "jpeg", only_route, lod = "chain", lod_ratios = "0.5,0.25,0.1", tile = "1x1";
+    std::string impostor = "layered", texture_codec = "webp", only_route, lod = "chain", lod_ratios = "0.5,0.25,0.1", tile = "1x1";
     uint64_t seed = 1;
     std::string shard;
     uint32_t shards = 0;
@@ -119,7 +119,7 @@ void addBake(CLI::App& app, Runner& run) {
       ->capture_default_str()->check(CLI::IsMember({"layered", "single", "both", "none"}));
   cmd->add_option("--texture", o->bake.impostor.texture_max, "largest impostor texture side, pixels")
       ->capture_default_str()->check(CLI::Range(32, 4096));
-  cmd->add_option("--texture-codec", o->texture_codec, "impostor textures: jpeg, or webp (EXT_texture_webp)")
+  cmd->add_option("--texture-codec", o->texture_codec, "impostor textures: webp (EXT_texture_webp), or jpeg")
       ->capture_default_str()->check(CLI::IsMember({"jpeg", "webp"}));
   cmd->add_option("--texture-quality,--jpeg-quality", o->bake.impostor.texture_quality, "impostor texture quality")
       ->capture_default_str()->check(CLI::Range(10, 100));
@@ -144,6 +144,10 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->add_option("--skirt", o->bake.impostor.skirt_px,
                   "pixels of skirt hung under far geometry's lower edge in each capture (0: none)")
       ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd->add_option("--edge-on", o->bake.impostor.edge_on_cos,
+                  "drop impostor triangles the capture saw this edge-on (|cos| from the vantage point) that the run's "
+                  "end sees at least twice as squarely; 0: keep all (docs/decisions/0015)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--threshold-px", o->bake.impostor.threshold_px,
                   "layer threshold T in pixels at the display (Decoret 99 section 4.2)")
       ->capture_default_str()->check(CLI::Range(0.5, 500.0));

@@ -93,11 +93,10 @@ void downsample(const uint8_t* src, int sw, int sh, uint8_t* dst, int dw, int dh
 // Null with `err` set when the image cannot be decoded or does not fit.
 constexpr char kNoMemory[] = "out of memory decoding the mesh's image";
 
-// WebP straight into the arena; the decoder's own buffers are malloc'd, and
-// its status tells a failed allocation from a bad image.
-bool decodeWebp(const uint8_t* d, size_t n, uint8_t* rgba, int w, int h, std::string& err) {
+// WebP straight into the arena; the decoder's own buffers are malloc'd.
+VP8StatusCode webpInto(const uint8_t* d, size_t n, uint8_t* rgba, int w, int h) {
   WebPDecoderConfig config;
-  if (!WebPInitDecoderConfig(&config)) return failWith(err, "libwebp: version mismatch");
+  if (!WebPInitDecoderConfig(&config)) return VP8_STATUS_UNSUPPORTED_FEATURE;
   config.output.colorspace = MODE_RGBA;
   config.output.is_external_memory = 1;
   config.output.u.RGBA.rgba = rgba;
@@ -105,8 +104,20 @@ bool decodeWebp(const uint8_t* d, size_t n, uint8_t* rgba, int w, int h, std::st
   config.output.u.RGBA.size = size_t(w) * size_t(h) * 4;
   const VP8StatusCode st = WebPDecode(d, n, &config);
   WebPFreeDecBuffer(&config.output);  // external memory: frees nothing of ours
+  return st;
+}
+
+// A failed allocation must not pass for a bad image (the runtime asks for an
+// out-of-memory cell again, never for a corrupt one), but libwebp reports
+// some as a bitstream error: the alpha plane's decoder (an impostor's mask)
+// says "could not decode alpha data" whatever failed. The decoder is
+// deterministic, so an image that decodes on a second try was good: that
+// failure was an allocation.
+bool decodeWebp(const uint8_t* d, size_t n, uint8_t* rgba, int w, int h, std::string& err) {
+  const VP8StatusCode st = webpInto(d, n, rgba, w, h);
   if (st == VP8_STATUS_OK) return true;
-  return failWith(err, st == VP8_STATUS_OUT_OF_MEMORY ? kNoMemory : "mesh image cannot be decoded");
+  if (st == VP8_STATUS_OUT_OF_MEMORY || webpInto(d, n, rgba, w, h) == VP8_STATUS_OK) return failWith(err, kNoMemory);
+  return failWith(err, "mesh image cannot be decoded");
 }
 
 void* decodeImage(const geo::MeshData& mesh, StagingArena& arena, int& w, int& h, int& levels, std::string& err) {

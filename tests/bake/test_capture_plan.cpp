@@ -97,7 +97,7 @@ TEST(CapturePlan, GroundTheScoutSeesNeedsNoOutline) {
   for (size_t i = 0; i < bare.size(); ++i) EXPECT_EQ(with[i].tan_x, bare[i].tan_x);
 }
 
-// The runs of a straight 80 m street (shorter than a run, no turn): one on
+// The runs of a straight 80 m street (shorter than a run of 100 m, no turn): one on
 // level ground; on a 10 % grade (8 m of climb) one per 3 m of it, three.
 TEST(CellRuns, OnTerrainACellIsSplitWhereItClimbs) {
   blvd_test::GraphBuilder b;
@@ -105,6 +105,7 @@ TEST(CellRuns, OnTerrainACellIsSplitWhereItClimbs) {
   const graph::StreetGraph g = b.finish();
   const graph::HalfEdge& e = g.halfedges[0];
   ImpostorOptions opt;
+  opt.run_length_m = 100;
   EXPECT_EQ(cellRuns(g, e, opt).size(), 1u);  // no terrain
   opt.ground = [](glm::dvec2 p) { return 50.0 + 0.1 * p.x; };
   EXPECT_NEAR(cellClimb(g, e, opt), 8.0, 1e-9);

@@ -979,5 +979,32 @@ TEST(DepthMesh, ASkirtKeepsFarGroundSeenEdgeOnCoveredFromAhead) {
   }
 }
 
+// The capture's eye 1.5 m up at the origin, the run's end 35 m north (glTF:
+// y up, z south). Of four triangles only the wall the eye saw edge-on and the
+// viewer faces goes: a wall facing the eye, the ground (edge-on from both, as
+// every street sees it) and a wall edge-on from both eyes stay.
+TEST(DepthMesh, ATriangleTheCaptureSawEdgeOnAndTheViewerFacesIsDropped) {
+  geo::MeshData m;
+  auto tri = [&](glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {
+    for (const glm::dvec3& p : {a, b, c}) {
+      m.indices.push_back(uint32_t(m.positions.size() / 3));
+      m.positions.insert(m.positions.end(), {float(p.x), float(p.y), float(p.z)});
+    }
+  };
+  tri({-5, 0, -50}, {5, 0, -50}, {0, 10, -50});   // faces the eye
+  tri({5, 0, -58}, {5, 0, -62}, {5, 10, -60});    // edge-on from the eye (cos 0.08), faced from the end (0.20)
+  tri({-2, 0, -40}, {2, 0, -40}, {0, 0, -44});    // ground
+  tri({5, 0, -198}, {5, 0, -202}, {5, 10, -200});  // edge-on from both
+  const glm::dvec3 eye(0, 1.5, 0), end(0, 1.5, -35);
+  geo::MeshData kept = m;
+  EXPECT_EQ(dropEdgeOnTriangles(kept, eye, end, 0.0), 0u);  // off
+  EXPECT_EQ(kept.indices, m.indices);
+  EXPECT_EQ(dropEdgeOnTriangles(kept, eye, end, 0.2), 1u);
+  const std::vector<uint32_t> want = {0, 1, 2, 6, 7, 8, 9, 10, 11};
+  EXPECT_EQ(kept.indices, want);
+  kept = m;
+  EXPECT_EQ(dropEdgeOnTriangles(kept, eye, eye, 0.2), 0u) << "a viewer at the eye sees nothing stretched";
+}
+
 }  // namespace
 }  // namespace blvd::bake

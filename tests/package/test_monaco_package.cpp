@@ -6,10 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <webp/decode.h>
 
 #include "common/monaco_city.h"
 #include "render/slab_atlas.h"
@@ -67,6 +69,11 @@ TEST(MonacoPackage, EveryBlockLevelDecodesToItsRecordedCounts) {
 
 // Width and height from a JPEG's SOF marker or a PNG's IHDR.
 bool imageSize(const std::vector<uint8_t>& img, uint32_t& w, uint32_t& h) {
+  int ww = 0, hh = 0;
+  if (img.size() > 12 && std::memcmp(img.data(), "RIFF", 4) == 0 && WebPGetInfo(img.data(), img.size(), &ww, &hh)) {
+    w = uint32_t(ww), h = uint32_t(hh);
+    return true;
+  }
   if (img.size() > 24 && img[0] == 0x89 && img[1] == 'P') {
     w = uint32_t(img[16]) << 24 | uint32_t(img[17]) << 16 | uint32_t(img[18]) << 8 | img[19];
     h = uint32_t(img[20]) << 24 | uint32_t(img[21]) << 16 | uint32_t(img[22]) << 8 | img[23];
