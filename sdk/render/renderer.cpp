@@ -79,9 +79,6 @@ uint64_t atlasUploadBytes(const PreparedMesh& p) {
   return n;
 }
 
-// The texels of an image's place in an atlas, every level.
-uint64_t placeBytes(int w, int h) { return atlasBytes(atlasRound(w), atlasRound(h)); }
-
 void setTextureSampling(const GlApi& gl) {
   gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
   gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -530,7 +527,7 @@ bool Renderer::placeImage(Slab& slab, const PreparedMesh& p) {
       return fail("atlas place of the image overlaps another image");
   if (slab.places.size() >= slab.desc.meshes) return fail("slab full: mesh count exceeds its size");
   slab.places.push_back(at);
-  slab.texture_used += placeBytes(p.texture_width, p.texture_height);
+  slab.texture_used += atlasBytes(at.w, at.h);  // the place's texels, every level
   return true;
 }
 
@@ -793,7 +790,9 @@ SlabHandle Renderer::createSlab(const SlabDesc& d) {
   if ((d.atlas_width || d.atlas_height) &&
       (d.atlas_width <= 0 || d.atlas_height <= 0 || d.atlas_width > 16384 || d.atlas_height > 16384 ||
        d.atlas_width % kAtlasAlign || d.atlas_height % kAtlasAlign)) {
-    fail("slab atlas size out of range (1..16384, a multiple of 16)");
+    char msg[96];
+    std::snprintf(msg, sizeof msg, "slab atlas size out of range (1..16384, a multiple of %d)", kAtlasAlign);
+    fail(msg);
     return {};
   }
   if (!ctx_.makeCurrent()) {
