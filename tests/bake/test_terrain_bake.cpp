@@ -71,10 +71,19 @@ struct Baked {
   stream::City city;
 };
 
+// The running test's own directory: CTest runs the tests of this binary as
+// processes side by side, and two baking the same package into one place
+// read each other's half-written files.
+std::string testDir() {
+  const std::string dir =
+      std::string(BLVD_BINARY_DIR) + "/terrain_bake/" + ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
 // The city baked without a DEM ("flat") or on the tile `tile` writes.
 std::string bake(const std::string& name, const std::function<double(double, double)>& tile) {
-  const std::string dir = std::string(BLVD_BINARY_DIR) + "/terrain_bake";
-  ::mkdir(dir.c_str(), 0755);
+  const std::string dir = testDir();
   std::ofstream(dir + "/city.osm") << cityOsm();
   bake::BakeOptions o;
   o.quiet = true;
@@ -140,7 +149,7 @@ TEST(TerrainBake, OnASlopeTheStreetsAndBlocksFollowTheGround) {
   // The runtime's eye: 1.5 m above the road at the pose.
   blvd_runtime_desc d{};
   d.struct_size = sizeof d;
-  const std::string path = std::string(BLVD_BINARY_DIR) + "/terrain_bake/slope.blvd";
+  const std::string path = testDir() + "/slope.blvd";
   d.package_path = path.c_str();
   d.width = 160, d.height = 96;
   blvd_runtime* rt = nullptr;
@@ -354,7 +363,7 @@ TEST(TerrainBake, TheHillsBeyondTheCityAreDrawnFromStreamedTiles) {
 // fetches them, and the frames then show the hill as the local file does.
 TEST(TerrainBake, TilesOverTheLinkAreFetchedAndDrawn) {
   const std::string hilly = bake("hill", hill);
-  const std::string work = std::string(BLVD_BINARY_DIR) + "/terrain_bake/served";
+  const std::string work = testDir() + "/served";
   std::filesystem::remove_all(work);
   std::filesystem::create_directories(work + "/www");
   std::filesystem::create_directories(work + "/nginx");
