@@ -257,6 +257,7 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
         {"skirt_px", opt.impostor.skirt_px},
         {"texture_codec", opt.impostor.texture_codec == TextureCodec::Webp ? "webp" : "jpeg"},
         {"texture_quality", opt.impostor.texture_quality},
+        {"mesh_codec", package::glbCodecName(opt.impostor.mesh_codec)},
         {"display", {opt.impostor.display_width, opt.impostor.display_height, opt.impostor.display_fov_y_deg}}}},
       {"counts",
        {{"streets", sum.streets}, {"buildings", sum.buildings}, {"height_tagged", city.height_tagged},
@@ -388,7 +389,8 @@ std::string bakeIdentityJson(const BakeOptions& opt, const std::vector<uint32_t>
        {int(i.mode), i.texture_max, i.threshold_px, i.max_layers, i.display_width, i.display_height,
         i.display_fov_y_deg, i.grid_px, i.skirt_px, i.positions_per_cell, i.item_resolution, i.pullback_m,
         i.max_span_deg, i.view_margin_deg, i.cell_texels, i.run_length_m, i.run_turn_deg, i.run_climb_m, i.max_runs,
-        i.landmark_height_m, i.landmark_scale, int(i.texture_codec), i.texture_quality, i.edge_on_cos}},
+        i.landmark_height_m, i.landmark_scale, int(i.texture_codec), i.texture_quality, i.edge_on_cos,
+        package::glbCodecName(i.mesh_codec)}},
       {"route", route},
   };
   if (opt.dem.empty()) return j.dump();  // a flat bake's identity as it was

@@ -272,10 +272,11 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
   mesh.image_mime = webp ? "image/webp" : "image/jpeg";
   package::GlbOptions glb_opt;
   glb_opt.normal_bits = 0;
+  glb_opt.codec = opt.mesh_codec;
   package::GlbMeshCounts counts;
   glb = package::encodeGlb(mesh, glb_opt, &counts);
   if (counts.triangles == 0) {
-    BLVD_LOG_DEBUG("cell %u layer %u: no impostor (Draco kept no triangle)", rec.cell, rec.layer);
+    BLVD_LOG_DEBUG("cell %u layer %u: no impostor (the mesh codec kept no triangle)", rec.cell, rec.layer);
     return false;
   }
   il.triangles = counts.triangles;

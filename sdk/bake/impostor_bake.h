@@ -16,6 +16,7 @@
 #include "geo/mesh.h"
 #include "graph/cell_tables.h"
 #include "graph/street_graph.h"
+#include "package/glb.h"
 #include "package/writer.h"
 
 namespace blvd::bake {
@@ -54,6 +55,8 @@ struct ImpostorOptions {
   // above and this one: decision 0015 (WebP pays for twice the texels).
   TextureCodec texture_codec = TextureCodec::Webp;
   int texture_quality = 75;
+  // How the depth meshes are stored (package/glb.h).
+  package::GlbCodec mesh_codec = package::GlbCodec::Draco;
   std::vector<uint32_t> only_cells; // bake impostors only for these cells (empty: all)
   // Capture workers, each with its own GL context (0: one per CPU). The
   // package is the same with any number (bake/rig_pool.h).

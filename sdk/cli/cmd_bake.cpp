@@ -75,7 +75,7 @@ void addBake(CLI::App& app, Runner& run) {
     std::string in, out, report_dir;
     bake::BakeOptions bake;
     bool no_draco = false;
-    std::string block_codec = "meshopt";
+    std::string block_codec = "meshopt", impostor_codec = "draco";
     std::string impostor = "layered", texture_codec = "webp", only_route, lod = "chain", lod_ratios = "0.5,0.25,0.1", tile = "1x1";
     uint64_t seed = 1;
     std::string shard;
@@ -121,6 +121,10 @@ void addBake(CLI::App& app, Runner& run) {
       ->capture_default_str()->check(CLI::Range(32, 4096));
   cmd->add_option("--texture-codec", o->texture_codec, "impostor textures: webp (EXT_texture_webp), or jpeg")
       ->capture_default_str()->check(CLI::IsMember({"jpeg", "webp"}));
+  cmd->add_option("--impostor-codec", o->impostor_codec,
+                  "how impostor depth meshes are stored: draco (smallest), meshopt (fast decode) or plain")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"meshopt", "draco", "plain"}));
   cmd->add_option("--texture-quality,--jpeg-quality", o->bake.impostor.texture_quality, "impostor texture quality")
       ->capture_default_str()->check(CLI::Range(10, 100));
   cmd->add_option("--cell-texels", o->bake.impostor.cell_texels,
@@ -178,6 +182,7 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->callback([o, &run] {
     run = [o] {
       package::parseGlbCodec(o->no_draco ? "plain" : o->block_codec, o->bake.block_codec);
+      package::parseGlbCodec(o->impostor_codec, o->bake.impostor.mesh_codec);
       o->bake.lod.enabled = o->lod == "chain";
       o->bake.lod.ratios = parseRatios(o->lod_ratios);
       unsigned nx = 0, ny = 0;

@@ -41,9 +41,12 @@ PY
 # --texture-codec webp: impostor atlases as lossy WebP (EXT_texture_webp), recorded in the meta,
 # smaller than JPEG at the same quality, and drawn by the runtime with the far city no worse
 # than 2 points of far_bad p50 from JPEG's along the same route.
-for c in jpeg webp; do
+# --impostor-codec meshopt: the same impostors (WebP) with their depth meshes in
+# EXT_meshopt_compression instead of Draco, drawn the same.
+for c in jpeg webp mo; do
+  if [ $c = mo ]; then opts=(--impostor-codec meshopt); else opts=(--texture-codec $c); fi
   "$blvd" bake --quiet "$osm" -o "$work/tex-$c.blvd" --impostor layered --impostor-route auto:4 --seed 5 \
-    --texture-codec $c > "$work/tex-$c.txt"
+    "${opts[@]}" > "$work/tex-$c.txt"
   "$blvd" pack verify "$work/tex-$c.blvd" > /dev/null
   "$blvd" pack info "$work/tex-$c.blvd" --json > "$work/tex-$c.json"
   "$blvd" bench route "$work/tex-$c.blvd" --route auto:4 --seed 5 --size 400x240 --json "$work/route-$c.json" > /dev/null 2>&1
@@ -65,6 +68,15 @@ assert route["webp"]["far_scored_poses"] == route["jpeg"]["far_scored_poses"] > 
 if fj is not None:
     assert fw <= fj + 0.02, (fj, fw)
 print("texture codecs: impostor bytes jpeg %d, webp %d; far_bad p50 %s, %s" % (bytes_["jpeg"], bytes_["webp"], fj, fw))
+mo = json.load(open(os.path.join(w, "tex-mo.json")))
+assert mo["meta"]["impostors"]["mesh_codec"] == "meshopt", mo["meta"]["impostors"]
+assert info["webp"]["meta"]["impostors"]["mesh_codec"] == "draco", info["webp"]["meta"]["impostors"]
+assert "KHR_draco_mesh_compression" not in open(os.path.join(w, "tex-mo.blvd"), "rb").read().decode("latin-1")
+rm = json.load(open(os.path.join(w, "route-mo.json")))
+assert rm["far_scored_poses"] == route["webp"]["far_scored_poses"], rm["far_scored_poses"]
+fm = rm["modes"]["blvd"]["far_bad_p50"]
+assert (fm is None) == (fw is None) and (fm is None or abs(fm - fw) <= 0.005), (fw, fm)
+print("impostor mesh codecs: far_bad p50 draco %s, meshopt %s" % (fw, fm))
 PY
 
 # --block-codec and --draco-level: recorded in the package's meta. Draco level 0
