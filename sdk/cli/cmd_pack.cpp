@@ -60,9 +60,10 @@ int info(const std::string& path, bool json) {
   j["pool_sizing"] = pools;
   // The bake's metadata (options, LOD totals, tiling, the impostor route).
   package::Span meta;
+  std::vector<uint8_t> meta_bytes;
   std::string meta_err;
   if (city.package().hasSection(package::kSectionMeta) &&
-      city.package().checkedSection(package::kSectionMeta, meta, meta_err) == core::Status::Ok)
+      city.package().checkedCopy(package::kSectionMeta, meta_bytes, meta, meta_err) == core::Status::Ok)
     j["meta"] = nlohmann::json::parse(meta.data, meta.data + meta.size, nullptr, false);
   nlohmann::json sections = nlohmann::json::object();
   for (const auto& s : city.package().sections())
@@ -127,9 +128,9 @@ int extract(const std::string& path, int block, int cell, const std::string& out
     const uint32_t blob = city.blocks()[block].blob;
     if (blob == 0xffffffffu) throw core::Error(core::Status::NotFound, "block " + std::to_string(block) + " is empty");
     package::Span s;
-    const core::Status st = city.package().blob(blob, s, err);
+    const core::Status st = city.package().readBlob(blob, glb, s, err);
     if (st != core::Status::Ok) throw core::Error(st, err);
-    glb.assign(s.data, s.data + s.size);  // already a GLB: extract it byte for byte
+    glb.resize(s.size);  // already a GLB: extracted byte for byte
   } else {
     const auto& g = city.graph();
     if (cell < 0 || static_cast<size_t>(cell) >= g.cellCount())

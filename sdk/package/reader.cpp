@@ -10,6 +10,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "package/format_detail.h"
+
 namespace blvd::package {
 
 namespace {
@@ -34,6 +36,7 @@ PackageReader& PackageReader::operator=(PackageReader&& o) noexcept {
     data_ = o.data_;
     size_ = o.size_;
     mapped_ = o.mapped_;
+    reserved_ = o.reserved_;
     fd_ = o.fd_;
     o.fd_ = -1;
     name_ = std::move(o.name_);
@@ -46,6 +49,7 @@ PackageReader& PackageReader::operator=(PackageReader&& o) noexcept {
     o.data_ = nullptr;
     o.size_ = 0;
     o.mapped_ = false;
+    o.reserved_ = false;
     o.sections_.clear();
     o.blobs_.clear();
   }
@@ -59,13 +63,14 @@ void PackageReader::close() {
   data_ = nullptr;
   size_ = 0;
   mapped_ = false;
+  reserved_ = false;
   layout_ = HeaderLayout{};
   sections_.clear();
   blobs_.clear();
   has_table_pages_ = false;
 }
 
-core::Status PackageReader::open(const std::string& path, PackageReader& out, std::string& err) {
+core::Status PackageReader::open(const std::string& path, PackageReader& out, std::string& err, Access access) {
   out.close();
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
@@ -92,7 +97,10 @@ core::Status PackageReader::open(const std::string& path, PackageReader& out, st
       err = path + ": file is too large to map on this host";
       return core::Status::Io;
     }
-    void* p = ::mmap(nullptr, static_cast<size_t>(file_size), PROT_READ, MAP_PRIVATE, fd, 0);
+    const bool read_only = access == Access::Read;
+    void* p = read_only ? ::mmap(nullptr, static_cast<size_t>(file_size), PROT_NONE,
+                                 MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0)
+                        : ::mmap(nullptr, static_cast<size_t>(file_size), PROT_READ, MAP_PRIVATE, fd, 0);
     if (p == MAP_FAILED) {
       err = path + ": cannot map " + std::to_string(file_size) + " bytes: " + std::strerror(errno);
       ::close(fd);
@@ -101,6 +109,7 @@ core::Status PackageReader::open(const std::string& path, PackageReader& out, st
     r.data_ = static_cast<const uint8_t*>(p);
     r.size_ = static_cast<size_t>(file_size);
     r.mapped_ = true;
+    r.reserved_ = read_only;
     r.fd_ = fd;  // read() after open
   } else {
     ::close(fd);
@@ -139,11 +148,32 @@ core::Status PackageReader::openMemory(const uint8_t* data, size_t size, const s
   return core::Status::Ok;
 }
 
+// The header's bytes: its first kHeaderSize, or the size it states when a
+// later minor grew it (up to 64 KiB; parseHeader refuses a larger one).
+core::Status PackageReader::readHeader(std::vector<uint8_t>& bytes, std::string& err) const {
+  bytes.resize(std::min<size_t>(size_, kHeaderSize));
+  if (bytes.empty()) return core::Status::Ok;  // an empty file: parseHeader says so
+  core::Status s = read(0, bytes.size(), bytes.data(), err);
+  if (s != core::Status::Ok || bytes.size() < kHeaderSize) return s;
+  uint32_t stated = 0;
+  std::memcpy(&stated, bytes.data() + detail::hdr::kHeaderSize, sizeof stated);
+  const size_t want = std::min<size_t>({size_, stated, size_t{64} << 10});
+  if (want <= bytes.size()) return s;
+  bytes.resize(want);
+  return read(0, want, bytes.data(), err);
+}
+
+// Header, directory, blob index and table page CRCs, each read (never
+// touched through the mapping), parsed and checked.
 core::Status PackageReader::validate(std::string& err) {
-  core::Status s = parseHeader(data_, size_, size_, name_, layout_, err);
+  std::vector<uint8_t> bytes;
+  core::Status s = readHeader(bytes, err);
   if (s != core::Status::Ok) return s;
+  if ((s = parseHeader(bytes.data(), bytes.size(), size_, name_, layout_, err)) != core::Status::Ok) return s;
   const size_t dir_size = size_t{layout_.directory_count} * kDirEntrySize;
-  s = parseDirectory(data_ + layout_.directory_offset, dir_size, layout_, name_, sections_, err);
+  bytes.resize(dir_size);
+  if ((s = read(layout_.directory_offset, dir_size, bytes.data(), err)) != core::Status::Ok) return s;
+  s = parseDirectory(bytes.data(), dir_size, layout_, name_, sections_, err);
   if (s != core::Status::Ok) return s;
   const SectionInfo* index = nullptr;
   const SectionInfo* blob_data = nullptr;
@@ -158,14 +188,15 @@ core::Status PackageReader::validate(std::string& err) {
             tagToString(kSectionBlobData) + " section";
       return core::Status::Corrupt;
     }
-    s = parseBlobIndex(data_ + index->offset, static_cast<size_t>(index->size), *index, *blob_data,
-                       name_, blobs_, err);
+    if ((s = copy(section(kSectionBlobIndex), bytes, err)) != core::Status::Ok) return s;
+    s = parseBlobIndex(bytes.data(), bytes.size(), *index, *blob_data, name_, blobs_, err);
     if (s != core::Status::Ok) return s;
-    dropPages(Span{data_ + index->offset, static_cast<size_t>(index->size), index->offset});  // parsed
   }
   has_table_pages_ = false;
   if (const Span t = section(kSectionTablePages); t.data) {
-    if ((s = parseTablePages(t.data, t.size, t.offset, sections_, name_, table_pages_, err)) != core::Status::Ok) return s;
+    if ((s = copy(t, bytes, err)) != core::Status::Ok) return s;
+    if ((s = parseTablePages(bytes.data(), t.size, t.offset, sections_, name_, table_pages_, err)) != core::Status::Ok)
+      return s;
     has_table_pages_ = true;
   }
   return core::Status::Ok;
@@ -191,7 +222,14 @@ core::Status PackageReader::checkedSection(uint32_t tag, Span& out, std::string&
   }
   for (const SectionInfo& s : sections_) {
     if (s.tag != tag) continue;
-    const uint32_t crc = crc32c(data_ + s.offset, static_cast<size_t>(s.size));
+    uint32_t crc = 0;
+    uint8_t piece[16 * 1024];  // read in pieces: a CRC needs no copy of the section
+    for (uint64_t at = 0; at < s.size; at += sizeof piece) {
+      const size_t n = static_cast<size_t>(std::min<uint64_t>(sizeof piece, s.size - at));
+      const core::Status st = read(s.offset + at, n, piece, err);
+      if (st != core::Status::Ok) return st;
+      crc = crc32c(piece, n, crc);
+    }
     if (crc != s.crc) {
       err = crcMismatch(name_, "section " + tagToString(tag), s.offset, s.crc, crc);
       return core::Status::Corrupt;
@@ -203,8 +241,31 @@ core::Status PackageReader::checkedSection(uint32_t tag, Span& out, std::string&
   return core::Status::NotFound;
 }
 
+core::Status PackageReader::copy(const Span& s, std::vector<uint8_t>& out, std::string& err, size_t limit) const {
+  out.resize(std::min(s.size, limit));
+  return read(s.offset, out.size(), out.data(), err);
+}
+
+core::Status PackageReader::checkedCopy(uint32_t tag, std::vector<uint8_t>& out, Span& where, std::string& err) const {
+  where = Span{};
+  for (const SectionInfo& s : sections_) {
+    if (s.tag != tag) continue;
+    const core::Status st = copy(Span{nullptr, static_cast<size_t>(s.size), s.offset}, out, err);
+    if (st != core::Status::Ok) return st;
+    const uint32_t crc = crc32c(out.data(), out.size());
+    if (crc != s.crc) {
+      err = crcMismatch(name_, "section " + tagToString(tag), s.offset, s.crc, crc);
+      return core::Status::Corrupt;
+    }
+    where = Span{out.data(), out.size(), s.offset};
+    return core::Status::Ok;
+  }
+  err = name_ + ": no section " + tagToString(tag);
+  return core::Status::NotFound;
+}
+
 void PackageReader::dropPages(const Span& s) const {
-  if (!mapped_ || !s.data || s.size == 0) return;
+  if (!mapped_ || reserved_ || !s.data || s.size == 0) return;
   // A fault maps more of the file than the page it needs: the pages around it
   // (fault-around, 64 KiB) or the whole large folio the page cache holds it in
   // (up to a PMD, 2 MiB). Those go with it, or a drive keeps a growing share of
@@ -243,9 +304,16 @@ core::Status PackageReader::checkBlob(uint32_t i, const uint8_t* bytes, Span& ou
   return core::Status::Ok;
 }
 
+core::Status PackageReader::mapped(std::string& err) const {
+  if (!reserved_) return core::Status::Ok;
+  err = name_ + ": opened to be read, not mapped: its bytes come through read()";
+  return core::Status::Misuse;
+}
+
 core::Status PackageReader::blob(uint32_t i, Span& out, std::string& err) const {
   out = Span{};
-  const core::Status st = blobExists(i, err);
+  core::Status st = blobExists(i, err);
+  if (st == core::Status::Ok) st = mapped(err);
   if (st != core::Status::Ok) return st;
   return checkBlob(i, data_ + blobs_[i].offset, out, err);
 }
@@ -317,6 +385,7 @@ core::Status PackageReader::verify(std::string& err) const {
     err = "package reader is not open";
     return core::Status::Misuse;
   }
+  if (const core::Status st = mapped(err); st != core::Status::Ok) return st;
   // Header and directory were checked at open; checking again costs nothing
   // and keeps verify() a complete statement on its own.
   HeaderLayout layout;

@@ -15,12 +15,15 @@
 // threads at once (the object is immutable). Lifetime: Spans point into the
 // mapping and stay valid until the reader is closed, destroyed or moved from.
 //
-// A file truncated while open: the mapping is read only by open() and
-// verify(); afterwards the runtime reads through read() and readBlob(), which
-// copy with pread from the descriptor kept open, so a file cut short under a
-// running runtime gives Status::Io naming the offset, never a SIGBUS from a
-// page past the file's new end. (A package is meant to be replaced by renaming
-// a new file over it, which keeps the open one intact.)
+// A file truncated while open: open() itself reads the header, directory and
+// indexes with pread (read()), and so do checkedSection() and copy(). A reader
+// opened with Access::Read (the runtime) maps nothing: its Spans only name
+// places (offsetOf), their bytes come through read(), readBlob() and copy(),
+// so a file cut short under it, even while it is being opened, gives
+// Status::Io naming the offset, never a SIGBUS from a page past the file's new
+// end. Access::Map (tools that hold the file: pack verify, merge) maps it for
+// blob(), section() bytes and verify(). (A package is meant to be replaced by
+// renaming a new file over it, which keeps the open one intact.)
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -33,8 +36,9 @@
 
 namespace blvd::package {
 
-// A range of the package: `data` points into the mapping, `offset` is where
-// it starts in the file (for messages and for range requests).
+// A range of the package: `data` points into the mapping (with Access::Read,
+// into an address range that only names it: read its bytes with copy()),
+// `offset` is where it starts in the file (for messages and range requests).
 struct Span {
   const uint8_t* data = nullptr;
   size_t size = 0;
@@ -51,10 +55,15 @@ class PackageReader {
   PackageReader(const PackageReader&) = delete;
   PackageReader& operator=(const PackageReader&) = delete;
 
-  // Maps `path` (PROT_READ, MAP_PRIVATE) and validates it. On success `out`
-  // holds the package (whatever it held before is closed); on failure `out` is
-  // left closed and `err` says what is wrong.
-  static core::Status open(const std::string& path, PackageReader& out, std::string& err);
+  enum class Access { Map, Read };
+  // Opens `path` and validates it: mapped (PROT_READ, MAP_PRIVATE) with
+  // Access::Map; with Access::Read only an address range of the file's size
+  // is reserved (PROT_NONE: a byte touched there is a bug, not a read) and
+  // every byte is read with pread. On success `out` holds the package
+  // (whatever it held before is closed); on failure `out` is left closed and
+  // `err` says what is wrong.
+  static core::Status open(const std::string& path, PackageReader& out, std::string& err,
+                           Access access = Access::Map);
   // The same, throwing core::Error(status, err) instead.
   static PackageReader openOrThrow(const std::string& path);
   // Validates a package that is already in memory (embedded in the host, or
@@ -79,9 +88,16 @@ class PackageReader {
   // when the package has no such section: absent optional sections are
   // normal, so this does not throw. Use hasSection() to tell absent from empty.
   Span section(uint32_t tag) const;
-  // The section's bytes after checking its CRC: NotFound when absent,
-  // Corrupt (naming section and offset) when the CRC does not match.
+  // The section after checking its CRC (read in pieces, not through the
+  // mapping): NotFound when absent, Corrupt (naming section and offset) when
+  // the CRC does not match, Io when the file no longer holds it.
   core::Status checkedSection(uint32_t tag, Span& out, std::string& err) const;
+  // The first `limit` bytes of `s` (all of them by default) read into `out`
+  // (resized to what was read): what a parser reads, whatever the access.
+  core::Status copy(const Span& s, std::vector<uint8_t>& out, std::string& err, size_t limit = SIZE_MAX) const;
+  // The section read whole into `out` and its CRC checked there; `where`
+  // points at the copy. Errors as checkedSection().
+  core::Status checkedCopy(uint32_t tag, std::vector<uint8_t>& out, Span& where, std::string& err) const;
 
   // The table page CRCs (TPCR, package 3.2), parsed at open; null in an older
   // package. tablePageCrc() reads them from section(kSectionTablePages).
@@ -93,7 +109,8 @@ class PackageReader {
   const BlobInfo& blobInfo(uint32_t i) const { return blobs_[i]; }
   // Blob `i`, zero-copy, after checking its CRC. NotFound for i >= blobCount(),
   // Corrupt naming the blob and its offset when the CRC does not match.
-  // Touches the mapping: for tools that hold the file (pack verify, merge).
+  // Touches the mapping: for tools that hold the file (pack verify, merge);
+  // Misuse with Access::Read.
   core::Status blob(uint32_t i, Span& out, std::string& err) const;
   // Blob `i` copied into `into` (grown when too small, never shrunk), then its
   // CRC checked; `out` points into `into`. As blob(), plus Io when the file no
@@ -107,7 +124,7 @@ class PackageReader {
 
   // Checks every checksum (header, directory, each section, each blob) and that
   // the padding between sections is zero; names the first bad one and its
-  // offset. Reads the whole file.
+  // offset. Reads the whole file through the mapping (Misuse with Access::Read).
   core::Status verify(std::string& err) const;
 
   // Tells the kernel the mapped pages `s` touches are not needed now
@@ -126,10 +143,13 @@ class PackageReader {
   core::Status verifyTablePages(std::string& err) const;
   core::Status blobExists(uint32_t i, std::string& err) const;
   core::Status checkBlob(uint32_t i, const uint8_t* bytes, Span& out, std::string& err) const;
+  core::Status mapped(std::string& err) const;
+  core::Status readHeader(std::vector<uint8_t>& bytes, std::string& err) const;
 
   const uint8_t* data_ = nullptr;
   size_t size_ = 0;
-  bool mapped_ = false;  // we own the mapping (open) rather than borrow (openMemory)
+  bool mapped_ = false;    // we own the mapping (open) rather than borrow (openMemory)
+  bool reserved_ = false;  // Access::Read: data_ is a PROT_NONE range, not the file
   int fd_ = -1;          // kept open for read(): the file, when mapped_
   std::string name_;
   HeaderLayout layout_;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cstring>
+#include <tuple>
+#include <vector>
 
 #include "core/bytes.h"
 #include "graph/cell_tables.h"
@@ -18,18 +20,40 @@ T at(const uint8_t* p) {
   return v;
 }
 
+// PVSA's and IMPO's headers, each reader left at its first cell's records.
+void parseHeaders(core::ByteReader& rv, core::ByteReader& ri, uint32_t cells) {
+  graph::CellTables display;
+  graph::parseVisibilityHeader(rv, cells);
+  graph::parseImpostorsHeader(ri, cells, display);
+}
+
 }  // namespace
 
 core::Status CellTablePages::open(const package::PackageReader& reader, const graph::GraphSource& streets,
                                   uint32_t blocks, uint32_t pages, uint32_t page_bytes, std::string& err,
                                   const PageSource* source, uint32_t max_layers) {
   *this = CellTablePages{};
+  // Parsed from copies, never through the mapping: the whole sections from a
+  // file (checked here; the copies go when open returns), their headers over
+  // a link (each cell is checked as it is read).
   package::Span vis, imp, index;
-  for (auto [tag, span] : {std::pair{package::kSectionVisibility, &vis}, std::pair{package::kSectionImpostors, &imp},
-                           std::pair{package::kSectionCellTableIndex, &index}}) {
-    const core::Status st = tableSection(reader, source, tag, *span, err);
-    if (st != core::Status::Ok) return st;
+  std::vector<uint8_t> vb, ib, xb;
+  core::Status st = core::Status::Ok;
+  for (auto [tag, span, b] : {std::tuple{package::kSectionVisibility, &vis, &vb},
+                              std::tuple{package::kSectionImpostors, &imp, &ib},
+                              std::tuple{package::kSectionCellTableIndex, &index, &xb}})
+    if ((st = tableSection(reader, source, tag, *span, err, b)) != core::Status::Ok) return st;
+  try {
+    for (auto [s, b, head] : {std::tuple{&index, &xb, 8}, std::tuple{&vis, &vb, 8}, std::tuple{&imp, &ib, 20}}) {
+      if (!source) break;
+      source->ensure(s->offset, std::min<uint64_t>(s->size, head));
+      if ((st = reader.copy(*s, *b, err, size_t(head))) != core::Status::Ok) return st;
+    }
+  } catch (const core::Error& e) {
+    err = e.what();
+    return e.status();
   }
+  const package::Span vc{vb.data(), vb.size(), vis.offset}, ic{ib.data(), ib.size(), imp.offset};
   if (source) {
     streets_ = &streets;
     name_ = reader.name();
@@ -39,23 +63,11 @@ core::Status CellTablePages::open(const package::PackageReader& reader, const gr
     max_layers_ = max_layers;
     vis_ = vis;
     imp_ = imp;
-    try {
-      source->ensure(index.offset, std::min<uint64_t>(index.size, 8));
-      source->ensure(vis.offset, std::min<uint64_t>(vis.size, 8));
-      source->ensure(imp.offset, std::min<uint64_t>(imp.size, 20));
-      const core::Status st = openLazy(reader, vis, imp, index, err);
-      if (st != core::Status::Ok) return st;
-    } catch (const core::Error& e) {
-      err = e.what();
-      return e.status();
-    }
+    st = openLazy(reader, vc, ic, index, xb, err);
   } else {
-    const core::Status st = check(reader, streets, blocks, vis, imp, index, err);
-    reader.dropPages(vis);
-    reader.dropPages(imp);
-    reader.dropPages(index);
-    if (st != core::Status::Ok) return st;
+    st = check(reader, streets, blocks, vc, ic, index, xb, err);
   }
+  if (st != core::Status::Ok) return st;
   cache_ = std::make_unique<PageCache>(reader, pages, page_bytes, source);
   t_index_ = cache_->addTable(index.data + graph::kCellTableIndexHeader, streets.cellCount(),
                               graph::kCellTableIndexEntry);
@@ -64,14 +76,17 @@ core::Status CellTablePages::open(const package::PackageReader& reader, const gr
   return core::Status::Ok;
 }
 
+// `head` holds the index's first bytes (all of them, or its header).
 core::Status CellTablePages::checkIndexHeader(const package::PackageReader& reader, uint32_t cells,
-                                              const package::Span& index, std::string& err) const {
+                                              const package::Span& index, const std::vector<uint8_t>& head,
+                                              std::string& err) const {
   const uint64_t want = graph::kCellTableIndexHeader + uint64_t(cells) * graph::kCellTableIndexEntry;
-  if (index.size != want || at<uint32_t>(index.data) != graph::kCellTableIndexVersion ||
-      at<uint32_t>(index.data + 4) != cells) {
+  const uint32_t version = head.size() >= 4 ? at<uint32_t>(head.data()) : 0;
+  if (index.size != want || head.size() < 8 || version != graph::kCellTableIndexVersion ||
+      at<uint32_t>(head.data() + 4) != cells) {
     err = reader.name() + ": cell table index CTIX at offset " + std::to_string(index.offset) + ": version " +
-          std::to_string(index.size >= 4 ? at<uint32_t>(index.data) : 0) + ", " + std::to_string(index.size) +
-          " bytes; a version 1 index of " + std::to_string(cells) + " cells has " + std::to_string(want);
+          std::to_string(version) + ", " + std::to_string(index.size) + " bytes; a version 1 index of " +
+          std::to_string(cells) + " cells has " + std::to_string(want);
     return core::Status::Corrupt;
   }
   return core::Status::Ok;
@@ -79,14 +94,18 @@ core::Status CellTablePages::checkIndexHeader(const package::PackageReader& read
 
 // The headers only (the index's, PVSA's, IMPO's): cells are checked as read.
 core::Status CellTablePages::openLazy(const package::PackageReader& reader, const package::Span& vis,
-                                      const package::Span& imp, const package::Span& index, std::string& err) {
-  const core::Status st = checkIndexHeader(reader, cells_, index, err);
+                                      const package::Span& imp, const package::Span& index,
+                                      const std::vector<uint8_t>& index_head, std::string& err) {
+  const core::Status st = checkIndexHeader(reader, cells_, index, index_head, err);
   if (st != core::Status::Ok) return st;
-  core::ByteReader rv(vis.data, vis.size, "visibility section PVSA", vis.offset);
-  core::ByteReader ri(imp.data, imp.size, "impostor section IMPO", imp.offset);
-  graph::CellTables display;
-  graph::parseVisibilityHeader(rv, cells_);
-  graph::parseImpostorsHeader(ri, cells_, display);
+  try {
+    core::ByteReader rv(vis.data, vis.size, "visibility section PVSA", vis.offset);
+    core::ByteReader ri(imp.data, imp.size, "impostor section IMPO", imp.offset);
+    parseHeaders(rv, ri, cells_);
+  } catch (const core::Error& e) {
+    err = e.what();
+    return e.status();
+  }
   return core::Status::Ok;
 }
 
@@ -129,21 +148,22 @@ void CellTablePages::checkCellRecords(uint32_t cell) const {
 // each cell's records start.
 core::Status CellTablePages::check(const package::PackageReader& reader, const graph::GraphSource& streets,
                                    uint32_t blocks, const package::Span& vis, const package::Span& imp,
-                                   const package::Span& index, std::string& err) {
+                                   const package::Span& index, const std::vector<uint8_t>& index_bytes,
+                                   std::string& err) {
   const uint32_t cells = streets.cellCount();
-  if (const core::Status st = checkIndexHeader(reader, cells, index, err); st != core::Status::Ok) return st;
+  if (const core::Status st = checkIndexHeader(reader, cells, index, index_bytes, err); st != core::Status::Ok)
+    return st;
   try {
     core::ByteReader rv(vis.data, vis.size, "visibility section PVSA", vis.offset);
     core::ByteReader ri(imp.data, imp.size, "impostor section IMPO", imp.offset);
-    graph::CellTables display;
-    graph::parseVisibilityHeader(rv, cells);
-    graph::parseImpostorsHeader(ri, cells, display);
+    parseHeaders(rv, ri, cells);
     graph::CellVisibility v;
     graph::CellImpostors c;
     for (uint32_t cell = 0; cell < cells; ++cell) {
-      const uint8_t* e = index.data + graph::kCellTableIndexHeader + size_t(cell) * graph::kCellTableIndexEntry;
+      const uint8_t* e = index_bytes.data() + graph::kCellTableIndexHeader + size_t(cell) * graph::kCellTableIndexEntry;
       if (at<uint64_t>(e) != rv.pos() || at<uint64_t>(e + 8) != ri.pos()) {
-        err = reader.name() + ": cell table index CTIX at offset " + std::to_string(index.offset + (e - index.data)) +
+        err = reader.name() + ": cell table index CTIX at offset " +
+              std::to_string(index.offset + uint64_t(e - index_bytes.data())) +
               ": cell " + std::to_string(cell) + " does not point where its records start";
         return core::Status::Corrupt;
       }

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/status.h"
 #include "graph/graph_source.h"
@@ -52,13 +53,16 @@ class CellTablePages {
   PageCacheStats stats() const { return cache_ ? cache_->stats() : PageCacheStats{}; }
 
  private:
+  // `vis` and `imp` point at copies of the sections (their headers only, in
+  // openLazy), `index_bytes` holds the index's; `index` is where it lies.
   core::Status check(const package::PackageReader& reader, const graph::GraphSource& streets, uint32_t blocks,
-                     const package::Span& vis, const package::Span& imp, const package::Span& index, std::string& err);
+                     const package::Span& vis, const package::Span& imp, const package::Span& index,
+                     const std::vector<uint8_t>& index_bytes, std::string& err);
   uint64_t entry(uint32_t cell, int which) const;  // 0: PVSA offset, 1: IMPO offset
   core::Status checkIndexHeader(const package::PackageReader& reader, uint32_t cells, const package::Span& index,
-                                std::string& err) const;
+                                const std::vector<uint8_t>& head, std::string& err) const;
   core::Status openLazy(const package::PackageReader& reader, const package::Span& vis, const package::Span& imp,
-                        const package::Span& index, std::string& err);
+                        const package::Span& index, const std::vector<uint8_t>& index_head, std::string& err);
   void checkCell(uint32_t cell) const;  // lazy: the cell's records, parsed; throws naming the file
   void checkCellRecords(uint32_t cell) const;
 

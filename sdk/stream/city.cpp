@@ -43,7 +43,9 @@ core::Status City::open(const std::string& path, std::string& err, Tables tables
   ground_.reset();
   ground_points_ = 0;
   terrain_.reset();
-  core::Status st = package::PackageReader::open(path, reader_, err);
+  // Read, not mapped: a package file cut short under the runtime, even while
+  // it is being opened, is a read error, never a SIGBUS (package/reader.h).
+  core::Status st = package::PackageReader::open(path, reader_, err, package::PackageReader::Access::Read);
   if (st != core::Status::Ok) return st;
   if (reader_.hasSection(package::kSectionShard)) {
     err = path + ": a shard of a bake, not a package: merge the shards with `blvd pack merge`";
@@ -134,12 +136,12 @@ core::Status City::ensureSection(uint32_t tag, std::string& err) const {
 core::Status City::openWhole(std::string& err) {
   try {
     package::Span s;
+    std::vector<uint8_t> hold;
     for (uint32_t tag : {package::kSectionGraph, package::kSectionCells}) {
-      const core::Status st = requiredSection(tag, s, err);
+      const core::Status st = requiredSection(tag, hold, s, err);
       if (st != core::Status::Ok) return st;
       if (tag == package::kSectionGraph) graph::parseGraph(s.data, s.size, s.offset, graph_);
       else graph::parseCells(s.data, s.size, s.offset, graph_);
-      reader_.dropPages(s);  // parsed: the tables hold it now
     }
   } catch (const core::Error& e) {
     err = reader_.name() + ": " + e.what();
@@ -158,10 +160,11 @@ core::Status City::openPaged(const PagedGraphDesc& paging, std::string& err) {
   return core::Status::Ok;
 }
 
-core::Status City::requiredSection(uint32_t tag, package::Span& s, std::string& err) const {
+core::Status City::requiredSection(uint32_t tag, std::vector<uint8_t>& hold, package::Span& s,
+                                   std::string& err) const {
   core::Status st = ensureSection(tag, err);
   if (st != core::Status::Ok) return st;
-  st = reader_.checkedSection(tag, s, err);
+  st = reader_.checkedCopy(tag, hold, s, err);
   if (st == core::Status::NotFound) {
     err = reader_.name() + ": missing section " + package::tagToString(tag);
     return core::Status::Corrupt;
@@ -187,8 +190,8 @@ core::Status City::openElevation(std::string& err) {
     err = e.what();
     return e.status();
   }
-  if (s.size >= 8) std::memcpy(head, s.data, 8);
-  reader_.dropPages(s);
+  if (s.size >= 8 && (st = reader_.read(s.offset, 8, reinterpret_cast<uint8_t*>(head), err)) != core::Status::Ok)
+    return st;
   if (s.size < 8 || head[0] != 1 || head[1] != points || s.size != 8 + 4 * points) {
     err = reader_.name() + ": elevation section ELEV at offset " + std::to_string(s.offset) + ": version " +
           std::to_string(head[0]) + ", " + std::to_string(head[1]) + " heights in " + std::to_string(s.size) +
@@ -302,14 +305,14 @@ core::Status City::openRenderTables(std::string& err) {
   const uint32_t faces = paged_ ? paged_->faceCount() : static_cast<uint32_t>(graph_.faces.size());
   try {
     package::Span s;
+    std::vector<uint8_t> hold;
     core::Status st = core::Status::Ok;
     if (paged_) {
       block_pages_ = std::make_unique<BlockPages>();
       st = block_pages_->open(reader_, kBlockPages, kBlockPageBytes, err, source());
       if (st == core::Status::NotFound) err = reader_.name() + ": missing section BLCK", st = core::Status::Corrupt;
-    } else if ((st = requiredSection(package::kSectionBlocks, s, err)) == core::Status::Ok) {
+    } else if ((st = requiredSection(package::kSectionBlocks, hold, s, err)) == core::Status::Ok) {
       graph::parseBlocks(s.data, s.size, s.offset, reader_.blobCount(), blocks_);
-      reader_.dropPages(s);
     }
     if (st != core::Status::Ok) return st;
     const uint32_t nblocks = blockCount();
@@ -328,11 +331,9 @@ core::Status City::openRenderTables(std::string& err) {
     }
     for (uint32_t tag : {package::kSectionVisibility, package::kSectionImpostors}) {
       if (!reader_.hasSection(tag)) continue;
-      if ((st = ensureSection(tag, err)) != core::Status::Ok) return st;
-      if ((st = reader_.checkedSection(tag, s, err)) != core::Status::Ok) return st;
+      if ((st = requiredSection(tag, hold, s, err)) != core::Status::Ok) return st;
       if (tag == package::kSectionVisibility) graph::parseVisibility(s.data, s.size, s.offset, cells, nblocks, tables_);
       else graph::parseImpostors(s.data, s.size, s.offset, cellLengths(*streets_), nblocks, reader_.blobCount(), tables_);
-      reader_.dropPages(s);
     }
     for (const graph::CellImpostors& ci : tables_.impostors)
       max_cell_layers_ = std::max<uint32_t>(max_cell_layers_, static_cast<uint32_t>(ci.layered.size() + ci.single.size()));

@@ -223,7 +223,9 @@ class City {
     double h0 = 0, h1 = 0, length = 0, at_m = 0;
   };
   bool groundSegment(uint32_t cell, double arc_m, GroundSegment& out) const;
-  core::Status requiredSection(uint32_t tag, package::Span& s, std::string& err) const;  // Corrupt when absent
+  // The section read whole into `hold` and CRC-checked (`s` points at the
+  // copy); Corrupt when absent.
+  core::Status requiredSection(uint32_t tag, std::vector<uint8_t>& hold, package::Span& s, std::string& err) const;
   // A section's pages all fetched (a whole-table parse of a package on a server).
   core::Status ensureSection(uint32_t tag, std::string& err) const;
   // Table pages over the link, for a package on a server with table page CRCs.

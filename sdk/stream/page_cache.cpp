@@ -9,7 +9,13 @@
 namespace blvd::stream {
 
 core::Status tableSection(const package::PackageReader& reader, const PageSource* source, uint32_t tag,
-                          package::Span& out, std::string& err) {
+                          package::Span& out, std::string& err, std::vector<uint8_t>* bytes) {
+  if (!source && bytes) {
+    package::Span copy;
+    const core::Status st = reader.checkedCopy(tag, *bytes, copy, err);
+    if (st == core::Status::Ok) out = reader.section(tag);
+    return st;
+  }
   if (!source) return reader.checkedSection(tag, out, err);
   out = reader.section(tag);
   if (out.data) return core::Status::Ok;

@@ -38,11 +38,12 @@ class PageSource {
   ~PageSource() = default;
 };
 
-// A table section's bytes: CRC-checked whole without a source; with one,
-// unchecked here (each page is checked as the source brings it). NotFound when
-// the package has no such section.
+// Where a table section lies: CRC-checked whole without a source (its bytes
+// read, and kept in `bytes` when given); with one, unchecked here (each page
+// is checked as the source brings it, `bytes` untouched). NotFound when the
+// package has no such section.
 core::Status tableSection(const package::PackageReader& reader, const PageSource* source, uint32_t tag,
-                          package::Span& out, std::string& err);
+                          package::Span& out, std::string& err, std::vector<uint8_t>* bytes = nullptr);
 
 class PageCache {
  public:

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 namespace blvd::stream {
 namespace {
@@ -17,8 +18,10 @@ uint32_t readU32(const uint8_t* p) {
   return v;
 }
 
-// Walks a section's counted tables without reading them.
+// Walks a section's counted tables without reading them: each count is
+// read from the file (never touched through the mapping).
 struct Cursor {
+  const package::PackageReader& reader;
   const package::Span& s;
   const char* section;
   const PageSource* source;
@@ -28,7 +31,10 @@ struct Cursor {
   bool count(uint32_t* n, uint64_t record, const char* what) {
     if (at + 4 > s.size) return fail(std::string(what) + ": count truncated");
     if (source) source->ensure(s.offset + at, 4);
-    *n = readU32(s.data + at);
+    uint8_t word[4];
+    std::string err;
+    if (reader.read(s.offset + at, 4, word, err) != core::Status::Ok) throw core::Error(core::Status::Io, err);
+    *n = readU32(word);
     at += 4;
     if (record * *n > s.size - at) return fail(std::string(what) + ": " + std::to_string(*n) + " records overrun the section");
     return true;
@@ -58,7 +64,7 @@ core::Status PagedGraph::locate(const package::PackageReader& reader, const Page
   }
   grph_ = g;
   cell_ = c;
-  Cursor gc{g, "graph section GRPH", source, 0, {}};
+  Cursor gc{reader, g, "graph section GRPH", source, 0, {}};
   uint32_t version = 0;
   bool ok = gc.count(&version, 0, "version") && (version == kGraphVersion || gc.fail("unknown graph version")) &&
             gc.count(&vertices_, kVertexBytes, "vertices") && gc.skip(uint64_t(vertices_) * kVertexBytes) &&
@@ -66,7 +72,7 @@ core::Status PagedGraph::locate(const package::PackageReader& reader, const Page
             (at_halfedges_ = gc.skip(uint64_t(halfedges_) * kHalfEdgeBytes)) && gc.count(&faces_, kFaceBytes, "faces") &&
             gc.skip(uint64_t(faces_) * kFaceBytes) && gc.count(&points_, kPointBytes, "points") &&
             (at_points_ = gc.skip(uint64_t(points_) * kPointBytes));
-  Cursor cc{c, "cell section CELL", source, 0, {}};
+  Cursor cc{reader, c, "cell section CELL", source, 0, {}};
   uint32_t cells = 0;
   ok = ok && cc.count(&version, 0, "version") && (version == kGraphVersion || cc.fail("unknown cell version")) &&
        cc.count(&cells, 0, "cells") && (cells == halfedges_ || cc.fail("cell count does not match the graph's half-edges"));
@@ -94,8 +100,9 @@ core::Status PagedGraph::openGrid(const package::PackageReader& reader, const Pa
   const core::Status st = tableSection(reader, source, package::kSectionSpatialIndex, sidx, err);
   if (st != core::Status::Ok) return st;
   if (source) source->ensure(sidx.offset, std::min<uint64_t>(sidx.size, graph::kGridHeaderBytes));
-  stored_ = graph::parseGridShape(sidx.data, sidx.size, sidx.offset);
-  reader.dropPages(sidx);
+  std::vector<uint8_t> head;
+  if (const core::Status rs = reader.copy(sidx, head, err, graph::kGridHeaderBytes); rs != core::Status::Ok) return rs;
+  stored_ = graph::parseGridShape(head.data(), sidx.size, sidx.offset);  // reads the header only
   return core::Status::Ok;
 }
 

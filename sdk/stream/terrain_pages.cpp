@@ -1,6 +1,7 @@
 #include "stream/terrain_pages.h"
 
 #include <algorithm>
+#include <vector>
 
 namespace blvd::stream {
 
@@ -11,15 +12,15 @@ core::Status TerrainPages::open(const package::PackageReader& reader, std::strin
   if (st != core::Status::Ok) return st;
   name_ = reader.name();
   blobs_ = reader.blobCount();
+  std::vector<uint8_t> head;  // read, never touched through the mapping
   try {
     if (source) source->ensure(s.offset, std::min<uint64_t>(s.size, graph::kTerrainHeaderBytes));
-    layout_ = graph::parseTerrainHeader(s.data, s.size, s.offset);
+    if ((st = reader.copy(s, head, err, graph::kTerrainHeaderBytes)) != core::Status::Ok) return st;
+    layout_ = graph::parseTerrainHeader(head.data(), s.size, s.offset);  // reads the header only
   } catch (const core::Error& e) {
     err = name_ + ": " + e.what();
-    reader.dropPages(s);
     return e.status();
   }
-  reader.dropPages(s);
   records_offset_ = s.offset + graph::kTerrainHeaderBytes;
   cache_ = std::make_unique<PageCache>(reader, kPages, kPageBytes, source);
   table_ = cache_->addTable(s.data + graph::kTerrainHeaderBytes, layout_.tiles(), graph::kTerrainRecordBytes);

@@ -5,7 +5,8 @@
 // is cut short under the running runtime: the blobs past the cut are read
 // errors naming the offset (a mapped reader would die of SIGBUS), the drive
 // goes on; cut to nothing, a street whose table pages are not cached is a
-// refused call naming the file. The GPU is reset under the drive (the
+// refused call naming the file; cut while the tables are being parsed at
+// open, a read error too. The GPU is reset under the drive (the
 // driver's GetError says GL_CONTEXT_LOST): every frame from then on is
 // BLVD_ERR_BACKEND saying to create the runtime again, and a new one draws.
 #include <gtest/gtest.h>
@@ -14,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -24,7 +26,10 @@
 #include "render/gl_api.h"
 #include "render/renderer.h"
 #include "runtime_fixture.h"
+#include "stream/block_pages.h"
+#include "stream/cell_table_pages.h"
 #include "stream/city.h"
+#include "stream/paged_graph.h"
 
 namespace {
 
@@ -187,6 +192,67 @@ TEST(RuntimeFaults, APackageCutShortMidDriveGivesReadErrorsNotASigbus) {
   }
   std::printf("file cut to 0 bytes: %zu frames drawn, %zu refused with a read error\n", drawn, failed);
   EXPECT_GT(failed, 0u);  // a new street's table pages were not cached: the cut shows, named
+  std::filesystem::remove(path);
+}
+
+// What City::open parses after its reader opened the file: the street
+// graph, the block table and the cell tables.
+blvd::core::Status openTables(const blvd::package::PackageReader& r, std::string& err) {
+  blvd::stream::PagedGraph graph;
+  blvd::core::Status st = graph.open(r, err);
+  if (st != blvd::core::Status::Ok) return st;
+  blvd::stream::BlockPages blocks;
+  if ((st = blocks.open(r, 32, 2048, err)) != blvd::core::Status::Ok) return st;
+  blvd::stream::CellTablePages cells;
+  return cells.open(r, graph, blocks.count(), 64, 2048, err, nullptr, r.header().max_cell_impostor_layers);
+}
+
+// The window a mapped reader left: the file cut short after the reader opened
+// it and before the tables were parsed, at the start and in the middle of
+// each section. A cut before the end of a table is a read error naming the
+// file and saying it was truncated; a cut past them all opens; no signal
+// either way, since the runtime's reader maps nothing (Access::Read).
+TEST(RuntimeFaults, APackageCutShortWhileItIsBeingOpenedGivesReadErrorsNotASigbus) {
+  using blvd::package::PackageReader;
+  const std::string path = (std::filesystem::temp_directory_path() / "blvd_test_cut_opening.blvd").string();
+  std::string err;
+  std::vector<uint64_t> cuts;
+  uint64_t tables_end = 0;
+  {
+    PackageReader r;
+    ASSERT_EQ(PackageReader::open(BLVD_TEST_PACKAGE, r, err), blvd::core::Status::Ok) << err;
+    for (const blvd::package::SectionInfo& s : r.sections()) {
+      cuts.push_back(s.offset);
+      cuts.push_back(s.offset + s.size / 2);
+      for (uint32_t tag : {blvd::package::kSectionGraph, blvd::package::kSectionCells,
+                           blvd::package::kSectionSpatialIndex, blvd::package::kSectionBlocks,
+                           blvd::package::kSectionVisibility, blvd::package::kSectionImpostors,
+                           blvd::package::kSectionCellTableIndex})
+        if (s.tag == tag) tables_end = std::max(tables_end, s.offset + s.size);
+    }
+    ASSERT_TRUE(r.hasSection(blvd::package::kSectionCellTableIndex));
+  }
+  size_t refused = 0;
+  for (const uint64_t cut : cuts) {
+    std::filesystem::copy_file(BLVD_TEST_PACKAGE, path, std::filesystem::copy_options::overwrite_existing);
+    PackageReader r;
+    ASSERT_EQ(PackageReader::open(path, r, err, PackageReader::Access::Read), blvd::core::Status::Ok) << err;
+    blvd::package::Span unused;
+    ASSERT_EQ(r.blob(0, unused, err), blvd::core::Status::Misuse);  // nothing mapped to touch
+    ASSERT_EQ(::truncate(path.c_str(), static_cast<off_t>(cut)), 0);
+    std::string why;
+    const blvd::core::Status st = openTables(r, why);
+    if (cut >= tables_end) {
+      EXPECT_EQ(st, blvd::core::Status::Ok) << "cut at " << cut << ": " << why;
+      continue;
+    }
+    ++refused;
+    EXPECT_EQ(st, blvd::core::Status::Io) << "cut at " << cut << ": " << why;
+    EXPECT_NE(why.find(path + ": cannot read"), std::string::npos) << why;
+    EXPECT_NE(why.find("the file ends at offset " + std::to_string(cut)), std::string::npos) << why;
+  }
+  std::printf("%zu cuts, %zu refused with a read error\n", cuts.size(), refused);
+  EXPECT_GT(refused, 0u);
   std::filesystem::remove(path);
 }
 
