@@ -6,7 +6,8 @@
 # takes folders only, so files are copied into WORKDIR/files. What the campaign
 # finds goes to WORKDIR/corpus, kept from one run to the next.
 # SECONDS 0 runs every input once (a replay).
-# A crash, leak, timeout or out-of-memory is minimised into
+# A crash, leak, timeout (one that times out again alone) or out-of-memory
+# is minimised into
 # tests/fuzz/regressions/<target>/ (which CTest replays from then on), and the
 # script exits 1 naming it and the command that reproduces it.
 # The last line: "<target>: <s> s, <n> executions (<n>/s), cov <n>, ft <n>, corpus <n>".
@@ -52,8 +53,16 @@ cov=$(grep -oE 'cov: [0-9]+' "$log" | tail -n 1 | cut -d' ' -f2)
 ft=$(grep -oE 'ft: [0-9]+' "$log" | tail -n 1 | cut -d' ' -f2)
 corpus=$(find "$work/corpus" -type f | wc -l)
 
+art=$(ls -t "$work"/artifacts/* 2> /dev/null | head -n 1 || true)
+# A timeout is tried again alone: one that then runs within the limit was the
+# machine stalling (a stopped or starved process), not the input. It is said
+# and not kept, and the campaign counts as run.
+if [ "$rc" != 0 ] && [ -n "$art" ] && [[ $(basename "$art") == timeout-* ]] &&
+   timeout 120 "$bin" -timeout=25 -rss_limit_mb=2048 "$art" > "$work/retry.log" 2>&1; then
+  echo "$name: $(basename "$art") ran within the limit when tried again alone: the machine stalled; not kept"
+  rc=0
+fi
 if [ "$rc" != 0 ]; then
-  art=$(ls -t "$work"/artifacts/* 2> /dev/null | head -n 1 || true)
   tail -n 60 "$log"
   if [ -z "$art" ]; then
     echo "$name: libFuzzer exited $rc without an artifact (log: $log)"
