@@ -202,16 +202,17 @@ core::Status PackageReader::validate(std::string& err) {
   return core::Status::Ok;
 }
 
-bool PackageReader::hasSection(uint32_t tag) const {
-  for (const SectionInfo& s : sections_)
-    if (s.tag == tag) return true;
-  return false;
-}
+bool PackageReader::hasSection(uint32_t tag) const { return find(tag) != nullptr; }
 
 Span PackageReader::section(uint32_t tag) const {
+  const SectionInfo* s = find(tag);
+  return s ? Span{data_ + s->offset, static_cast<size_t>(s->size), s->offset} : Span{};
+}
+
+const SectionInfo* PackageReader::find(uint32_t tag) const {
   for (const SectionInfo& s : sections_)
-    if (s.tag == tag) return Span{data_ + s.offset, static_cast<size_t>(s.size), s.offset};
-  return Span{};
+    if (s.tag == tag) return &s;
+  return nullptr;
 }
 
 core::Status PackageReader::checkedSection(uint32_t tag, Span& out, std::string& err) const {
@@ -220,25 +221,25 @@ core::Status PackageReader::checkedSection(uint32_t tag, Span& out, std::string&
     err = "package reader is not open";
     return core::Status::Misuse;
   }
-  for (const SectionInfo& s : sections_) {
-    if (s.tag != tag) continue;
-    uint32_t crc = 0;
-    uint8_t piece[16 * 1024];  // read in pieces: a CRC needs no copy of the section
-    for (uint64_t at = 0; at < s.size; at += sizeof piece) {
-      const size_t n = static_cast<size_t>(std::min<uint64_t>(sizeof piece, s.size - at));
-      const core::Status st = read(s.offset + at, n, piece, err);
-      if (st != core::Status::Ok) return st;
-      crc = crc32c(piece, n, crc);
-    }
-    if (crc != s.crc) {
-      err = crcMismatch(name_, "section " + tagToString(tag), s.offset, s.crc, crc);
-      return core::Status::Corrupt;
-    }
-    out = Span{data_ + s.offset, static_cast<size_t>(s.size), s.offset};
-    return core::Status::Ok;
+  const SectionInfo* s = find(tag);
+  if (!s) {
+    err = name_ + ": no section " + tagToString(tag);
+    return core::Status::NotFound;
   }
-  err = name_ + ": no section " + tagToString(tag);
-  return core::Status::NotFound;
+  uint32_t crc = 0;
+  uint8_t piece[16 * 1024];  // read in pieces: a CRC needs no copy of the section
+  for (uint64_t at = 0; at < s->size; at += sizeof piece) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(sizeof piece, s->size - at));
+    const core::Status st = read(s->offset + at, n, piece, err);
+    if (st != core::Status::Ok) return st;
+    crc = crc32c(piece, n, crc);
+  }
+  if (crc != s->crc) {
+    err = crcMismatch(name_, "section " + tagToString(tag), s->offset, s->crc, crc);
+    return core::Status::Corrupt;
+  }
+  out = Span{data_ + s->offset, static_cast<size_t>(s->size), s->offset};
+  return core::Status::Ok;
 }
 
 core::Status PackageReader::copy(const Span& s, std::vector<uint8_t>& out, std::string& err, size_t limit) const {
@@ -248,36 +249,20 @@ core::Status PackageReader::copy(const Span& s, std::vector<uint8_t>& out, std::
 
 core::Status PackageReader::checkedCopy(uint32_t tag, std::vector<uint8_t>& out, Span& where, std::string& err) const {
   where = Span{};
-  for (const SectionInfo& s : sections_) {
-    if (s.tag != tag) continue;
-    const core::Status st = copy(Span{nullptr, static_cast<size_t>(s.size), s.offset}, out, err);
-    if (st != core::Status::Ok) return st;
-    const uint32_t crc = crc32c(out.data(), out.size());
-    if (crc != s.crc) {
-      err = crcMismatch(name_, "section " + tagToString(tag), s.offset, s.crc, crc);
-      return core::Status::Corrupt;
-    }
-    where = Span{out.data(), out.size(), s.offset};
-    return core::Status::Ok;
+  const SectionInfo* s = find(tag);
+  if (!s) {
+    err = name_ + ": no section " + tagToString(tag);
+    return core::Status::NotFound;
   }
-  err = name_ + ": no section " + tagToString(tag);
-  return core::Status::NotFound;
-}
-
-void PackageReader::dropPages(const Span& s) const {
-  if (!mapped_ || reserved_ || !s.data || s.size == 0) return;
-  // A fault maps more of the file than the page it needs: the pages around it
-  // (fault-around, 64 KiB) or the whole large folio the page cache holds it in
-  // (up to a PMD, 2 MiB). Those go with it, or a drive keeps a growing share of
-  // a big package resident (64 KiB windows still left 2.9 MB more of San
-  // Francisco's 2×2 package than of its 1× one; 2 MiB windows leave none).
-  constexpr uintptr_t kFaultAround = 2 * 1024 * 1024;
-  const uintptr_t page = static_cast<uintptr_t>(::sysconf(_SC_PAGESIZE));
-  const uintptr_t lo = reinterpret_cast<uintptr_t>(data_);
-  const uintptr_t hi = (lo + size_ + page - 1) & ~(page - 1);
-  const uintptr_t begin = std::max(lo, reinterpret_cast<uintptr_t>(s.data) & ~(kFaultAround - 1));
-  const uintptr_t end = std::min(hi, (reinterpret_cast<uintptr_t>(s.data) + s.size + kFaultAround - 1) & ~(kFaultAround - 1));
-  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_DONTNEED);
+  const core::Status st = copy(Span{nullptr, static_cast<size_t>(s->size), s->offset}, out, err);
+  if (st != core::Status::Ok) return st;
+  const uint32_t crc = crc32c(out.data(), out.size());
+  if (crc != s->crc) {
+    err = crcMismatch(name_, "section " + tagToString(tag), s->offset, s->crc, crc);
+    return core::Status::Corrupt;
+  }
+  where = Span{out.data(), out.size(), s->offset};
+  return core::Status::Ok;
 }
 
 core::Status PackageReader::blobExists(uint32_t i, std::string& err) const {

@@ -127,16 +127,6 @@ class PackageReader {
   // offset. Reads the whole file through the mapping (Misuse with Access::Read).
   core::Status verify(std::string& err) const;
 
-  // Tells the kernel the mapped pages `s` touches are not needed now
-  // (madvise MADV_DONTNEED), with the 2 MiB-aligned window around them that
-  // a fault may map (fault-around, large folios): they
-  // leave the process's resident set and are read again from the file if
-  // touched, so dropping a neighbour's page costs it a refault, never its
-  // data (the mapping is read-only). The runtime calls it once a section is
-  // checked, a blob decoded or a table page copied, so resident memory
-  // follows the cells in use, not the file's size. A no-op for a package
-  // read into memory.
-  void dropPages(const Span& s) const;
 
  private:
   core::Status validate(std::string& err);
@@ -144,6 +134,7 @@ class PackageReader {
   core::Status blobExists(uint32_t i, std::string& err) const;
   core::Status checkBlob(uint32_t i, const uint8_t* bytes, Span& out, std::string& err) const;
   core::Status mapped(std::string& err) const;
+  const SectionInfo* find(uint32_t tag) const;
   core::Status readHeader(std::vector<uint8_t>& bytes, std::string& err) const;
 
   const uint8_t* data_ = nullptr;

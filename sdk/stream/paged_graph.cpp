@@ -90,8 +90,6 @@ core::Status PagedGraph::locate(const package::PackageReader& reader, const Page
     err = reader.name() + ": " + (gc.error.empty() ? cc.error : gc.error);
     return core::Status::Corrupt;
   }
-  reader.dropPages(g);
-  reader.dropPages(c);
   return core::Status::Ok;
 }
 
