@@ -76,11 +76,10 @@ class PagedGraph final : public graph::GraphSource {
   Lists lists_[3];
   graph::StoredGrid stored_;
   std::unique_ptr<graph::SegmentGrid> grid_;  // built when the package has no SIDX
-  // Where the tables start in the mapping, found by locate() before the cache exists.
+  // Where the tables start in the reserved range, found by locate() before the cache exists.
   const uint8_t* at_halfedges_ = nullptr;
   const uint8_t* at_points_ = nullptr;
   const uint8_t* at_lists_[3][2] = {};
-  const uint8_t* at_grid_[2] = {};
   // File offset of a byte of the GRPH or CELL section (for messages).
   uint64_t fileOffset(const uint8_t* p) const;
   package::Span grph_, cell_;
