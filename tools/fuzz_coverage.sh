@@ -29,6 +29,7 @@ declare -A sources=(
   [fuzz_nmea]='^adapters/gnss/nmea'
   [fuzz_osm]='^sdk/bake/osm_reader'
   [fuzz_package]='^sdk/package/(reader|format|glb|meshopt_view|table_pages)|^sdk/stream/(city|paged_graph|block_pages|cell_table_pages|page_cache|terrain_pages)|^sdk/graph/segment_grid'
+  [fuzz_runtime]='^sdk/capi/(blvd_capi|binding)'
   [fuzz_shard_manifest]='^sdk/bake/shard\.'
 )
 

@@ -274,8 +274,8 @@ void Runtime::info(blvd_runtime_info* out) const {
   i.gl_version = renderer_->glVersion();
   i.origin_lat = city_.header().origin_lat;
   i.origin_lon = city_.header().origin_lon;
-  i.cell_count = city_.header().cell_count;
-  i.block_count = city_.header().block_count;
+  i.cell_count = city_.streets().cellCount();  // the tables', which frames and routes index, not the header's
+  i.block_count = city_.blockCount();
   i.building_count = city_.header().building_count;
   i.triangle_count = city_.header().triangle_count;
   std::memcpy(out, &i, std::min<size_t>(i.struct_size, sizeof i));

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "blvd/blvd.h"
+#include "fuzz_script.h"
 #include "seed_package.h"
 
 namespace {
@@ -27,53 +28,20 @@ namespace {
 std::string g_package;  // the grid package, written once per process
 bool g_trace = false;   // BLVD_FUZZ_TRACE=1: print each call, to read a crash's script
 
-// Reads the script's bytes in order; zeros once it runs out.
-struct Script {
-  const uint8_t* p;
-  size_t n;
-  bool done() const { return n == 0; }
-  void take(void* out, size_t size) {
-    const size_t k = size < n ? size : n;
-    std::memcpy(out, p, k);
-    std::memset(static_cast<uint8_t*>(out) + k, 0, size - k);
-    p += k;
-    n -= k;
-  }
-  uint8_t byte() {
-    uint8_t b;
-    take(&b, 1);
-    return b;
-  }
-  template <typename T>
-  T in() {  // an input struct with the fuzzer's struct_size (any value: a newer caller's bigger struct too)
-    T v;
-    take(&v, sizeof v);
-    return v;
-  }
-};
+using blvd_fuzz::Script;
 
 void checkStatus(blvd_status s, blvd_tracker* tr) {
-  if (s < BLVD_OK || s > BLVD_ERR_OFF_MAP) std::abort();
+  if (!blvd_fuzz::known(s)) std::abort();
   if (s != BLVD_OK && s != BLVD_ERR_MISUSE && blvd_tracker_last_error(tr)[0] == '\0') std::abort();
 }
 
-// An output struct of the fuzzer's struct_size (0: the whole struct) in a
-// buffer of canaries: nothing may be written past it.
+// An output struct of the fuzzer's struct_size: true when the call succeeded
+// and filled all of it.
 template <typename T, typename Call>
 bool out(Script& sc, T& v, Call&& call, blvd_tracker* tr) {
-  constexpr size_t kPad = 64;
-  uint8_t buf[sizeof(T) + kPad];
-  std::memset(buf, 0xA5, sizeof buf);
-  const uint32_t size = sc.byte() % (sizeof(T) + 1);
-  std::memcpy(buf, &size, sizeof size);
-  const blvd_status s = call(reinterpret_cast<T*>(buf));
-  checkStatus(s, tr);
-  const size_t written = size ? size : sizeof(T);
-  for (size_t i = written < sizeof size ? sizeof size : written; i < sizeof buf; ++i)
-    if (buf[i] != 0xA5) std::abort();
-  std::memset(&v, 0, sizeof v);
-  std::memcpy(&v, buf, written);
-  return s == BLVD_OK && written == sizeof(T);
+  const blvd_fuzz::OutResult r = blvd_fuzz::callOut(sc, v, call);
+  checkStatus(r.status, tr);
+  return r.status == BLVD_OK && r.whole;
 }
 
 void checkPose(const blvd_pose& p) {

@@ -4,12 +4,15 @@
 // (every one of a small input) and single-byte flips. Every input is copied into a heap buffer
 // of exactly its size, as libFuzzer does, so ASan catches a read past the end.
 // Arguments starting with '-' (libFuzzer flags such as -runs=0) are ignored,
-// so CTest can call both kinds of binary the same way.
+// so CTest can call both kinds of binary the same way, but for
+// -max_variations=N: at most N truncations and N flips an input, for a target
+// whose every run costs milliseconds (one that creates a GL context).
 //
 // Usage: fuzz_<target> [-flags] FILE_OR_DIR...
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -23,6 +26,7 @@ extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) __attribute__((weak
 namespace {
 
 size_t g_runs = 0;
+size_t g_max_variations = 4096;  // -max_variations=N
 
 void runOne(const uint8_t* data, size_t size) {
   // Exactly `size` bytes on the heap; new[] of 0 still gives a unique pointer.
@@ -41,12 +45,12 @@ void runVariations(const std::vector<uint8_t>& in) {
   runOne(in.data(), in.size());
   const size_t budget = kBytesPerInput / std::max<size_t>(in.size(), 1);
   // Every truncation for inputs up to 2 KiB, then at least 64 evenly spread.
-  const size_t cuts = std::clamp<size_t>(budget, 64, 4096);
+  const size_t cuts = std::min(std::clamp<size_t>(budget, 64, 4096), g_max_variations);
   const size_t step = std::max<size_t>(1, in.size() / cuts);
   for (size_t n = 0; n < in.size(); n += step) runOne(in.data(), n);
   // Single-byte flips at up to 512 evenly spread positions, at least 32.
   std::vector<uint8_t> flipped = in;
-  const size_t fstep = std::max<size_t>(1, in.size() / std::clamp<size_t>(budget, 32, 512));
+  const size_t fstep = std::max<size_t>(1, in.size() / std::min(std::clamp<size_t>(budget, 32, 512), g_max_variations));
   for (size_t i = 0; i < in.size(); i += fstep) {
     flipped[i] ^= 0xFF;
     runOne(flipped.data(), flipped.size());
@@ -60,6 +64,7 @@ int main(int argc, char** argv) {
   if (LLVMFuzzerInitialize) LLVMFuzzerInitialize(&argc, &argv);
   std::vector<std::filesystem::path> files;
   for (int i = 1; i < argc; ++i) {
+    if (std::strncmp(argv[i], "-max_variations=", 16) == 0) g_max_variations = std::max(1, std::atoi(argv[i] + 16));
     if (argv[i][0] == '-') continue;
     const std::filesystem::path p = argv[i];
     std::error_code ec;

@@ -4,6 +4,7 @@
 // stands in for its GLB: the tables only index it).
 #pragma once
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -36,10 +37,16 @@ inline blvd::package::PackageHeader seedHeader() {
   return h;
 }
 
-inline void writeGridPackage(const std::string& path) {
+// Fills the header's pool sizing from the tables (bake::fillPoolSizing's
+// signature): what a package needs for blvd_runtime_create to open it.
+using PoolSizer = std::function<void(const blvd::graph::StreetGraph&, const std::vector<blvd::graph::BlockRecord>&,
+                                     const blvd::graph::CellTables&, const std::function<uint64_t(uint32_t)>&,
+                                     blvd::package::PackageHeader&)>;
+
+inline void writeGridPackage(const std::string& path, const PoolSizer& size_pools = {}) {
   using namespace blvd::package;
   const blvd::geo::MeshData m = seedQuad();
-  const PackageHeader h = seedHeader();
+  PackageHeader h = seedHeader();
   // A small street graph, its cell lists and its segment grid.
   blvd::graph::StreetGraph g = blvd_test::makeGrid(3, 50);
   g.faces.resize(1);  // one block, all around: enough for the index checks to pass
@@ -95,6 +102,10 @@ inline void writeGridPackage(const std::string& path) {
                                           4 + float(i)};
   }
   gw.addSection(kSectionTerrain, blvd::graph::serializeTerrain(terrain, tiles));
+  if (size_pools) {
+    size_pools(g, {rec}, t, [&](uint32_t i) { return uint64_t(gw.blob(i).size()); }, h);
+    gw.setHeader(h);
+  }
   gw.write(path);
 }
 
