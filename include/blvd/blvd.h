@@ -257,6 +257,7 @@ BLVD_API blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* d
  * gpu_budget_bytes. Opens the package's tables, creates no GL context. For a
  * package of format 3.1 or later the figure depends on the package's largest
  * cell, not on its size: its tables are read through fixed page caches.
+ * The descriptor is checked as blvd_runtime_create checks it.
  * Errors: BLVD_ERR_IO, BLVD_ERR_CORRUPT, BLVD_ERR_INVALID_ARG. Any thread. */
 BLVD_API blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const char* package_path,
                                           uint64_t* cpu_bytes, uint64_t* gpu_bytes);

@@ -61,6 +61,46 @@ blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* in) {
 namespace {
 // A blvd_render_mode value a C host may pass (create and blvd_set_render_mode).
 bool knownMode(int32_t m) { return m >= BLVD_MODE_BLVD && m <= BLVD_MODE_SINGLE; }
+
+blvd_status invalid(const char* who, const char* what) {
+  t_create_error = std::string(who) + ": " + what;
+  return BLVD_ERR_INVALID_ARG;
+}
+
+// The view, frame and LOD fields of a descriptor with its defaults filled in.
+blvd_status checkView(const blvd_runtime_desc& d, const char* who) {
+  if (d.width > 16384 || d.height > 16384) return invalid(who, "width and height must be at most 16384");
+  if (!(d.fov_y_deg > 1 && d.fov_y_deg < 179) || !(d.eye_height_m > 0 && d.eye_height_m < 1000) ||
+      !(d.far_m > 10 && d.far_m < 1e6))
+    return invalid(who, "fov_y_deg, eye_height_m or far_m out of range");
+  if (!(d.target_frame_ms >= 0 && d.target_frame_ms < 10000) || !(d.lod_error_px > 0 && d.lod_error_px < 1e4))
+    return invalid(who, "target_frame_ms or lod_error_px out of range");
+  if (!(d.min_render_scale >= 0.25f && d.min_render_scale <= 1.f))
+    return invalid(who, "min_render_scale must be within 0.25..1 (0 means 1)");
+  if (!knownMode(blvd::core::rawEnum(d.mode))) return invalid(who, "unknown render mode");
+  if (blvd::core::rawEnum(d.backend) < 0 || blvd::core::rawEnum(d.backend) > BLVD_CONTEXT_SHARED)
+    return invalid(who, "unknown backend");
+  return BLVD_OK;
+}
+
+// A descriptor with its defaults filled in, as create and memory_required take
+// it: the pools it sizes are checked before anything is carved or measured.
+blvd_status checkDesc(const blvd_runtime_desc& d, const char* who) {
+  if (!d.package_path || !*d.package_path) return invalid(who, "desc.package_path is required");
+  if (const blvd_status st = checkView(d, who); st != BLVD_OK) return st;
+  if (d.max_resident_cells < 2 || d.max_resident_cells > 4096)
+    return invalid(who, "max_resident_cells must be within 2..4096 (the current cell and one ahead)");
+  if (!(d.upload_budget_ms > 0 && d.upload_budget_ms < 1000) || d.ring_capacity > (1u << 20) ||
+      d.route_capacity > (1u << 24))
+    return invalid(who, "upload_budget_ms, ring_capacity or route_capacity out of range");
+  if (d.prefetch_priority != BLVD_PREFETCH_IDLE && d.prefetch_priority != BLVD_PREFETCH_LOW &&
+      d.prefetch_priority != BLVD_PREFETCH_IDLE_ANYTIME)
+    return invalid(who, "prefetch_priority must be BLVD_PREFETCH_IDLE, BLVD_PREFETCH_LOW or BLVD_PREFETCH_IDLE_ANYTIME");
+  if (!(d.prefetch_share < 0 || (d.prefetch_share > 0 && d.prefetch_share <= 1)))
+    return invalid(who, "prefetch_share must be within (0, 1], or negative for no bound (0 means 0.1)");
+  if (!d.allocator.alloc != !d.allocator.free) return invalid(who, "allocator needs both alloc and free, or neither");
+  return BLVD_OK;
+}
 }  // namespace
 
 blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** out) {
@@ -69,58 +109,7 @@ blvd_status blvd_runtime_create(const blvd_runtime_desc* desc, blvd_runtime** ou
   if (!desc) return nullArg(nullptr, "blvd_runtime_create: desc is NULL");
   t_create_error.clear();
   const blvd_runtime_desc d = blvd_runtime_desc_defaults(desc);
-  if (!d.package_path || !*d.package_path) {
-    t_create_error = "blvd_runtime_create: desc.package_path is required";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (d.width > 16384 || d.height > 16384) {
-    t_create_error = "blvd_runtime_create: width and height must be at most 16384";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (!(d.fov_y_deg > 1 && d.fov_y_deg < 179) || !(d.eye_height_m > 0 && d.eye_height_m < 1000) ||
-      !(d.far_m > 10 && d.far_m < 1e6)) {
-    t_create_error = "blvd_runtime_create: fov_y_deg, eye_height_m or far_m out of range";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (d.max_resident_cells < 2 || d.max_resident_cells > 4096) {
-    t_create_error = "blvd_runtime_create: max_resident_cells must be within 2..4096 (the current cell and one ahead)";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (!(d.upload_budget_ms > 0 && d.upload_budget_ms < 1000) || d.ring_capacity > (1u << 20) ||
-      d.route_capacity > (1u << 24)) {
-    t_create_error = "blvd_runtime_create: upload_budget_ms, ring_capacity or route_capacity out of range";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (!(d.target_frame_ms >= 0 && d.target_frame_ms < 10000) || !(d.lod_error_px > 0 && d.lod_error_px < 1e4)) {
-    t_create_error = "blvd_runtime_create: target_frame_ms or lod_error_px out of range";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (!(d.min_render_scale >= 0.25f && d.min_render_scale <= 1.f)) {
-    t_create_error = "blvd_runtime_create: min_render_scale must be within 0.25..1 (0 means 1)";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (d.prefetch_priority != BLVD_PREFETCH_IDLE && d.prefetch_priority != BLVD_PREFETCH_LOW &&
-      d.prefetch_priority != BLVD_PREFETCH_IDLE_ANYTIME) {
-    t_create_error = "blvd_runtime_create: prefetch_priority must be BLVD_PREFETCH_IDLE, BLVD_PREFETCH_LOW or "
-                     "BLVD_PREFETCH_IDLE_ANYTIME";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (!(d.prefetch_share < 0 || (d.prefetch_share > 0 && d.prefetch_share <= 1))) {
-    t_create_error = "blvd_runtime_create: prefetch_share must be within (0, 1], or negative for no bound (0 means 0.1)";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (!d.allocator.alloc != !d.allocator.free) {
-    t_create_error = "blvd_runtime_create: allocator needs both alloc and free, or neither";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (!knownMode(blvd::core::rawEnum(d.mode))) {
-    t_create_error = "blvd_runtime_create: unknown render mode";
-    return BLVD_ERR_INVALID_ARG;
-  }
-  if (blvd::core::rawEnum(d.backend) < 0 || blvd::core::rawEnum(d.backend) > BLVD_CONTEXT_SHARED) {
-    t_create_error = "blvd_runtime_create: unknown backend";
-    return BLVD_ERR_INVALID_ARG;
-  }
+  if (const blvd_status st = checkDesc(d, "blvd_runtime_create"); st != BLVD_OK) return st;
   blvd::runtime::Runtime* impl = nullptr;
   const blvd_status st = guarded(nullptr, [&] { impl = new blvd::runtime::Runtime(d); });
   if (st != BLVD_OK) return st;
@@ -139,10 +128,7 @@ blvd_status blvd_memory_required(const blvd_runtime_desc* desc, const char* pack
   t_create_error.clear();
   blvd_runtime_desc d = blvd_runtime_desc_defaults(desc);
   if (package_path) d.package_path = package_path;
-  if (!d.package_path || !*d.package_path) {
-    t_create_error = "blvd_memory_required: no package path";
-    return BLVD_ERR_INVALID_ARG;
-  }
+  if (const blvd_status st = checkDesc(d, "blvd_memory_required"); st != BLVD_OK) return st;
   return guarded(nullptr, [&] {
     blvd::stream::City city;
     blvd::runtime::openCity(city, d.package_path, blvd::runtime::linkDesc(d), blvd::stream::City::Tables::All);

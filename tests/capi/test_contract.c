@@ -218,6 +218,31 @@ static void enumWidths(void) {
   EXPECT(sizeof(blvd_vehicle) == 4 && sizeof(blvd_can_speed_source) == 4);
 }
 
+/* A descriptor out of range is refused alike by blvd_memory_required and
+ * blvd_runtime_create, for the same reason, before either sizes anything: a
+ * ring of two billion events once made memory_required allocate 79 GB. */
+static void descriptorsOutOfRange(const char* package) {
+  blvd_runtime_desc d;
+  blvd_runtime* rt = NULL;
+  uint64_t cpu = 0;
+  char why[256];
+  int k;
+  for (k = 0; k < 4; ++k) {
+    memset(&d, 0, sizeof d);
+    d.package_path = package;
+    if (k == 0) d.ring_capacity = 0x7a7a7a7au;
+    if (k == 1) d.max_resident_cells = 1;
+    if (k == 2) d.prefetch_share = 2.0f;
+    if (k == 3) d.mode = (blvd_render_mode)9;
+    EXPECT(blvd_memory_required(&d, NULL, &cpu, NULL) == BLVD_ERR_INVALID_ARG);
+    EXPECT(strncmp(blvd_last_error(NULL), "blvd_memory_required: ", 22) == 0);
+    snprintf(why, sizeof why, "%s", blvd_last_error(NULL) + 22);
+    EXPECT(blvd_runtime_create(&d, &rt) == BLVD_ERR_INVALID_ARG && rt == NULL);
+    EXPECT(strncmp(blvd_last_error(NULL), "blvd_runtime_create: ", 21) == 0);
+    EXPECT(strcmp(blvd_last_error(NULL) + 21, why) == 0);
+  }
+}
+
 int main(int argc, char** argv) {
   blvd_runtime_desc d;
   blvd_runtime* rt = NULL;
@@ -227,6 +252,7 @@ int main(int argc, char** argv) {
   }
   nullHandles();
   enumWidths();
+  descriptorsOutOfRange(argv[1]);
   memset(&d, 0, sizeof d);
   d.package_path = argv[1];
   d.width = 160;
