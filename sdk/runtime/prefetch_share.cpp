@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <mutex>
 
-
 #include "runtime/frame_clock.h"
 
 namespace blvd::runtime {
@@ -19,7 +18,10 @@ int64_t ShareBucket::decide(int64_t now, int64_t cost_ns, double share, int64_t 
   accrue(now, share, burst_ns);
   const double need = double(std::min(std::max<int64_t>(cost_ns, 0), burst_ns));
   if (tokens_ >= need) return 0;
-  return now + std::max<int64_t>(1, int64_t((need - tokens_) / share) + 1);
+  // A share as small as a float gets (1e-45) would wait past what int64
+  // holds; no wait is longer than the caller's cap, so an hour will do.
+  const double wait_ns = std::min((need - tokens_) / share, 3.6e12);
+  return now + std::max<int64_t>(1, int64_t(wait_ns) + 1);
 }
 
 void ShareBucket::charge(int64_t now, int64_t cpu_ns, double share, int64_t burst_ns) {

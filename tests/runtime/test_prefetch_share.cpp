@@ -33,6 +33,19 @@ TEST(ShareBucket, ACostlyUnitWaitsForItsTokens) {
   EXPECT_EQ(b.decide(wake, kMs, 0.1, kBurst), 0);
 }
 
+// The smallest share a float holds: the wait is long, but an int64 of
+// nanoseconds holds it (it overflowed, undefined behaviour, before).
+TEST(ShareBucket, ATinyShareWaitsLongWithoutOverflow) {
+  ShareBucket b;
+  const int64_t t0 = 100 * kMs;
+  const double share = double(1e-45f);
+  ASSERT_EQ(b.decide(t0, kMs, share, kBurst), 0);
+  b.charge(t0, 100 * kMs, share, kBurst);
+  const int64_t wake = b.decide(t0, kMs, share, kBurst);
+  EXPECT_GT(wake, t0 + 1000 * kMs);
+  EXPECT_LT(wake, t0 + 4000000 * kMs);
+}
+
 TEST(ShareBucket, TokensNeverExceedTheBurst) {
   ShareBucket b;
   ASSERT_EQ(b.decide(kMs, 0, 0.5, kBurst), 0);
