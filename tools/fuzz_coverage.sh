@@ -24,11 +24,11 @@ declare -A sources=(
   [fuzz_capi]='^sdk/capi/(capi_tracking|track_convert)'
   [fuzz_dbc]='^sdk/vehicle/dbc'
   [fuzz_dem]='^sdk/bake/dem\.'
-  [fuzz_glb]='^sdk/package/glb'
+  [fuzz_glb]='^sdk/package/(glb_decode|glb_detail|glb\.h|meshopt_view)'
   [fuzz_gpsd]='^adapters/gnss/gpsd_client\.'
   [fuzz_nmea]='^adapters/gnss/nmea'
   [fuzz_osm]='^sdk/bake/osm_reader'
-  [fuzz_package]='^sdk/package/(reader|format|glb|meshopt_view|table_pages)|^sdk/stream/(city|paged_graph|block_pages|cell_table_pages|page_cache|terrain_pages)|^sdk/graph/segment_grid'
+  [fuzz_package]='^sdk/package/(reader|format|glb_decode|glb_detail|glb\.h|meshopt_view|table_pages)|^sdk/stream/(city|paged_graph|block_pages|cell_table_pages|page_cache|terrain_pages)|^sdk/graph/segment_grid'
   [fuzz_runtime]='^sdk/capi/(blvd_capi|binding)'
   [fuzz_shard_manifest]='^sdk/bake/shard\.'
 )

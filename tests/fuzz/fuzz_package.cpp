@@ -1,8 +1,10 @@
 // Fuzz target for the package reader: the input is opened from memory, from
 // a file (the mmap path), and once more with all its checksums recomputed, so
 // that mutations get past the CRCs to the structure checks and, through the
-// blobs, to the GLB decoder. Every path must end in Ok or an error with a
-// message; never a crash.
+// blobs, to the GLB decoder; then as the runtime opens it (City, its tables
+// paged) with each cell's tables read and the first cells' block levels and
+// impostor layers decoded as the loader does. Every path must end in Ok or an
+// error with a message; never a crash.
 //
 // Seeds: set BLVD_FUZZ_SEED_DIR and the target writes a small package there.
 #include <fcntl.h>
@@ -110,14 +112,41 @@ const char* tempPath() {
   return path;
 }
 
-// Reads each cell's tables as the runtime would (checked at open: never a crash).
+// Decodes a cell's block levels and impostor layers as the loader does (read
+// with pread, CRC-checked, then decoded): Ok, or an error that says why. Each
+// blob once (`seen`), at most `budget` blobs an input.
+void decodeCell(const blvd::stream::City& city, uint32_t c, const std::vector<blvd::stream::LayerInfo>& layers,
+                uint32_t n_layers, std::vector<bool>& seen, int& budget) {
+  std::string err;
+  blvd::geo::MeshData m;
+  for (uint32_t b : city.streets().localBlocks(c)) {
+    const uint32_t blob_id = city.block(b).blob;
+    if (blob_id >= seen.size() || seen[blob_id] || budget-- <= 0) continue;
+    seen[blob_id] = true;
+    blvd::stream::City::BlockBlob blob;
+    const Status s = city.openBlock(b, blob, err);
+    check(s, err);
+    for (uint32_t k = 0; s == Status::Ok && k < city.block(b).lod_count; ++k) check(city.decodeBlockLevel(blob, k, m, err), err);
+  }
+  for (uint32_t i = 0; i < n_layers; ++i) {
+    if (layers[i].blob >= seen.size() || seen[layers[i].blob] || budget-- <= 0) continue;
+    seen[layers[i].blob] = true;
+    check(city.decodeImpostorBlob(layers[i].blob, m, err), err);
+  }
+}
+
+// Reads each cell's tables as the runtime would (checked at open: never a
+// crash) and decodes the first cells' blobs.
 void readEveryCell(const blvd::stream::City& city) {
   std::vector<blvd::stream::LayerInfo> layers(city.maxCellLayers());
+  int budget = 16;
+  std::vector<bool> seen(city.package().blobCount());
   for (uint32_t c = 0; c < city.streets().cellCount(); ++c) {
     uint32_t layered = 0, single = 0;
     city.cellLayers(c, layers.data(), static_cast<uint32_t>(layers.size()), &layered, &single);
     for (uint32_t b : city.streets().localBlocks(c)) (void)city.coverage(c, b), (void)city.block(b);
     for (uint32_t s : city.streets().successors(c)) (void)city.streets().halfedge(s);
+    decodeCell(city, c, layers, layered + single, seen, budget);
   }
   // Each terrain tile's record and heights (records checked at open).
   if (const blvd::stream::TerrainPages* t = city.terrain()) {

@@ -1,7 +1,7 @@
 // A small package with a street graph for the fuzz targets' seeds: a 3 x 3
 // grid of streets 50 m apart (its cell lists and segment grid), one block with
-// its GLB, a PVS per cell and one impostor layer on cell 0 (the block's blob
-// stands in for its GLB: the tables only index it).
+// two levels, a PVS per cell and one impostor layer on cell 0 (a quad without
+// its image), ground heights and terrain tiles.
 #pragma once
 #include <cstring>
 #include <functional>
@@ -59,22 +59,34 @@ inline void writeGridPackage(const std::string& path, const PoolSizer& size_pool
   gw.addSection(kSectionGraph, blvd::graph::serializeGraph(g));
   gw.addSection(kSectionCells, blvd::graph::serializeCells(g));
   gw.addSection(kSectionSpatialIndex, blvd::graph::serializeSegmentGrid(grid));
-  // One block with its blob, and per-cell tables: a PVS of it and, on cell 0,
-  // one impostor layer (the blob stands in for its GLB: the tables only index it).
+  // One block whose blob holds two levels in meshopt (as the bake writes
+  // blocks), and per-cell tables: a PVS of it and, on cell 0, one impostor
+  // layer, a Draco quad with texture coordinates and no image.
+  blvd::geo::MeshData coarse = m;
+  coarse.indices.resize(3);
+  GlbOptions meshopt;
+  meshopt.codec = GlbCodec::Meshopt;
+  std::vector<GlbMeshCounts> counts;
   blvd::graph::BlockRecord rec;
-  rec.blob = 0;
-  rec.lod_count = 1;
-  rec.triangles[0] = rec.triangle_count = 2;
-  rec.vertices[0] = rec.vertex_count = 4;
+  rec.blob = gw.addBlob(encodeGlbLevels({m, coarse}, meshopt, &counts));
+  rec.lod_count = 2;
+  for (uint32_t k = 0; k < 2; ++k) rec.triangles[k] = counts[k].triangles, rec.vertices[k] = counts[k].vertices;
+  rec.triangle_count = rec.triangles[0];
+  rec.vertex_count = rec.vertices[0];
   rec.bbox_max[0] = rec.bbox_max[1] = rec.bbox_max[2] = 1;
   gw.addSection(kSectionBlocks, blvd::graph::serializeBlocks({rec}));
-  gw.addBlob(encodeGlb(m));
+  blvd::geo::MeshData quad = m;
+  quad.normals.clear();  // as an impostor's depth mesh
+  quad.texcoords = {0, 0, 1, 0, 0, 1, 1, 1};
+  GlbMeshCounts quad_counts;
+  const uint32_t impostor_blob = gw.addBlob(encodeGlb(quad, {}, &quad_counts));
   blvd::graph::CellTables t;
   t.visibility.resize(g.halfedges.size(), blvd::graph::CellVisibility{{0}, {0.5f}});
   t.impostors.resize(g.halfedges.size());
   blvd::graph::ImpostorLayer layer;
-  layer.triangles = 2;
-  layer.vertices = 6;
+  layer.blob = impostor_blob;
+  layer.triangles = quad_counts.triangles;
+  layer.vertices = quad_counts.vertices;
   layer.texture_width = layer.texture_height = 4;
   layer.blocks = {0};
   t.impostors[0].layered.push_back(layer);
