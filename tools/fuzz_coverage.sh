@@ -29,7 +29,7 @@ declare -A sources=(
   [fuzz_nmea]='^adapters/gnss/nmea'
   [fuzz_osm]='^sdk/bake/osm_reader'
   [fuzz_package]='^sdk/package/(reader|format|glb_decode|glb_detail|glb\.h|meshopt_view|table_pages)|^sdk/stream/(city|paged_graph|block_pages|cell_table_pages|page_cache|terrain_pages)|^sdk/graph/segment_grid'
-  [fuzz_runtime]='^sdk/capi/(blvd_capi|binding)'
+  [fuzz_runtime]='^sdk/capi/(blvd_capi|binding)|^sdk/runtime/(block_copy|cell_choice|cell_loader|cell_slots|draw_list|frame|frame_clock|impostor_atlas|lod_choice|memory_plan|prefetch_share|runtime|slot_upload|terrain_set|tracking)\.'
   [fuzz_shard_manifest]='^sdk/bake/shard\.'
 )
 
