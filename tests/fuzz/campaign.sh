@@ -34,6 +34,8 @@ while IFS= read -r p; do
 done < "$list"
 # BLVD_FUZZ_SEED fixes libFuzzer's random seed (CI's short campaigns: the same
 # mutations in the same order on every run); unset, each campaign draws its own.
+# Leaks of the system's libraries that blvd cannot free, each explained there.
+export LSAN_OPTIONS="suppressions=$here/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 flags=(-timeout=25 -rss_limit_mb=2048 -print_final_stats=1 "-artifact_prefix=$work/artifacts/" "-seed=${BLVD_FUZZ_SEED:-0}")
 [ -f "$here/dict/$name.dict" ] && flags+=("-dict=$here/dict/$name.dict")
 
