@@ -387,7 +387,7 @@ std::string bakeIdentityJson(const BakeOptions& opt, const std::vector<uint32_t>
       {"tile", {opt.tile.nx, opt.tile.ny, opt.tile.gap_m}},
       {"impostor",
        {int(i.mode), i.texture_max, i.threshold_px, i.max_layers, i.display_width, i.display_height,
-        i.display_fov_y_deg, i.grid_px, i.skirt_px, i.positions_per_cell, i.item_resolution, i.pullback_m,
+        i.display_fov_y_deg, i.grid_px, i.skirt_px, i.positions_per_cell, i.item_resolution, i.vantage_at,
         i.max_span_deg, i.view_margin_deg, i.cell_texels, i.run_length_m, i.run_turn_deg, i.run_climb_m, i.max_runs,
         i.landmark_height_m, i.landmark_scale, int(i.texture_codec), i.texture_quality, i.edge_on_cos,
         package::glbCodecName(i.mesh_codec)}},

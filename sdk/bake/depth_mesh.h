@@ -129,12 +129,12 @@ bool buildDepthMesh(const CaptureImage& img, const PinholeCamera& cam, const Dep
                     DepthMeshDebug* debug = nullptr);
 
 // Triangles of a depth mesh captured from `eye` that stand edge-on to it and
-// face a viewer at `viewer` (the run's far end) at least twice as squarely:
+// face a viewer at `viewer` (an end of the run) at least twice as squarely:
 // |n . ray| below `max_cos` from the eye (0.2: within 12 degrees of edge-on)
 // and more than twice that from the viewer. A triangle the capture saw
 // edge-on holds almost no texels and mostly spans a depth step the
 // discrepancy lines missed (S97 §4.2: a triangle across a step is a "rubber
-// sheet"); from the run's end it opens into a needle across the near street.
+// sheet"); from an end of the run it opens into a needle across the near street.
 // Horizontal triangles (ground, roofs: |n.y| >= 0.9) are kept: ground is seen
 // edge-on from every eye on a street, and stays thin from each. Both points
 // in the mesh's frame (glTF axes). Returns the triangles dropped; unused

@@ -111,11 +111,14 @@ std::vector<std::pair<double, double>> cellRuns(const graph::StreetGraph& g, con
 
 namespace {
 
-// The vantage point sits at the run's start, pulled back along its chord so
-// a viewer anywhere across the carriageway stays in front of it (K06 §4.4.4,
-// S97 §4.2), but never inside a building. The azimuths: every heading the
-// street takes along the run (unwrapped, so a hairpin's sweep is kept),
-// widened by half the display's field and a margin.
+// The vantage point stands on the street at opt.vantage_at of the run (the
+// middle by default: a viewer is never more than half a run from it, so what
+// parallax uncovers and what the capture saw edge-on is half what a vantage
+// point at the run's start leaves; docs/decisions/0025), but never inside a
+// building. The azimuths: every heading the street takes along the run
+// (unwrapped, so a hairpin's sweep is kept), widened by half the display's
+// field and a margin: the captures cover every direction a viewer anywhere on
+// the run looks (capture_plan.h), in front of the vantage point or behind it.
 CellView cellView(const graph::StreetGraph& g, const graph::HalfEdge& e, double s0, double s1,
                   const ImpostorOptions& opt, CaptureRig& rig) {
   CellView v;
@@ -128,13 +131,12 @@ CellView cellView(const graph::StreetGraph& g, const graph::HalfEdge& e, double 
     fwd = {std::sin(glm::radians(hd[0])), std::cos(glm::radians(hd[0]))};
   fwd = glm::length(fwd) > 0 ? glm::normalize(fwd) : glm::dvec2(0, 1);
   v.heading_deg = headingOf(fwd);
-  // Pulled back less, or moved into the run, where the eye would be inside
-  // a building (a short cell ending at a corner, a street under a building):
-  // a capture from inside sees only back faces.
-  const double len = s1 - s0;
-  for (double s : {-opt.pullback_m, -0.5 * opt.pullback_m, 0.0, 0.25 * len, 0.5 * len}) {
-    const glm::dvec2 eye2 = s < 0 ? v.P + fwd * s : pointAt(g, e, s0 + s);
-    v.eye_enu = eyeAt(eye2, opt.ground);
+  // Moved along the run where the eye would be inside a building (a street
+  // under a building, a short cell ending at a corner): a capture from inside
+  // sees only back faces.
+  const double at = std::clamp(opt.vantage_at, 0.0, 1.0);
+  for (double f : {at, 0.5 * (at + 0.5), 0.25, 0.75, 0.0, 1.0}) {
+    v.eye_enu = eyeAt(pointAt(g, e, s0 + f * (s1 - s0)), opt.ground);
     if (!rig.insideGeometry(v.eye_enu)) break;
   }
   double a = 0, lo = 0, hi = 0;
@@ -224,10 +226,10 @@ AtlasLayout layoutAtlas(std::vector<CaptureShot>& shots, const CapturePlanOption
 // A layer's captures made into one textured depth mesh blob `glb` (S97 §4.2):
 // each capture's depth mesh, its texture coordinates moved into the atlas,
 // and the atlas as the texture, less the triangles the capture saw edge-on
-// and the viewer at the run's `end` faces (dropEdgeOnTriangles). False when
+// and a viewer at either end of the run faces (dropEdgeOnTriangles). False when
 // nothing survives (nothing covered, or Draco kept nothing).
 bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::vector<uint32_t>& blocks,
-                  const ImpostorOptions& opt, const CapturePlanOptions& popt, const glm::dvec3& end,
+                  const ImpostorOptions& opt, const CapturePlanOptions& popt, const glm::dvec3 (&ends)[2],
                   graph::ImpostorLayer& il, ImpostorRecord& rec, std::vector<uint8_t>& glb) {
   const auto tl = Clock::now();
   const AtlasLayout layout = layoutAtlas(shots, popt);
@@ -250,7 +252,7 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
       BLVD_LOG_DEBUG("cell %u layer %u capture %zu: nothing (%s)", rec.cell, rec.layer, k, why.c_str());
       continue;
     }
-    dropEdgeOnTriangles(part, pin.eye, end, opt.edge_on_cos);
+    for (const glm::dvec3& end : ends) dropEdgeOnTriangles(part, pin.eye, end, opt.edge_on_cos);
     const auto [x0, y0] = layout.at[k];
     for (int y = 0; y < img.height; ++y) {
       const size_t src = size_t(y) * img.width, dst = size_t(y0 + y) * atlas.width + x0;
@@ -360,7 +362,8 @@ struct CaptureJob {
   bool single;
   float run_from;
   std::vector<uint32_t> blocks;
-  glm::dvec3 end{0.0};  // the eye at the run's far end, glTF axes
+  glm::dvec3 ends[2];  // the eye at the run's start and end, glTF axes
+  glm::dvec3 eye_enu;  // the run's vantage point
 };
 
 // One cell's impostors as a worker makes them; committed in cell order.
@@ -386,12 +389,14 @@ CellImpostors bakeCellImpostors(const CellBake& cb, CaptureRig& rig, uint32_t h,
   std::vector<std::vector<CaptureShot>> plans;
   for (const auto& [s0, s1] : cellRuns(cb.g, e, opt)) {
     const CellView view = cellView(cb.g, e, s0, s1, opt, rig);
+    const glm::dvec3 start = render::enuToGltf(eyeAt(view.P, opt.ground));
     const glm::dvec3 end = render::enuToGltf(eyeAt(view.Q, opt.ground));
     std::vector<CaptureJob> run;
     if (opt.mode == ImpostorMode::Layered || opt.mode == ImpostorMode::Both)
       for (auto& blocks : layerBlocks(view, far, cb.info, opt, cb.T, out.counters))
-        run.push_back({false, float(s0), blocks, end});
-    if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both) run.push_back({true, float(s0), far, end});
+        run.push_back({false, float(s0), blocks, {start, end}, view.eye_enu});
+    if (opt.mode == ImpostorMode::Single || opt.mode == ImpostorMode::Both)
+      run.push_back({true, float(s0), far, {start, end}, view.eye_enu});
     for (CaptureJob& j : run) {
       plans.push_back(
           planCaptures(rig, view.eye_enu, view.heading_deg, view.az_lo, view.az_hi, j.blocks, cb.popt, &cb.outlines));
@@ -407,8 +412,9 @@ CellImpostors bakeCellImpostors(const CellBake& cb, CaptureRig& rig, uint32_t h,
     l.rec.single = jobs[j].single;
     l.rec.layer = layer_index++;
     l.rec.run_from_m = jobs[j].run_from;
+    l.rec.eye_enu = jobs[j].eye_enu;
     l.il.run_from_m = jobs[j].run_from;
-    if (captureLayer(rig, plans[j], jobs[j].blocks, opt, cb.popt, jobs[j].end, l.il, l.rec, l.glb))
+    if (captureLayer(rig, plans[j], jobs[j].blocks, opt, cb.popt, jobs[j].ends, l.il, l.rec, l.glb))
       out.layers.push_back(std::move(l));
   }
   return out;

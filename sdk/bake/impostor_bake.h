@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include <glm/vec3.hpp>
+
 #include "geo/mesh.h"
 #include "graph/cell_tables.h"
 #include "graph/street_graph.h"
@@ -40,7 +42,7 @@ struct ImpostorOptions {
   double edge_on_cos = 0.2;       // depth-mesh triangles seen this edge-on are dropped (depth_mesh.h dropEdgeOnTriangles; 0: none)
   int positions_per_cell = 8;     // item-buffer positions along a street, ends included (Marvie: 8 × 6 directions)
   int item_resolution = 128;      // item buffer size per direction (square, 90°)
-  double pullback_m = 6.0;        // capture eye behind the cell start
+  double vantage_at = 0.5;        // where along its run a run's vantage point stands: 0 its start, 1 its end
   double max_span_deg = 45.0;     // widest azimuth one capture holds (capture_plan.h)
   double view_margin_deg = 10.0;  // azimuths covered past half the display's field, each side
   int cell_texels = 327680;       // texel budget of a cell's captures together (capture_plan.h)
@@ -73,6 +75,7 @@ struct ImpostorRecord {
   bool single = false;
   uint32_t layer = 0;
   float run_from_m = 0.f;         // the run of the cell it serves (arc length of its start)
+  glm::dvec3 eye_enu{0.0};        // its vantage point (east, north, up)
   uint32_t shot = 0;              // captures in the layer's atlas (capture_plan.h: one per piece of azimuth)
   double density = 1.0;           // lowest texels per display pixel of its captures (< 1: a cap bit)
   uint32_t triangles = 0, bytes = 0, blocks = 0;

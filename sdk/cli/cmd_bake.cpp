@@ -136,6 +136,10 @@ void addBake(CLI::App& app, Runner& run) {
   cmd->add_option("--run-climb", o->bake.impostor.run_climb_m,
                   "with --dem, a cell whose ground rises or falls more than this gets several runs, metres (0: off)")
       ->capture_default_str()->check(CLI::Range(0.0, 10000.0));
+  cmd->add_option("--vantage", o->bake.impostor.vantage_at,
+                  "where along its run a run's impostors are captured: 0 its start, 0.5 its middle, 1 its end "
+                  "(docs/decisions/0025)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--max-runs", o->bake.impostor.max_runs, "most impostor runs a cell gets")
       ->capture_default_str()->check(CLI::Range(1, 16));
   cmd->add_option("--max-span", o->bake.impostor.max_span_deg,
@@ -149,8 +153,8 @@ void addBake(CLI::App& app, Runner& run) {
                   "pixels of skirt hung under far geometry's lower edge in each capture (0: none)")
       ->capture_default_str()->check(CLI::Range(0, 8));
   cmd->add_option("--edge-on", o->bake.impostor.edge_on_cos,
-                  "drop impostor triangles the capture saw this edge-on (|cos| from the vantage point) that the run's "
-                  "end sees at least twice as squarely; 0: keep all (docs/decisions/0015)")
+                  "drop impostor triangles the capture saw this edge-on (|cos| from the vantage point) that either "
+                  "end of the run sees at least twice as squarely; 0: keep all (docs/decisions/0015)")
       ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--threshold-px", o->bake.impostor.threshold_px,
                   "layer threshold T in pixels at the display (Decoret 99 section 4.2)")

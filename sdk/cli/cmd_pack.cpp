@@ -182,7 +182,8 @@ int cellInfo(const std::string& path, int cell) {
                                                           : t.impostors[size_t(cell)].layered;
       nlohmann::json arr = nlohmann::json::array();
       for (const auto& l : layers)
-        arr.push_back({{"blocks", l.blocks},
+        arr.push_back({{"run_from_m", l.run_from_m},
+                       {"blocks", l.blocks},
                        {"triangles", l.triangles},
                        {"texture", {l.texture_width, l.texture_height}}});
       j[kind] = arr;

@@ -1,8 +1,8 @@
 // Impostors on a synthetic city with known answers, baked and drawn end to
 // end (OSM XML -> bake -> package -> runtime -> far metrics):
 //   - a straight street looking at a tall block behind a low one: no spurious
-//     pixel at the start, and at the end at most what the depth mesh's
-//     contour tolerance allows (the bound is derived below);
+//     pixel at a vantage point, and at the cell's start and end at most what
+//     the depth mesh's contour tolerance allows (the bound is derived below);
 //   - a hairpin whose last leg looks at a building behind the bend, in a
 //     direction the cell's first leg never faces: drawn by its impostor at
 //     every heading that shows it (its pixels above the horizon; a far
@@ -232,6 +232,19 @@ uint32_t blockWithBuilding(const stream::City& city, double x, double y, double 
   return graph::kNone;
 }
 
+// Arc lengths along `cell` of its runs' vantage points (impostor_bake.cpp
+// cellView: each run's middle), from the runs its layers serve.
+std::vector<double> vantagePoints(const stream::City& city, uint32_t cell) {
+  std::vector<double> from;
+  for (const auto& l : city.cellTables().impostors[cell].layered) from.push_back(l.run_from_m);
+  std::sort(from.begin(), from.end());
+  from.erase(std::unique(from.begin(), from.end()), from.end());
+  std::vector<double> out;
+  const double len = city.graph().halfedges[cell].length;
+  for (size_t k = 0; k < from.size(); ++k) out.push_back(0.5 * (from[k] + (k + 1 < from.size() ? from[k + 1] : len)));
+  return out;
+}
+
 TEST(ImpostorScene, ATallBlockBehindALowOneHasNoRubberSheet) {
   Scene& s = *scene();
   const uint32_t cell = cellBetween(s.city, {250, -200}, {400, -200});
@@ -240,36 +253,64 @@ TEST(ImpostorScene, ATallBlockBehindALowOneHasNoRubberSheet) {
   double density = 1.0;
   for (const auto& r : s.impostors.records)
     if (r.cell == cell) density = std::min(density, r.density);
-  const auto poses = along(s.city.graph(), cell, 1.0);
+  const auto poses = along(s.city.graph(), cell, 1.0);  // pose i at arc 1 + i, scene x = 251 + i
   ASSERT_GT(poses.size(), 100u);
+  const std::vector<double> vantage = vantagePoints(s.city, cell);
+  ASSERT_GE(vantage.size(), 2u);  // 150 m: several runs
   Frames f(s.package);
   uint32_t at = 0;
-  const cli::FarMetrics start = f.measure(s, poses.front(), at);
+  // At the first run's vantage point: no rubber sheet, no needle. The skirt
+  // (one row hung under far geometry, depth_mesh.h) may show far ground that
+  // the full model's rasteriser leaves sub-pixel at the horizon: the row
+  // just below it, and nowhere else.
+  const cli::FarMetrics there = f.measure(s, poses[size_t(std::lround(vantage.front())) - 1], at);
   ASSERT_EQ(at, cell);
-  EXPECT_GT(start.far_px, 1000u);  // both buildings are in view
-  // No rubber sheet, no needle. The skirt (one row hung under far geometry,
-  // depth_mesh.h) may show far ground that the full model's rasteriser leaves
-  // sub-pixel at the horizon: the row just below it, and nowhere else.
+  EXPECT_GT(there.far_px, 1000u);  // both buildings are in view
   size_t off_horizon = 0;
-  for (size_t i = 0; i < start.classes.size(); ++i) off_horizon += start.classes[i] == 3 && i / kW != kH / 2;
+  for (size_t i = 0; i < there.classes.size(); ++i) off_horizon += there.classes[i] == 3 && i / kW != kH / 2;
   EXPECT_EQ(off_horizon, 0u);
-  EXPECT_LE(start.spurious * kW * kH, double(kW));
-  EXPECT_EQ(start.missing_objects, 0u);
-  // At the end. The depth mesh's contour lies within its tolerance (1 texel)
-  // of the silhouette seen from the vantage point; a texel spans 1/density
-  // display pixels there, and from the cell's end, d_end nearer to the
-  // buildings than the vantage (d_vantage away), the far geometry is
-  // magnified by d_vantage / d_end. Each silhouette pixel is then off by at
-  // most m = (1 / density) * d_vantage / d_end + 1 (rasterisation); only
-  // what lies beyond the metric's 2-px tolerance is spurious, so spurious <=
-  // max(0, m - 2) * (silhouette pixels) / (frame pixels).
-  const cli::FarMetrics end = f.measure(s, poses.back(), at);
-  ASSERT_EQ(at, cell);
-  const double d_vantage = 560.0 - (250.0 - 6.0), d_end = 560.0 - 399.0;
-  const double m = (1.0 / density) * d_vantage / d_end + 1.0;
-  const double bound = std::max(0.0, m - 2.0) * double(end.silhouette_px) / (kW * kH);
-  EXPECT_LE(end.spurious, bound) << "m " << m << " density " << density;
-  EXPECT_EQ(end.missing_objects, 0u);
+  EXPECT_LE(there.spurious * kW * kH, double(kW));
+  EXPECT_EQ(there.missing_objects, 0u);
+  // At the cell's start and end, half a run from a vantage point. The depth
+  // mesh's contour lies within its tolerance (1 texel) of the silhouette seen
+  // from the vantage point; a texel spans 1/density display pixels there, and
+  // from a viewer d metres from the buildings where the vantage point is
+  // d_vantage away, the far geometry is magnified by d_vantage / d. Each
+  // silhouette pixel is then off by at most m = (1 / density) * max(1,
+  // d_vantage / d) + 1 (rasterisation); only what lies beyond the metric's
+  // 2-px tolerance is spurious, so spurious <= max(0, m - 2) * (silhouette
+  // pixels) / (frame pixels).
+  for (const auto& [i, arc_vantage] : {std::pair{size_t(0), vantage.front()},
+                                        std::pair{poses.size() - 1, vantage.back()}}) {
+    const cli::FarMetrics m = f.measure(s, poses[i], at);
+    ASSERT_EQ(at, cell);
+    const double d_vantage = 560.0 - (250.0 + arc_vantage);
+    const double d = 560.0 - (251.0 + double(i));
+    const double px = (1.0 / density) * std::max(1.0, d_vantage / d) + 1.0;
+    const double bound = std::max(0.0, px - 2.0) * double(m.silhouette_px) / (kW * kH);
+    EXPECT_LE(m.spurious, bound) << "m " << px << " density " << density << " d " << d;
+    EXPECT_EQ(m.missing_objects, 0u) << "d " << d;
+  }
+}
+
+TEST(ImpostorScene, EachRunIsCapturedFromItsMiddle) {
+  // The straight cell runs east along y = -200 from x = 250: the vantage
+  // point of the run starting at arc s0 stands at x = 250 + its middle.
+  Scene& s = *scene();
+  const uint32_t cell = cellBetween(s.city, {250, -200}, {400, -200});
+  ASSERT_NE(cell, graph::kNone);
+  const std::vector<double> vantage = vantagePoints(s.city, cell);
+  size_t checked = 0;
+  for (const auto& r : s.impostors.records) {
+    if (r.cell != cell) continue;
+    const auto k = size_t(std::count_if(vantage.begin(), vantage.end(), [&](double v) { return v < r.run_from_m; }));
+    ASSERT_LT(k, vantage.size());
+    const glm::dvec2 want = local(s.city, 250.0 + vantage[k], -200.0);
+    EXPECT_LT(glm::length(glm::dvec2(r.eye_enu.x, r.eye_enu.y) - want), 0.5)
+        << "run from " << r.run_from_m << " m: eye at " << r.eye_enu.x << "," << r.eye_enu.y;
+    ++checked;
+  }
+  EXPECT_GE(checked, vantage.size());
 }
 
 TEST(ImpostorScene, AHairpinShowsTheBlockBehindItsBendAtEveryHeading) {
