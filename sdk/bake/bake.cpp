@@ -235,6 +235,7 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
       {"block_codec", package::glbCodecName(opt.block_codec)},
       {"draco_level", opt.draco_level},
       {"local_radius_m", opt.local_radius_m},
+      {"junction_radius_m", opt.junction_radius_m},
       {"tile",
        {{"nx", opt.tile.nx}, {"ny", opt.tile.ny}, {"gap_m", opt.tile.gap_m},
         {"step_m", {tiles.step.x, tiles.step.y}}, {"cells_per_tile", tiles.cells},
@@ -382,7 +383,7 @@ std::string bakeIdentityJson(const BakeOptions& opt, const std::vector<uint32_t>
   const ImpostorOptions& i = opt.impostor;
   const nlohmann::json j = {
       {"osm", {opt.osm.default_height_m, opt.osm.level_height_m}},
-      {"blocks", {package::glbCodecName(opt.block_codec), opt.draco_level, opt.local_radius_m}},
+      {"blocks", {package::glbCodecName(opt.block_codec), opt.draco_level, opt.local_radius_m, opt.junction_radius_m}},
       {"lod", {opt.lod.enabled, opt.lod.ratios}},
       {"tile", {opt.tile.nx, opt.tile.ny, opt.tile.gap_m}},
       {"impostor",
@@ -432,7 +433,7 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   }
   progress.stage("placing buildings");
   const std::vector<std::vector<uint32_t>> face_buildings = placeBuildings(city, map, sum, progress);
-  widenLocalModels(g, city.buildings, face_buildings, opt.local_radius_m);
+  widenLocalModels(g, city.buildings, face_buildings, opt.local_radius_m, opt.junction_radius_m);
   progress.stage("block geometry + LOD chain + GLB");
   package::PackageWriter writer;
   std::vector<graph::BlockRecord> blocks;

@@ -31,6 +31,9 @@ struct BakeOptions {
   // cells' local model too (local_model.h; docs/decisions/0015); 0: only the
   // blocks touching the street and its end junctions.
   double local_radius_m = 20.0;
+  // ... and so is a block bordering a street this near a cell's end points
+  // (local_model.h); 0: none.
+  double junction_radius_m = 8.0;
   TileOptions tile;  // --tile NxM: N x M disconnected copies of the city (benchmarks)
   // --dem: SRTM tiles (bake/dem.h) that cover the city; empty: flat ground.
   // The blocks stand and lie on the terrain, the item buffers and captures

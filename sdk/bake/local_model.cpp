@@ -9,8 +9,9 @@
 namespace blvd::bake {
 
 void widenLocalModels(graph::StreetGraph& g, const std::vector<OsmBuilding>& buildings,
-                      const std::vector<std::vector<uint32_t>>& face_buildings, double radius_m) {
-  if (!(radius_m > 0)) return;
+                      const std::vector<std::vector<uint32_t>>& face_buildings, double radius_m,
+                      double junction_radius_m) {
+  if (!(radius_m > 0) && !(junction_radius_m > 0)) return;
   // The streets near each footprint edge, from the graph's segment grid (one
   // half-edge of each twin pair is listed; its twin gets the same blocks).
   graph::SegmentGrid streets;
@@ -20,7 +21,7 @@ void widenLocalModels(graph::StreetGraph& g, const std::vector<OsmBuilding>& bui
   auto add = [&](uint32_t h, uint32_t f) {
     if (h < H && std::find(added[h].begin(), added[h].end(), f) == added[h].end()) added[h].push_back(f);
   };
-  for (uint32_t f = 0; f < face_buildings.size() && f < g.faces.size(); ++f) {
+  for (uint32_t f = 0; radius_m > 0 && f < face_buildings.size() && f < g.faces.size(); ++f) {
     if (g.faces[f].unbounded) continue;
     for (uint32_t b : face_buildings[f])
       for (const Polygon2& poly : buildings[b].polygons) {
@@ -35,6 +36,21 @@ void widenLocalModels(graph::StreetGraph& g, const std::vector<OsmBuilding>& bui
           });
         }
       }
+  }
+  // The blocks on either side of every street within junction_radius_m of
+  // the cell's end points: where a junction is drawn as several vertices a
+  // few metres apart, the viewer crossing it stands on their ground.
+  for (uint32_t h = 0; junction_radius_m > 0 && h < H; ++h) {
+    const graph::HalfEdge& e = g.halfedges[h];
+    if (e.pts_count == 0) continue;
+    for (const glm::dvec2 p : {g.points[e.pts_begin], g.points[e.pts_begin + e.pts_count - 1]})
+      streets.query(p.x, p.y, junction_radius_m, [&](const graph::SegmentGrid::Entry& s) {
+        if (segmentDistance(g.points[s.point], g.points[s.point + 1], p, p) > junction_radius_m) return;
+        for (const uint32_t side : {s.halfedge, g.halfedges[s.halfedge].twin}) {
+          const uint32_t f = g.halfedges[side].face;
+          if (f < g.faces.size() && !g.faces[f].unbounded) add(h, f);
+        }
+      });
   }
   graph::Csr out;
   for (uint32_t h = 0; h < H; ++h) {

@@ -10,7 +10,13 @@
 // driver but are not topologically near: drawn as an impostor from a
 // vantage point tens of metres back, they smear and uncover what no capture
 // saw. So a block is local too when one of its buildings comes within a
-// radius of the street (docs/decisions/0015).
+// radius of the street (docs/decisions/0015), and when its ground borders a
+// street within a few metres of the cell's end points: a junction drawn as
+// several vertices (a dual carriageway crossing, a short connector) puts the
+// crossing street's blocks right under a viewer at the cell's end, where the
+// runtime keeps the cell (runtime/cell_choice.h), yet they share no vertex
+// with it; drawn as impostors from half a run back, their street surfaces
+// smear across the near street (docs/decisions/0025).
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -24,8 +30,11 @@ namespace blvd::bake {
 // with a building footprint (outer ring) within `radius_m` of the cell's
 // polyline, in block order after the topological ones. radius_m <= 0: no
 // change. `face_buildings[f]` lists block f's buildings (indices into
-// `buildings`). Both half-edges of a street get the same added blocks.
+// `buildings`). Then every bounded block on either side of a street segment
+// within `junction_radius_m` of the cell's first or last point (<= 0: none).
+// Both half-edges of a street get the same added blocks.
 void widenLocalModels(graph::StreetGraph& g, const std::vector<OsmBuilding>& buildings,
-                      const std::vector<std::vector<uint32_t>>& face_buildings, double radius_m);
+                      const std::vector<std::vector<uint32_t>>& face_buildings, double radius_m,
+                      double junction_radius_m = 0.0);
 
 }  // namespace blvd::bake

@@ -114,6 +114,10 @@ void addBake(CLI::App& app, Runner& run) {
                   "a block with a building this close to a street is in its cell's local model, metres; 0: the "
                   "blocks touching the street and its junctions only (docs/decisions/0015)")
       ->capture_default_str()->check(CLI::Range(0.0, 200.0));
+  cmd->add_option("--junction-radius", o->bake.junction_radius_m,
+                  "a block bordering a street this close to a cell's end points is in its local model, metres; 0: "
+                  "none (a junction drawn as several vertices, docs/decisions/0025)")
+      ->capture_default_str()->check(CLI::Range(0.0, 50.0));
   cmd->add_option("--impostor", o->impostor,
                   "impostors per cell: layered (Decoret 99 MMI), single (Sillion 97), both, or none")
       ->capture_default_str()->check(CLI::IsMember({"layered", "single", "both", "none"}));

@@ -178,3 +178,36 @@ TEST(StreetMap, ABuildingNearTheStreetBeyondAThinFaceIsLocal) {
   const auto bad = graph::checkInvariants(g);
   EXPECT_TRUE(bad.empty()) << bad.front();
 }
+
+TEST(StreetMap, ABlockAcrossAJunctionDrawnAsTwoVerticesIsLocal) {
+  std::vector<bake::OsmStreet> s;
+  // The main road y = 0 meets a street south at x = 100 and the crossing
+  // street x = 106 six metres on: one junction drawn as two vertices.
+  s.push_back(street(1, {1, 2, 3, 4}, {{0, 0}, {100, 0}, {106, 0}, {200, 0}}));
+  s.push_back(street(2, {2, 20}, {{100, 0}, {100, -60}}));
+  s.push_back(street(3, {21, 3, 22}, {{106, -60}, {106, 0}, {106, 60}}));
+  s.push_back(street(4, {1, 30, 31, 4}, {{0, 0}, {0, 60}, {200, 60}, {200, 0}}));
+  s.push_back(street(5, {1, 40, 20, 21, 41, 4}, {{0, 0}, {0, -60}, {100, -60}, {106, -60}, {200, -60}, {200, 0}}));
+  bake::StreetMap map(s);
+  graph::StreetGraph& g = map.graph();
+  const uint32_t h = findCell(g, {0, 0}, {100, 0});
+  ASSERT_NE(h, graph::kNone);
+  const uint32_t ne = map.locateFace({150, 30}), se = map.locateFace({150, -30});
+  auto local = [&](uint32_t cell) { return std::vector<uint32_t>(g.local_blocks.begin(cell), g.local_blocks.end(cell)); };
+  auto has = [](const std::vector<uint32_t>& v, uint32_t f) { return std::find(v.begin(), v.end(), f) != v.end(); };
+  const std::vector<uint32_t> before = local(h);
+  EXPECT_FALSE(has(before, ne));  // beyond the crossing street: no shared vertex
+  EXPECT_FALSE(has(before, se));
+  const std::vector<bake::OsmBuilding> none;
+  const std::vector<std::vector<uint32_t>> no_buildings(g.faces.size());
+  bake::widenLocalModels(g, none, no_buildings, 20.0, 5.0);  // the crossing is 6 m from the cell's end
+  EXPECT_EQ(local(h), before);
+  bake::widenLocalModels(g, none, no_buildings, 20.0, 8.0);
+  const std::vector<uint32_t> after = local(h);
+  EXPECT_TRUE(has(after, ne));
+  EXPECT_TRUE(has(after, se));
+  EXPECT_TRUE(std::equal(before.begin(), before.end(), after.begin()));  // the topological ones first
+  EXPECT_TRUE(has(local(g.halfedges[h].twin), ne));                      // both directions
+  const auto bad = graph::checkInvariants(g);
+  EXPECT_TRUE(bad.empty()) << bad.front();
+}
