@@ -135,7 +135,7 @@ CellView cellView(const graph::StreetGraph& g, const graph::HalfEdge& e, double 
   // under a building, a short cell ending at a corner): a capture from inside
   // sees only back faces.
   const double at = std::clamp(opt.vantage_at, 0.0, 1.0);
-  for (double f : {at, 0.5 * (at + 0.5), 0.25, 0.75, 0.0, 1.0}) {
+  for (double f : {at, 0.5, 0.25, 0.75, 0.0, 1.0}) {
     v.eye_enu = eyeAt(pointAt(g, e, s0 + f * (s1 - s0)), opt.ground);
     if (!rig.insideGeometry(v.eye_enu)) break;
   }

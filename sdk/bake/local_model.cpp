@@ -39,16 +39,17 @@ void widenLocalModels(graph::StreetGraph& g, const std::vector<OsmBuilding>& bui
   }
   // The blocks on either side of every street within junction_radius_m of
   // the cell's end points: where a junction is drawn as several vertices a
-  // few metres apart, the viewer crossing it stands on their ground.
+  // few metres apart, the viewer crossing it stands on their ground. A street
+  // and its twin share their end points: each pair is walked once.
   for (uint32_t h = 0; junction_radius_m > 0 && h < H; ++h) {
     const graph::HalfEdge& e = g.halfedges[h];
-    if (e.pts_count == 0) continue;
+    if (e.pts_count == 0 || e.twin < h) continue;
     for (const glm::dvec2 p : {g.points[e.pts_begin], g.points[e.pts_begin + e.pts_count - 1]})
       streets.query(p.x, p.y, junction_radius_m, [&](const graph::SegmentGrid::Entry& s) {
-        if (segmentDistance(g.points[s.point], g.points[s.point + 1], p, p) > junction_radius_m) return;
+        if (pointSegmentDistance(p, g.points[s.point], g.points[s.point + 1]) > junction_radius_m) return;
         for (const uint32_t side : {s.halfedge, g.halfedges[s.halfedge].twin}) {
           const uint32_t f = g.halfedges[side].face;
-          if (f < g.faces.size() && !g.faces[f].unbounded) add(h, f);
+          if (f < g.faces.size() && !g.faces[f].unbounded) add(h, f), add(e.twin, f);
         }
       });
   }
