@@ -43,9 +43,11 @@ def route(j):
         rows.append([mode, num(g("frame_ms_p50")), num(g("frame_ms_p95")), num(g("triangles_p50"), 0),
                      num(g("ssim_p50"), 3), pct(g("bad_pixels_p50"), 2), pct(g("far_bad_p50")),
                      pct(g("far_bad_p95")), pct(g("holes_p95"), 2), pct(g("spurious_p95"), 3),
-                     num(g("missing_objects_poses"), 0), num(g("visibility_error_px_p95"), 1)])
+                     num(g("missing_objects_poses"), 0), num(g("visibility_error_px_p95"), 1),
+                     num(g("silhouette_distance_px_p95"), 1)])
     t = table(["mode", "frame ms p50", "p95", "triangles p50", "SSIM p50", "bad px p50", "far_bad p50", "p95",
-               "holes p95", "spurious p95", "missing-object poses", "silhouette px p95"], rows)
+               "holes p95", "spurious p95", "missing-object poses", "visibility error px p95",
+               "silhouette distance px p95"], rows)
     return t + f"\n\nSpeed-up full ÷ blvd (median frame time): {num(j.get('speedup_p50'))}×, " \
                f"triangles ÷ {num(1 / j['triangle_ratio_p50'], 1) if j.get('triangle_ratio_p50') else '–'}; " \
                f"{len(j.get('blvd_poses', []))} poses, {j.get('far_scored_poses', '–')} scored for the far metrics, " \

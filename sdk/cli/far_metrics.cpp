@@ -78,6 +78,53 @@ void silhouetteDistances(const std::vector<uint8_t>& a, const std::vector<uint8_
     if (a[i]) out.push_back(std::min(cap, std::sqrt(double(db[i]))));
 }
 
+// Per pixel of `e` (set: far visibility wrong there), the shorter of the
+// horizontal and vertical runs of `e` through it; 0 elsewhere.
+std::vector<uint16_t> runThickness(const std::vector<uint8_t>& e, int w, int h) {
+  std::vector<uint16_t> hr(e.size(), 0), t(e.size(), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w;) {
+      const size_t i = size_t(y) * w + x;
+      if (!e[i]) {
+        ++x;
+        continue;
+      }
+      int end = x;
+      while (end < w && e[size_t(y) * w + end]) ++end;
+      for (int k = x; k < end; ++k) hr[size_t(y) * w + k] = uint16_t(end - x);
+      x = end;
+    }
+  for (int x = 0; x < w; ++x)
+    for (int y = 0; y < h;) {
+      if (!e[size_t(y) * w + x]) {
+        ++y;
+        continue;
+      }
+      int end = y;
+      while (end < h && e[size_t(end) * w + x]) ++end;
+      for (int k = y; k < end; ++k) t[size_t(k) * w + x] = std::min(hr[size_t(k) * w + x], uint16_t(end - y));
+      y = end;
+    }
+  return t;
+}
+
+// The visibility error of each boundary pixel of `b`: the thickest wrong
+// region at it or its 4-neighbours (0: the silhouettes agree there).
+void boundaryThickness(const std::vector<uint8_t>& b, const std::vector<uint16_t>& t, int w, int h,
+                       std::vector<double>& out) {
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      if (!b[i]) continue;
+      uint16_t m = t[i];
+      if (x > 0) m = std::max(m, t[i - 1]);
+      if (x + 1 < w) m = std::max(m, t[i + 1]);
+      if (y > 0) m = std::max(m, t[i - size_t(w)]);
+      if (y + 1 < h) m = std::max(m, t[i + size_t(w)]);
+      out.push_back(double(m));
+    }
+}
+
 bool drawnFar(uint32_t id, const FarInputs& in) {
   if (id == 0) return false;
   if (id & kItemImpostor) return true;
@@ -161,7 +208,14 @@ FarMetrics measureFar(const FarInputs& in) {
   std::vector<double> dist;
   silhouetteDistances(bF, bD, in.w, in.h, diag, dist);
   silhouetteDistances(bD, bF, in.w, in.h, diag, dist);
-  m.visibility_error_px = dist.empty() ? 0.0 : pct(std::move(dist), 95.0);
+  m.silhouette_distance_px = dist.empty() ? 0.0 : pct(std::move(dist), 95.0);
+  std::vector<uint8_t> E(n);
+  for (size_t i = 0; i < n; ++i) E[i] = F[i] != D[i];
+  const std::vector<uint16_t> thick = runThickness(E, in.w, in.h);
+  std::vector<double> err;
+  boundaryThickness(bF, thick, in.w, in.h, err);
+  boundaryThickness(bD, thick, in.w, in.h, err);
+  m.visibility_error_px = err.empty() ? 0.0 : pct(std::move(err), 95.0);
   return m;
 }
 

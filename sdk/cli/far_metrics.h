@@ -23,14 +23,23 @@
 //   missing objects far blocks with >= 200 pixels in F whose pixels show what
 //                   stands for them (their layer, or themselves as geometry)
 //                   on fewer than half of them;
-//   visibility error the displacement of the far silhouette, Décoret 99 §5's
-//                   "visibility errors in the final image": the boundary pixels
-//                   of F and of D (a pixel whose 4-neighbour is on the other
-//                   side, the image border not counting), each one's Euclidean
-//                   distance to the nearest boundary pixel of the other image
-//                   (both directions, exact distance transform), and the 95th
-//                   percentile of those distances. A silhouette with no
-//                   counterpart at all counts the frame's diagonal.
+//   visibility error what Décoret 99 bounds (§4: "how A and B can move
+//                   relative to each other in the image"; §6.1: "a maximum
+//                   error of 10 pixels"): the size, in display pixels, of a
+//                   region where far visibility is wrong. E is where F and D disagree (a
+//                   far block not drawn, or drawn where none shows); each E
+//                   pixel's thickness is the shorter of E's horizontal and
+//                   vertical runs through it. Each boundary pixel of F and of
+//                   D (a pixel whose 4-neighbour is on the other side, the
+//                   image border not counting) takes the largest thickness of
+//                   E at it or its 4-neighbours, 0 where the two silhouettes
+//                   agree; the error is the 95th percentile. A silhouette
+//                   shifted by k px measures k, a crack between layers its
+//                   width, a missing block its smaller extent.
+//   silhouette distance the same boundary pixels' Euclidean distance to the
+//                   nearest boundary pixel of the other image (both ways,
+//                   exact distance transform), 95th percentile. A crack inside
+//                   F counts here by its distance to F's outline.
 //
 // Pure functions; thread-safe; allocate scratch of O(w*h).
 #pragma once
@@ -75,7 +84,8 @@ struct FarMetrics {
   uint32_t missing_objects = 0;
   std::vector<uint32_t> missing;  // their block ids
   std::vector<MissingObject> missing_shown;  // the same blocks, what shows on their pixels
-  double visibility_error_px = 0; // 95th percentile of silhouette displacement
+  double visibility_error_px = 0; // 95th percentile of the wrong region's thickness at the silhouettes
+  double silhouette_distance_px = 0;  // 95th percentile of boundary-to-boundary distance
   uint64_t silhouette_px = 0;     // boundary pixels of F
   // Per pixel, for the error overlay: 0 outside F and fine, 1 in F and
   // fine, 2 in F and bad or a hole, 3 spurious.

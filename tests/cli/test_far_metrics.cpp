@@ -75,6 +75,7 @@ TEST(FarMetrics, AShiftedSilhouetteIsMeasuredInPixels) {
   p.paint(false, 45, 0, 95, H, kItemImpostor | 1u, kFarA + 1);
   const FarMetrics m = p.measure();
   EXPECT_NEAR(m.visibility_error_px, 5.0, 1e-6);
+  EXPECT_NEAR(m.silhouette_distance_px, 5.0, 1e-6);
   // 5 columns of the far block now show sky: holes, and wrong colour.
   EXPECT_NEAR(m.holes, 5.0 * H / (W * H), 1e-9);
   EXPECT_NEAR(m.far_bad, 5.0 / 50.0, 1e-9);
@@ -90,9 +91,31 @@ TEST(FarMetrics, AHoleIsAShareOfTheFrame) {
   EXPECT_NEAR(m.holes, 400.0 / (W * H), 1e-12);
   EXPECT_NEAR(m.far_bad, 400.0 / (80.0 * 80.0), 1e-12);
   EXPECT_EQ(m.spurious, 0.0);
-  // The hole's rim is a silhouette only in the test: 20 px from the nearest
-  // outer silhouette at its centre; the p95 of all silhouette pixels sees it.
-  EXPECT_GT(m.visibility_error_px, 10.0);
+  // The hole's rim is a silhouette only in the test, around 20 x 20 pixels
+  // of wrong visibility: 20 px of error, and 20 px from the nearest outer
+  // silhouette at its centre; the p95 of all silhouette pixels sees both.
+  EXPECT_NEAR(m.visibility_error_px, 20.0, 1e-6);
+  EXPECT_GT(m.silhouette_distance_px, 10.0);
+}
+
+TEST(FarMetrics, ACrackBetweenLayersMeasuresItsWidth) {
+  // Two far blocks side by side, the test's layers 6 px apart where they
+  // meet: sky through a crack 6 px wide and 80 px tall, far inside F. The
+  // error is the crack's width; the silhouette distance, its distance from
+  // F's outline (up to 40 px at its middle).
+  Pair p;
+  p.both(20, 20, 80, 100, kFarA, 0);
+  p.both(80, 20, 140, 100, kFarB, 1);
+  p.paint(false, 77, 20, 83, 100, 0, 0);
+  const FarMetrics m = p.measure();
+  EXPECT_NEAR(m.visibility_error_px, 6.0, 1e-6);
+  EXPECT_GT(m.silhouette_distance_px, 20.0);
+  EXPECT_NEAR(m.holes, 6.0 * 80 / (W * H), 1e-12);
+  // A block not drawn at all: its smaller extent (30 px).
+  Pair q;
+  q.both(20, 20, 80, 100, kFarA, 0);
+  q.paint(true, 100, 40, 150, 70, kFarB + 1, kFarB + 1);
+  EXPECT_NEAR(q.measure().visibility_error_px, 30.0, 1e-6);
 }
 
 TEST(FarMetrics, ANeedleIntoTheSkyIsSpurious) {
