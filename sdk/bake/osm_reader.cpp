@@ -2,7 +2,9 @@
 
 #include <sys/stat.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
@@ -221,6 +223,28 @@ bool classifyHighway(const char* hw, const char* service, graph::RoadClass& cls,
   return false;
 }
 
+// libosmium 2.19's PBF parser reads the file's descriptor itself and closes
+// it only after a read that succeeds (PBFParser::run): every corrupt PBF
+// would leak a descriptor (found by fuzz_osm, which ran out of them). A PBF
+// is therefore read into memory and parsed from there, where no descriptor is
+// involved; other formats go through a decompressor that closes its own.
+// The cost: the file's size in memory while it is read (its passes report
+// progress whole).
+osmium::io::File osmFile(const std::string& path, std::string& bytes) {
+  osmium::io::File file{path};
+  if (file.format() != osmium::io::file_format::pbf || file.compression() != osmium::io::file_compression::none)
+    return file;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw core::Error(core::Status::Io, path + ": cannot open (" + std::strerror(errno) + ")");
+  char chunk[1 << 16];
+  size_t n = 0;
+  while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) bytes.append(chunk, n);
+  const bool failed = std::ferror(f) != 0;
+  std::fclose(f);
+  if (failed) throw core::Error(core::Status::Io, path + ": read error after " + std::to_string(bytes.size()) + " bytes");
+  return osmium::io::File{bytes.data(), bytes.size(), "pbf"};
+}
+
 OsmCity readOsm(const std::string& path, const OsmReadOptions& opt,
                 const std::function<void(uint64_t, uint64_t)>& progress) {
   struct stat st {};
@@ -234,7 +258,8 @@ OsmCity readOsm(const std::string& path, const OsmReadOptions& opt,
     // multipolygon buildings' members), nodes, then ways. Reading nodes on a
     // pass of their own lets an extract that is not sorted by type (a way
     // before its nodes) bake exactly as its sorted copy does.
-    osmium::io::File file{path};
+    std::string bytes;  // a PBF's contents (osmFile)
+    const osmium::io::File file = osmFile(path, bytes);
     osmium::area::Assembler::config_type acfg;
     osmium::TagsFilter filter{false};
     filter.add_rule(true, "building");
