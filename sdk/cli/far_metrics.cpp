@@ -78,33 +78,30 @@ void silhouetteDistances(const std::vector<uint8_t>& a, const std::vector<uint8_
     if (a[i]) out.push_back(std::min(cap, std::sqrt(double(db[i]))));
 }
 
+// Along one row or column of `e` (n pixels, `stride` apart), each set
+// pixel's run length, merged into `t` with `merge`.
+template <class Merge>
+void runLengths(const uint8_t* e, uint16_t* t, int n, size_t stride, Merge merge) {
+  for (int k = 0; k < n;) {
+    if (!e[size_t(k) * stride]) {
+      ++k;
+      continue;
+    }
+    int end = k;
+    while (end < n && e[size_t(end) * stride]) ++end;
+    for (int j = k; j < end; ++j) t[size_t(j) * stride] = merge(t[size_t(j) * stride], uint16_t(end - k));
+    k = end;
+  }
+}
+
 // Per pixel of `e` (set: far visibility wrong there), the shorter of the
 // horizontal and vertical runs of `e` through it; 0 elsewhere.
 std::vector<uint16_t> runThickness(const std::vector<uint8_t>& e, int w, int h) {
-  std::vector<uint16_t> hr(e.size(), 0), t(e.size(), 0);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w;) {
-      const size_t i = size_t(y) * w + x;
-      if (!e[i]) {
-        ++x;
-        continue;
-      }
-      int end = x;
-      while (end < w && e[size_t(y) * w + end]) ++end;
-      for (int k = x; k < end; ++k) hr[size_t(y) * w + k] = uint16_t(end - x);
-      x = end;
-    }
-  for (int x = 0; x < w; ++x)
-    for (int y = 0; y < h;) {
-      if (!e[size_t(y) * w + x]) {
-        ++y;
-        continue;
-      }
-      int end = y;
-      while (end < h && e[size_t(end) * w + x]) ++end;
-      for (int k = y; k < end; ++k) t[size_t(k) * w + x] = std::min(hr[size_t(k) * w + x], uint16_t(end - y));
-      y = end;
-    }
+  std::vector<uint16_t> t(e.size(), 0);
+  const auto first = [](uint16_t, uint16_t run) { return run; };
+  const auto shorter = [](uint16_t had, uint16_t run) { return std::min(had, run); };
+  for (int y = 0; y < h; ++y) runLengths(&e[size_t(y) * w], &t[size_t(y) * w], w, 1, first);
+  for (int x = 0; x < w; ++x) runLengths(&e[size_t(x)], &t[size_t(x)], h, size_t(w), shorter);
   return t;
 }
 
