@@ -37,6 +37,25 @@ void widenLocalModels(graph::StreetGraph& g, const std::vector<OsmBuilding>& bui
         }
       }
   }
+  // A block with no building is its ground and the halves of its streets: a
+  // traffic island, the strip between two carriageways. Where that ground
+  // comes within radius_m of a street, the viewer on that street sees it
+  // below the horizon, steeper than a capture from the run's vantage point
+  // holds it, and it costs a few dozen triangles as geometry.
+  for (uint32_t h = 0; radius_m > 0 && h < H; ++h) {
+    const graph::HalfEdge& e = g.halfedges[h];
+    const uint32_t f = e.face;
+    if (f >= g.faces.size() || g.faces[f].unbounded || (f < face_buildings.size() && !face_buildings[f].empty()))
+      continue;
+    for (uint32_t i = 0; i + 1 < e.pts_count; ++i) {
+      const glm::dvec2 a = g.points[e.pts_begin + i], c = g.points[e.pts_begin + i + 1], mid = 0.5 * (a + c);
+      streets.query(mid.x, mid.y, 0.5 * glm::length(c - a) + radius_m, [&](const graph::SegmentGrid::Entry& s) {
+        if (segmentDistance(g.points[s.point], g.points[s.point + 1], a, c) > radius_m) return;
+        add(s.halfedge, f);
+        add(g.halfedges[s.halfedge].twin, f);
+      });
+    }
+  }
   // The blocks on either side of every street within junction_radius_m of
   // the cell's end points: where a junction is drawn as several vertices a
   // few metres apart, the viewer crossing it stands on their ground. A street

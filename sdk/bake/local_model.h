@@ -10,7 +10,9 @@
 // driver but are not topologically near: drawn as an impostor from a
 // vantage point tens of metres back, they smear and uncover what no capture
 // saw. So a block is local too when one of its buildings comes within a
-// radius of the street (docs/decisions/0015), and when its ground borders a
+// radius of the street (docs/decisions/0015), when it has no building and
+// its ground comes within that radius (an island between carriageways,
+// seen below the horizon more steeply than a capture holds), and when its ground borders a
 // street within a few metres of the cell's end points: a junction drawn as
 // several vertices (a dual carriageway crossing, a short connector) puts the
 // crossing street's blocks right under a viewer at the cell's end, where the
@@ -28,8 +30,9 @@ namespace blvd::bake {
 
 // Appends to each cell's local blocks (g.local_blocks) every bounded block
 // with a building footprint (outer ring) within `radius_m` of the cell's
-// polyline, in block order after the topological ones. radius_m <= 0: no
-// change. `face_buildings[f]` lists block f's buildings (indices into
+// polyline, or with no building and a street of its border within
+// `radius_m` of the cell's (its ground), in block order after the
+// topological ones. radius_m <= 0: no change. `face_buildings[f]` lists block f's buildings (indices into
 // `buildings`). Then every bounded block on either side of a street segment
 // within `junction_radius_m` of the cell's first or last point (<= 0: none).
 // Both half-edges of a street get the same added blocks.

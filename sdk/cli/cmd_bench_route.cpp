@@ -33,11 +33,13 @@ struct Mode {
   blvd_render_mode mode;
   float radius;
 };
-const Mode kModes[] = {{"full", BLVD_MODE_FULL, 0},       {"local", BLVD_MODE_LOCAL, 0},
+constexpr Mode kModes[] = {{"full", BLVD_MODE_FULL, 0},       {"local", BLVD_MODE_LOCAL, 0},
                        {"radius100", BLVD_MODE_RADIUS, 100}, {"radius250", BLVD_MODE_RADIUS, 250},
                        {"single", BLVD_MODE_SINGLE, 0},   {"blvd", BLVD_MODE_BLVD, 0}};
 constexpr size_t kNumModes = sizeof kModes / sizeof kModes[0];
 constexpr size_t kBlvd = kNumModes - 1;
+constexpr size_t kSingle = kNumModes - 2;
+static_assert(kModes[kBlvd].mode == BLVD_MODE_BLVD && kModes[kSingle].mode == BLVD_MODE_SINGLE);
 constexpr size_t kWorstFrames = 12;
 
 struct Sample {
@@ -335,7 +337,8 @@ nlohmann::json RouteBench::summary() const {
                      {"spurious", samples_[kBlvd][k.pose].spurious},
                      {"missing_blocks", k.missing}});
   j["worst_blvd_poses"] = worst;
-  // Per pose, blvd's far metrics: where the route's figures come from.
+  // Per pose, blvd's far metrics (and single's beside them): where the
+  // route's figures come from.
   nlohmann::json per = nlohmann::json::array();
   size_t off_route = 0, bare = 0;  // poses on another cell than the route's; on a cell not baked
   for (size_t i = 0; i < poses_.size(); ++i) {
@@ -354,7 +357,10 @@ nlohmann::json RouteBench::summary() const {
                    {"route_cell", poses_[i].cell}, {"cell", s.cell}, {"baked", has}, {"far_px", s.far_px},
                    {"far_bad", s.far_bad}, {"holes", s.holes}, {"spurious", s.spurious},
                    {"visibility_error_px", s.vis_px}, {"silhouette_distance_px", s.sil_px}, {"missing_objects", s.missing.size()},
-                   {"missing", shown}});
+                   {"missing", shown},
+                   {"single", {{"far_bad", samples_[kSingle][i].far_bad},
+                               {"visibility_error_px", samples_[kSingle][i].vis_px},
+                               {"missing_objects", samples_[kSingle][i].missing.size()}}}});
   }
   j["blvd_poses"] = per;
   j["poses_off_route_cell"] = off_route;

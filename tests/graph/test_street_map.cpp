@@ -22,6 +22,22 @@ uint32_t findCell(const graph::StreetGraph& g, glm::dvec2 from, glm::dvec2 to) {
   }
   return graph::kNone;
 }
+std::vector<uint32_t> localBlocks(const graph::StreetGraph& g, uint32_t cell) {
+  return {g.local_blocks.begin(cell), g.local_blocks.end(cell)};
+}
+bool has(const std::vector<uint32_t>& v, uint32_t f) { return std::find(v.begin(), v.end(), f) != v.end(); }
+// A main road y = 0 with junctions at x = 0, 50, 100, 150, 250, 300; a
+// service road beside it (up at x = 50, along y = 8, down at x = 250);
+// streets south from x = 100 and 150; a ring closing the block north.
+std::vector<bake::OsmStreet> mainRoadWithServiceRoad() {
+  std::vector<bake::OsmStreet> s;
+  s.push_back(street(1, {1, 2, 3, 4, 5, 6}, {{0, 0}, {50, 0}, {100, 0}, {150, 0}, {250, 0}, {300, 0}}));
+  s.push_back(street(2, {2, 10, 11, 5}, {{50, 0}, {50, 8}, {250, 8}, {250, 0}}));
+  s.push_back(street(3, {3, 20}, {{100, 0}, {100, -60}}));
+  s.push_back(street(4, {4, 21}, {{150, 0}, {150, -60}}));
+  s.push_back(street(5, {1, 30, 31, 6}, {{0, 0}, {0, 60}, {300, 60}, {300, 0}}));
+  return s;
+}
 }  // namespace
 
 TEST(StreetMap, GridOfFourBlocks) {
@@ -143,16 +159,7 @@ TEST(StreetMap, TwoComponentsEuler) {
 // nor its junctions, yet its building stands 12 m from that street.
 // Topologically it is not local; within the local radius it is.
 TEST(StreetMap, ABuildingNearTheStreetBeyondAThinFaceIsLocal) {
-  std::vector<bake::OsmStreet> s;
-  // Main road y = 0 with junctions at x = 0, 50, 100, 150, 250, 300.
-  s.push_back(street(1, {1, 2, 3, 4, 5, 6}, {{0, 0}, {50, 0}, {100, 0}, {150, 0}, {250, 0}, {300, 0}}));
-  // The service road: up at x = 50, along y = 8, down at x = 250.
-  s.push_back(street(2, {2, 10, 11, 5}, {{50, 0}, {50, 8}, {250, 8}, {250, 0}}));
-  // Streets south from x = 100 and 150, and a ring closing the block north.
-  s.push_back(street(3, {3, 20}, {{100, 0}, {100, -60}}));
-  s.push_back(street(4, {4, 21}, {{150, 0}, {150, -60}}));
-  s.push_back(street(5, {1, 30, 31, 6}, {{0, 0}, {0, 60}, {300, 60}, {300, 0}}));
-  bake::StreetMap map(s);
+  bake::StreetMap map(mainRoadWithServiceRoad());
   graph::StreetGraph& g = map.graph();
   const uint32_t h = findCell(g, {100, 0}, {150, 0});
   ASSERT_NE(h, graph::kNone);
@@ -163,8 +170,7 @@ TEST(StreetMap, ABuildingNearTheStreetBeyondAThinFaceIsLocal) {
   const uint32_t beyond = map.locateFace({125, 20});
   std::vector<std::vector<uint32_t>> face_buildings(g.faces.size());
   face_buildings[beyond].push_back(0);
-  auto local = [&](uint32_t cell) { return std::vector<uint32_t>(g.local_blocks.begin(cell), g.local_blocks.end(cell)); };
-  auto has = [](const std::vector<uint32_t>& v, uint32_t f) { return std::find(v.begin(), v.end(), f) != v.end(); };
+  auto local = [&](uint32_t cell) { return localBlocks(g, cell); };
   const std::vector<uint32_t> before = local(h);
   EXPECT_FALSE(has(before, beyond));
   bake::widenLocalModels(g, buildings, face_buildings, 10.0);  // 12 m away: not yet
@@ -177,6 +183,36 @@ TEST(StreetMap, ABuildingNearTheStreetBeyondAThinFaceIsLocal) {
   EXPECT_TRUE(has(local(g.halfedges[h].twin), beyond));                   // both directions
   const auto bad = graph::checkInvariants(g);
   EXPECT_TRUE(bad.empty()) << bad.front();
+}
+
+// Two service roads beside the main road (y = 8 and 16): a strip of ground (no building)
+// between them, 8 m from the main road, touching neither its cell nor its
+// junctions. Within the local radius its ground is local; the block beyond
+// it is not, since its only building stands 40 m from the street.
+TEST(StreetMap, GroundWithoutABuildingNearTheStreetIsLocal) {
+  std::vector<bake::OsmStreet> s = mainRoadWithServiceRoad();
+  s.push_back(street(6, {10, 12, 13, 11}, {{50, 8}, {50, 16}, {250, 16}, {250, 8}}));  // a second one, y = 16
+  bake::StreetMap map(s);
+  graph::StreetGraph& g = map.graph();
+  const uint32_t h = findCell(g, {100, 0}, {150, 0});
+  ASSERT_NE(h, graph::kNone);
+  const uint32_t strip = map.locateFace({125, 12}), beyond = map.locateFace({125, 40});
+  bake::OsmBuilding b;
+  b.polygons.push_back({{{{110, 40}, {140, 40}, {140, 55}, {110, 55}}}, {}});
+  const std::vector<bake::OsmBuilding> buildings = {b};
+  std::vector<std::vector<uint32_t>> face_buildings(g.faces.size());
+  face_buildings[beyond].push_back(0);
+  auto local = [&](uint32_t cell) { return localBlocks(g, cell); };
+  const std::vector<uint32_t> before = local(h);
+  EXPECT_FALSE(has(before, strip));
+  bake::widenLocalModels(g, buildings, face_buildings, 5.0);  // 8 m away: not yet
+  EXPECT_EQ(local(h), before);
+  bake::widenLocalModels(g, buildings, face_buildings, 20.0);
+  const std::vector<uint32_t> after = local(h);
+  EXPECT_TRUE(has(after, strip));
+  EXPECT_FALSE(has(after, beyond));  // its ground is 16 m away, its building 40 m
+  EXPECT_TRUE(std::equal(before.begin(), before.end(), after.begin()));
+  EXPECT_TRUE(has(local(g.halfedges[h].twin), strip));
 }
 
 TEST(StreetMap, ABlockAcrossAJunctionDrawnAsTwoVerticesIsLocal) {
@@ -193,16 +229,15 @@ TEST(StreetMap, ABlockAcrossAJunctionDrawnAsTwoVerticesIsLocal) {
   const uint32_t h = findCell(g, {0, 0}, {100, 0});
   ASSERT_NE(h, graph::kNone);
   const uint32_t ne = map.locateFace({150, 30}), se = map.locateFace({150, -30});
-  auto local = [&](uint32_t cell) { return std::vector<uint32_t>(g.local_blocks.begin(cell), g.local_blocks.end(cell)); };
-  auto has = [](const std::vector<uint32_t>& v, uint32_t f) { return std::find(v.begin(), v.end(), f) != v.end(); };
+  auto local = [&](uint32_t cell) { return localBlocks(g, cell); };
   const std::vector<uint32_t> before = local(h);
   EXPECT_FALSE(has(before, ne));  // beyond the crossing street: no shared vertex
   EXPECT_FALSE(has(before, se));
   const std::vector<bake::OsmBuilding> none;
   const std::vector<std::vector<uint32_t>> no_buildings(g.faces.size());
-  bake::widenLocalModels(g, none, no_buildings, 20.0, 5.0);  // the crossing is 6 m from the cell's end
+  bake::widenLocalModels(g, none, no_buildings, 0.0, 5.0);  // the crossing is 6 m from the cell's end
   EXPECT_EQ(local(h), before);
-  bake::widenLocalModels(g, none, no_buildings, 20.0, 8.0);
+  bake::widenLocalModels(g, none, no_buildings, 0.0, 8.0);
   const std::vector<uint32_t> after = local(h);
   EXPECT_TRUE(has(after, ne));
   EXPECT_TRUE(has(after, se));
