@@ -259,6 +259,7 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
         {"texture_codec", opt.impostor.texture_codec == TextureCodec::Webp ? "webp" : "jpeg"},
         {"texture_quality", opt.impostor.texture_quality},
         {"mesh_codec", package::glbCodecName(opt.impostor.mesh_codec)},
+        {"mesh_bits", {opt.impostor.mesh_position_bits, opt.impostor.mesh_texcoord_bits}},
         {"display", {opt.impostor.display_width, opt.impostor.display_height, opt.impostor.display_fov_y_deg}}}},
       {"counts",
        {{"streets", sum.streets}, {"buildings", sum.buildings}, {"height_tagged", city.height_tagged},
@@ -391,7 +392,7 @@ std::string bakeIdentityJson(const BakeOptions& opt, const std::vector<uint32_t>
         i.display_fov_y_deg, i.grid_px, i.skirt_px, i.positions_per_cell, i.item_resolution, i.vantage_at,
         i.max_span_deg, i.view_margin_deg, i.cell_texels, i.run_length_m, i.run_turn_deg, i.run_climb_m, i.max_runs,
         i.landmark_height_m, i.landmark_scale, int(i.texture_codec), i.texture_quality, i.edge_on_cos,
-        package::glbCodecName(i.mesh_codec)}},
+        package::glbCodecName(i.mesh_codec), i.mesh_position_bits, i.mesh_texcoord_bits}},
       {"route", route},
   };
   if (opt.dem.empty()) return j.dump();  // a flat bake's identity as it was

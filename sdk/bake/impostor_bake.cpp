@@ -275,6 +275,8 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
   package::GlbOptions glb_opt;
   glb_opt.normal_bits = 0;
   glb_opt.codec = opt.mesh_codec;
+  glb_opt.position_bits = opt.mesh_position_bits;
+  glb_opt.texcoord_bits = opt.mesh_texcoord_bits;
   package::GlbMeshCounts counts;
   glb = package::encodeGlb(mesh, glb_opt, &counts);
   if (counts.triangles == 0) {
