@@ -816,13 +816,17 @@ void gridOf(const Image& im, const std::vector<Segment2>& constraints, const Con
 // 4. Constrained Delaunay triangulation (S97 §4.2, their ref. 25) over the
 // contour, the discrepancy lines and the grid, in (x, -y).
 bool triangulate(const std::vector<Segment2>& constraints, const std::vector<Segment2>& gridSegs,
-                 const ContourParity& parity, Triangulation& tri, std::string& why) {
+                 const std::vector<glm::dvec2>& points, const ContourParity& parity, Triangulation& tri,
+                 std::string& why) {
   std::vector<Segment2> all;
   all.reserve(constraints.size() + gridSegs.size());
   for (const Segment2& c : constraints) all.push_back({{c.a.x, -c.a.y}, {c.b.x, -c.b.y}});
   for (const Segment2& c : gridSegs) all.push_back({{c.a.x, -c.a.y}, {c.b.x, -c.b.y}});
+  std::vector<glm::dvec2> flipped(points.size());
+  for (size_t k = 0; k < points.size(); ++k) flipped[k] = {points[k].x, -points[k].y};
   std::string terr;
-  if (triangulateSegments(all, [&](glm::dvec2 c) { return parity.inside({c.x, -c.y}); }, tri, terr)) return true;
+  if (triangulateSegments(all, [&](glm::dvec2 c) { return parity.inside({c.x, -c.y}); }, tri, terr, &flipped))
+    return true;
   why = "triangulation: " + terr;
   return false;
 }
@@ -862,6 +866,63 @@ std::vector<Corner> cornerDepths(const Image& im, const Triangulation& tri, cons
       corners.push_back({id[k], z[static_cast<size_t>(k)], slot + static_cast<size_t>(k)});
   }
   return corners;
+}
+
+// 5b. Refinement. S97 §4.2 constrains the triangulation by the contour and
+// the depth steps; a crease (the ground in front of a wall meeting the wall)
+// is no step, and a triangle of the grid that spans it joins a ground point
+// to points up the wall. From the vantage point it shows the right texels;
+// from anywhere else it is a sheet through the air in front of the wall,
+// seen as a needle rising from the street across the facade. So in each
+// triangle, the covered pixel whose depth the triangle's plane misses most
+// (1/z is affine in the image over a plane), if by more than the
+// discrepancy threshold, is returned as a vertex for the next
+// triangulation. Only pixels inside a surface count: all 8 neighbours
+// covered, and 3 px or more from the constraints and the triangle's
+// corners (a vertex next to a line only makes slivers, and a vertex's depth
+// is taken from a pixel inside its triangles).
+std::vector<glm::dvec2> misfits(const Image& im, const std::vector<glm::dvec2>& pos,
+                                const std::vector<Corner>& corners, const std::vector<Segment2>& constraints,
+                                const DepthMeshOptions& opt) {
+  constexpr double kClear = 3.0;
+  SegmentGrid near(im.w, im.h, 16.0);
+  for (size_t k = 0; k < constraints.size(); ++k) near.add(constraints[k], 0, static_cast<int>(k));
+  auto clear = [&](glm::dvec2 p) {
+    bool ok = true;
+    near.visit(p, kClear, [&](const SegmentGrid::Item& it) {
+      ok = ok && pointSegmentDistance(p, it.seg.a, it.seg.b) >= kClear;
+    });
+    return ok;
+  };
+  std::vector<glm::dvec2> out;
+  for (size_t c = 0; c + 2 < corners.size(); c += 3) {
+    const glm::dvec2 a = pos[corners[c].vid], b = pos[corners[c + 1].vid], d = pos[corners[c + 2].vid];
+    const double wa = 1.0 / corners[c].z, wb = 1.0 / corners[c + 1].z, wd = 1.0 / corners[c + 2].z;
+    const double det = (b.x - a.x) * (d.y - a.y) - (b.y - a.y) * (d.x - a.x);
+    if (std::abs(det) < 1.0) continue;  // under half a pixel of area
+    const int x0 = std::max(0, int(std::floor(std::min({a.x, b.x, d.x})))),
+              x1 = std::min(im.w - 1, int(std::ceil(std::max({a.x, b.x, d.x})))),
+              y0 = std::max(0, int(std::floor(std::min({a.y, b.y, d.y})))),
+              y1 = std::min(im.h - 1, int(std::ceil(std::max({a.y, b.y, d.y}))));
+    double worst = opt.discrepancy_threshold;
+    glm::dvec2 at(-1.0);
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        if (!im.covered(x, y) || im.onContour(x, y)) continue;
+        const glm::dvec2 p(x + 0.5, y + 0.5);
+        const double lb = ((p.x - a.x) * (d.y - a.y) - (p.y - a.y) * (d.x - a.x)) / det;
+        const double ld = ((b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x)) / det;
+        const double la = 1.0 - lb - ld;
+        if (la < 0.0 || lb < 0.0 || ld < 0.0) continue;
+        if (glm::length(p - a) < kClear || glm::length(p - b) < kClear || glm::length(p - d) < kClear) continue;
+        const double e = relInv(la * wa + lb * wb + ld * wd, im.inv[im.at(x, y)]);
+        if (e > worst && clear(p)) worst = e, at = p;
+      }
+    if (at.x >= 0.0) out.push_back(at);
+  }
+  std::sort(out.begin(), out.end(), [](glm::dvec2 u, glm::dvec2 v) { return u.y != v.y ? u.y < v.y : u.x < v.x; });
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
 }
 
 // An output vertex: a triangulation vertex at one of its depths.
@@ -960,12 +1021,23 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
   std::vector<glm::dvec2> gridUsed;
   gridOf(im, constraints, parity, opt.grid_spacing_px, gridSegs, gridUsed);
   st.grid_points = gridUsed.size();
+  // 4. and 5. Triangulation and a depth per (triangle, corner), made again
+  // with the pixels where a triangle missed the surface as vertices (5b).
   Triangulation tri;
-  if (!triangulate(constraints, gridSegs, parity, tri, why)) return false;
-  std::vector<glm::dvec2> pos(tri.vertices.size());
-  for (size_t k = 0; k < pos.size(); ++k) pos[k] = {tri.vertices[k].x, -tri.vertices[k].y};
-  // 5. Depth per (triangle, corner), then one output vertex per (position, depth cluster).
-  const std::vector<Corner> corners = cornerDepths(im, tri, pos, opt);
+  std::vector<glm::dvec2> pos, extra;
+  std::vector<Corner> corners;
+  for (int round = 0;; ++round) {
+    if (!triangulate(constraints, gridSegs, extra, parity, tri, why)) return false;
+    pos.resize(tri.vertices.size());
+    for (size_t k = 0; k < pos.size(); ++k) pos[k] = {tri.vertices[k].x, -tri.vertices[k].y};
+    corners = cornerDepths(im, tri, pos, opt);
+    if (round >= opt.refine_rounds) break;
+    const std::vector<glm::dvec2> more = misfits(im, pos, corners, constraints, opt);
+    if (more.empty()) break;
+    extra.insert(extra.end(), more.begin(), more.end());
+  }
+  st.refine_points = extra.size();
+  // Then one output vertex per (position, depth cluster).
   std::vector<uint32_t> slotToVertex;
   const std::vector<OutVertex> verts = clusterCorners(corners, opt.discrepancy_threshold, slotToVertex, st.split_vertices);
   emitMesh(im, cam, pos, verts, slotToVertex, out, dbg);

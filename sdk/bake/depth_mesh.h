@@ -90,6 +90,11 @@ struct DepthMeshOptions {
   // steps near the horizon, where plain neighbour differences exceed any
   // threshold. false: the paper's plain neighbour difference.
   bool planar_prediction = true;
+  // Rounds of refinement: a covered pixel inside a triangle whose plane
+  // misses its depth by more than the discrepancy threshold (a crease, such
+  // as ground meeting a wall, spanned by one triangle) becomes a vertex and
+  // the triangulation is made again, at most this many times. 0: none.
+  int refine_rounds = 3;
 };
 
 struct DepthMeshStats {
@@ -101,6 +106,7 @@ struct DepthMeshStats {
   size_t triangles = 0;             // in `out`
   size_t vertices = 0;              // in `out`
   size_t split_vertices = 0;        // extra copies made where a vertex has two depths
+  size_t refine_points = 0;         // vertices added where a triangle missed the surface
   double seconds = 0.0;             // wall time of the call
 };
 

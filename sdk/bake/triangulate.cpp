@@ -201,7 +201,7 @@ bool triangulateImpl(const Polygon2& poly, Triangulation& out, std::string& why)
 
 bool triangulateSegmentsImpl(const std::vector<Segment2>& segments,
                              const std::function<bool(glm::dvec2)>& inside, Triangulation& out,
-                             std::string& why) {
+                             std::string& why, const std::vector<glm::dvec2>* points) {
   if (!inside) {
     why = "no inside predicate";
     return false;
@@ -215,6 +215,13 @@ bool triangulateSegmentsImpl(const std::vector<Segment2>& segments,
     }
     if (s.a == s.b) continue;
     cdt.insert_constraint(Point(s.a.x, s.a.y), Point(s.b.x, s.b.y));
+  }
+  for (size_t i = 0; points && i < points->size(); ++i) {
+    if (!finite((*points)[i])) {
+      why = "point " + std::to_string(i) + " has a non-finite coordinate";
+      return false;
+    }
+    cdt.insert(Point((*points)[i].x, (*points)[i].y));
   }
   if (cdt.dimension() != 2) {
     why = "segments span no area";
@@ -250,12 +257,12 @@ bool triangulate(const Polygon2& poly, Triangulation& out, std::string& why) {
 
 bool triangulateSegments(const std::vector<Segment2>& segments,
                          const std::function<bool(glm::dvec2)>& inside, Triangulation& out,
-                         std::string& why) {
+                         std::string& why, const std::vector<glm::dvec2>* points) {
   out.clear();
   why.clear();
   bool ok = false;
   try {
-    ok = triangulateSegmentsImpl(segments, inside, out, why);
+    ok = triangulateSegmentsImpl(segments, inside, out, why, points);
   } catch (const std::exception& e) {
     why = std::string("triangulation failed: ") + e.what();
   } catch (...) {

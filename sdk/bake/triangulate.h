@@ -75,10 +75,11 @@ bool triangulate(const Polygon2& poly, Triangulation& out, std::string& why);
 // true. Meant for street-block ground polygons whose boundary walks some
 // edges twice (dead-end streets), where the parity rule cannot decide.
 // Zero-length segments are ignored. Returns false when a coordinate is not
-// finite, the segments span no area, or no triangle is kept.
+// finite, the segments span no area, or no triangle is kept. `points`, if
+// given, are inserted as vertices too (Steiner points), after the segments.
 bool triangulateSegments(const std::vector<Segment2>& segments,
                          const std::function<bool(glm::dvec2)>& inside, Triangulation& out,
-                         std::string& why);
+                         std::string& why, const std::vector<glm::dvec2>* points = nullptr);
 
 // Shoelace area of a ring: positive when counter-clockwise (x east, y north).
 double signedArea(const Ring& ring);
