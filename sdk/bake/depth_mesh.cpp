@@ -749,6 +749,21 @@ std::vector<Segment2> constraintsOf(const Image& im, const DepthMeshOptions& opt
   return constraints;
 }
 
+// The constraints, bucketed for the clearance tests of the grid and of
+// refinement.
+SegmentGrid constraintIndex(const Image& im, const std::vector<Segment2>& constraints) {
+  SegmentGrid index(im.w, im.h, 16.0);
+  for (size_t k = 0; k < constraints.size(); ++k) index.add(constraints[k], 0, static_cast<int>(k));
+  return index;
+}
+
+// True when `p` is at least `r` from every constraint.
+bool clearOf(SegmentGrid& lines, glm::dvec2 p, double r) {
+  bool clear = true;
+  lines.visit(p, r, [&](const SegmentGrid::Item& it) { clear = clear && pointSegmentDistance(p, it.seg.a, it.seg.b) >= r; });
+  return clear;
+}
+
 // 3. Regular grid (S97: "to impose a minimal sampling density"), spaced `s`
 // pixels: the points kept (`gridUsed`) and the segments that join them
 // (`gridSegs`). Points on pixel centres, kept away from the constraints (a point next to a line
@@ -757,12 +772,10 @@ std::vector<Segment2> constraintsOf(const Image& im, const DepthMeshOptions& opt
 // the whole span is covered (a grid of squares triangulates into the same
 // right triangles either way); a point without a row neighbour is joined
 // to the point below or above, and one with neither is dropped.
-void gridOf(const Image& im, const std::vector<Segment2>& constraints, const ContourParity& parity, int s,
-            std::vector<Segment2>& gridSegs, std::vector<glm::dvec2>& gridUsed) {
+void gridOf(const Image& im, SegmentGrid& lines, const ContourParity& parity, int s, std::vector<Segment2>& gridSegs,
+            std::vector<glm::dvec2>& gridUsed) {
   const int gw = im.w / s + 1, gh = im.h / s + 1;
   const double clearance = std::clamp(0.3 * s, 1.5, 8.0);
-  SegmentGrid segIndex(im.w, im.h, 16.0);
-  for (size_t k = 0; k < constraints.size(); ++k) segIndex.add(constraints[k], 0, static_cast<int>(k));
   std::vector<uint8_t> gridOk(static_cast<size_t>(gw) * static_cast<size_t>(gh), 0);
   auto gpos = [&](int i, int j) {
     return glm::dvec2(std::floor((i + 0.5) * s) + 0.5, std::floor((j + 0.5) * s) + 0.5);
@@ -772,11 +785,8 @@ void gridOf(const Image& im, const std::vector<Segment2>& constraints, const Con
       const glm::dvec2 g = gpos(i, j);
       if (g.x >= im.w || g.y >= im.h) continue;
       if (!im.covered(static_cast<int>(g.x), static_cast<int>(g.y)) || !parity.inside(g)) continue;
-      bool clear = true;
-      segIndex.visit(g, clearance, [&](const SegmentGrid::Item& it) {
-        clear = clear && pointSegmentDistance(g, it.seg.a, it.seg.b) >= clearance;
-      });
-      gridOk[static_cast<size_t>(j) * static_cast<size_t>(gw) + static_cast<size_t>(i)] = clear ? 1 : 0;
+      gridOk[static_cast<size_t>(j) * static_cast<size_t>(gw) + static_cast<size_t>(i)] =
+          clearOf(lines, g, clearance) ? 1 : 0;
     }
   }
   auto ok = [&](int i, int j) {
@@ -882,18 +892,8 @@ std::vector<Corner> cornerDepths(const Image& im, const Triangulation& tri, cons
 // corners (a vertex next to a line only makes slivers, and a vertex's depth
 // is taken from a pixel inside its triangles).
 std::vector<glm::dvec2> misfits(const Image& im, const std::vector<glm::dvec2>& pos,
-                                const std::vector<Corner>& corners, const std::vector<Segment2>& constraints,
-                                const DepthMeshOptions& opt) {
+                                const std::vector<Corner>& corners, SegmentGrid& lines, const DepthMeshOptions& opt) {
   constexpr double kClear = 3.0;
-  SegmentGrid near(im.w, im.h, 16.0);
-  for (size_t k = 0; k < constraints.size(); ++k) near.add(constraints[k], 0, static_cast<int>(k));
-  auto clear = [&](glm::dvec2 p) {
-    bool ok = true;
-    near.visit(p, kClear, [&](const SegmentGrid::Item& it) {
-      ok = ok && pointSegmentDistance(p, it.seg.a, it.seg.b) >= kClear;
-    });
-    return ok;
-  };
   std::vector<glm::dvec2> out;
   for (size_t c = 0; c + 2 < corners.size(); c += 3) {
     const glm::dvec2 a = pos[corners[c].vid], b = pos[corners[c + 1].vid], d = pos[corners[c + 2].vid];
@@ -916,7 +916,7 @@ std::vector<glm::dvec2> misfits(const Image& im, const std::vector<glm::dvec2>& 
         if (la < 0.0 || lb < 0.0 || ld < 0.0) continue;
         if (glm::length(p - a) < kClear || glm::length(p - b) < kClear || glm::length(p - d) < kClear) continue;
         const double e = relInv(la * wa + lb * wb + ld * wd, im.inv[im.at(x, y)]);
-        if (e > worst && clear(p)) worst = e, at = p;
+        if (e > worst && clearOf(lines, p, kClear)) worst = e, at = p;
       }
     if (at.x >= 0.0) out.push_back(at);
   }
@@ -1019,7 +1019,8 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
   // 3. Regular grid (S97: "to impose a minimal sampling density").
   std::vector<Segment2> gridSegs;
   std::vector<glm::dvec2> gridUsed;
-  gridOf(im, constraints, parity, opt.grid_spacing_px, gridSegs, gridUsed);
+  SegmentGrid lines = constraintIndex(im, constraints);
+  gridOf(im, lines, parity, opt.grid_spacing_px, gridSegs, gridUsed);
   st.grid_points = gridUsed.size();
   // 4. and 5. Triangulation and a depth per (triangle, corner), made again
   // with the pixels where a triangle missed the surface as vertices (5b).
@@ -1032,7 +1033,7 @@ bool buildImpl(const CaptureImage& img, const PinholeCamera& cam, const DepthMes
     for (size_t k = 0; k < pos.size(); ++k) pos[k] = {tri.vertices[k].x, -tri.vertices[k].y};
     corners = cornerDepths(im, tri, pos, opt);
     if (round >= opt.refine_rounds) break;
-    const std::vector<glm::dvec2> more = misfits(im, pos, corners, constraints, opt);
+    const std::vector<glm::dvec2> more = misfits(im, pos, corners, lines, opt);
     if (more.empty()) break;
     extra.insert(extra.end(), more.begin(), more.end());
   }

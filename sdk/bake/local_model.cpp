@@ -21,20 +21,21 @@ void widenLocalModels(graph::StreetGraph& g, const std::vector<OsmBuilding>& bui
   auto add = [&](uint32_t h, uint32_t f) {
     if (h < H && std::find(added[h].begin(), added[h].end(), f) == added[h].end()) added[h].push_back(f);
   };
+  // Block f joins both directions of every street within radius_m of a..c.
+  auto addNear = [&](glm::dvec2 a, glm::dvec2 c, uint32_t f) {
+    const glm::dvec2 mid = 0.5 * (a + c);
+    streets.query(mid.x, mid.y, 0.5 * glm::length(c - a) + radius_m, [&](const graph::SegmentGrid::Entry& e) {
+      if (segmentDistance(g.points[e.point], g.points[e.point + 1], a, c) > radius_m) return;
+      add(e.halfedge, f);
+      add(g.halfedges[e.halfedge].twin, f);
+    });
+  };
   for (uint32_t f = 0; radius_m > 0 && f < face_buildings.size() && f < g.faces.size(); ++f) {
     if (g.faces[f].unbounded) continue;
     for (uint32_t b : face_buildings[f])
       for (const Polygon2& poly : buildings[b].polygons) {
         const std::vector<glm::dvec2>& r = poly.outer.pts;
-        for (size_t k = 0; k < r.size(); ++k) {
-          const glm::dvec2 a = r[k], c = r[(k + 1) % r.size()], mid = 0.5 * (a + c);
-          const double reach = 0.5 * glm::length(c - a) + radius_m;
-          streets.query(mid.x, mid.y, reach, [&](const graph::SegmentGrid::Entry& e) {
-            if (segmentDistance(g.points[e.point], g.points[e.point + 1], a, c) > radius_m) return;
-            add(e.halfedge, f);
-            add(g.halfedges[e.halfedge].twin, f);
-          });
-        }
+        for (size_t k = 0; k < r.size(); ++k) addNear(r[k], r[(k + 1) % r.size()], f);
       }
   }
   // A block with no building is its ground and the halves of its streets: a
@@ -47,14 +48,7 @@ void widenLocalModels(graph::StreetGraph& g, const std::vector<OsmBuilding>& bui
     const uint32_t f = e.face;
     if (f >= g.faces.size() || g.faces[f].unbounded || (f < face_buildings.size() && !face_buildings[f].empty()))
       continue;
-    for (uint32_t i = 0; i + 1 < e.pts_count; ++i) {
-      const glm::dvec2 a = g.points[e.pts_begin + i], c = g.points[e.pts_begin + i + 1], mid = 0.5 * (a + c);
-      streets.query(mid.x, mid.y, 0.5 * glm::length(c - a) + radius_m, [&](const graph::SegmentGrid::Entry& s) {
-        if (segmentDistance(g.points[s.point], g.points[s.point + 1], a, c) > radius_m) return;
-        add(s.halfedge, f);
-        add(g.halfedges[s.halfedge].twin, f);
-      });
-    }
+    for (uint32_t i = 0; i + 1 < e.pts_count; ++i) addNear(g.points[e.pts_begin + i], g.points[e.pts_begin + i + 1], f);
   }
   // The blocks on either side of every street within junction_radius_m of
   // the cell's end points: where a junction is drawn as several vertices a
