@@ -234,6 +234,7 @@ std::string packageMeta(const std::string& osm_path, const OsmCity& city, const 
       {"draco", opt.block_codec == package::GlbCodec::Draco},
       {"block_codec", package::glbCodecName(opt.block_codec)},
       {"draco_level", opt.draco_level},
+      {"blob_compression", opt.blob_compression},
       {"local_radius_m", opt.local_radius_m},
       {"junction_radius_m", opt.junction_radius_m},
       {"tile",
@@ -385,6 +386,7 @@ std::string bakeIdentityJson(const BakeOptions& opt, const std::vector<uint32_t>
   const nlohmann::json j = {
       {"osm", {opt.osm.default_height_m, opt.osm.level_height_m}},
       {"blocks", {package::glbCodecName(opt.block_codec), opt.draco_level, opt.local_radius_m, opt.junction_radius_m}},
+      {"blob_compression", opt.blob_compression},
       {"lod", {opt.lod.enabled, opt.lod.ratios}},
       {"tile", {opt.tile.nx, opt.tile.ny, opt.tile.gap_m}},
       {"impostor",
@@ -437,6 +439,7 @@ BakeSummary bakeCity(const std::string& osm_path, const std::string& out_path, c
   widenLocalModels(g, city.buildings, face_buildings, opt.local_radius_m, opt.junction_radius_m);
   progress.stage("block geometry + LOD chain + GLB");
   package::PackageWriter writer;
+  writer.setBlobCompression(opt.blob_compression);
   std::vector<graph::BlockRecord> blocks;
   std::vector<geo::MeshData> block_meshes;
   buildBlocks(city, map, face_buildings, opt, terrain ? &terrain : nullptr, writer, blocks, block_meshes, sum, progress);

@@ -26,6 +26,9 @@ struct BakeOptions {
   // .. 10 (smallest), as draco_encoder -cl (decision 0008 §12: the block
   // decode is most of a prediction's CPU time).
   int draco_level = 3;
+  // zstd level every blob is stored at (--blob-compression; 0: as is). The
+  // meshopt block levels and the glTF JSON compress well (decision 0029).
+  int blob_compression = 19;
   LodOptions lod;
   // A block with a building within this many metres of a street is in its
   // cells' local model too (local_model.h; docs/decisions/0015); 0: only the

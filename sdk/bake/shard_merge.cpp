@@ -106,11 +106,13 @@ std::map<uint32_t, uint32_t> checkShards(std::vector<OpenShard>& shards) {
 
 std::vector<uint8_t> copyOf(const package::Span& s) { return std::vector<uint8_t>(s.data, s.data + s.size); }
 
-package::Span blobOf(const OpenShard& s, uint32_t i) {
+// Blob i of a shard as it is stored (compressed or not), to be copied as is.
+package::StoredBlob blobOf(const OpenShard& s, uint32_t i) {
   package::Span out;
   std::string err;
   if (s.reader.blob(i, out, err) != core::Status::Ok) throw core::Error(core::Status::Corrupt, err);
-  return out;
+  const package::BlobInfo& info = s.reader.blobInfo(i);
+  return package::StoredBlob{copyOf(out), info.flags, info.contents_size};
 }
 
 // A shard's cell tables, as its PVSA and IMPO sections hold them.
@@ -137,7 +139,7 @@ void takeCell(uint32_t h, const OpenShard& s, graph::CellTables& from, package::
   for (auto& l : ci.layered) layers.push_back(&l);
   for (auto& l : ci.single) layers.push_back(&l);
   std::sort(layers.begin(), layers.end(), [](auto* a, auto* b) { return a->blob < b->blob; });
-  for (graph::ImpostorLayer* l : layers) l->blob = w.addBlob(copyOf(blobOf(s, l->blob)));
+  for (graph::ImpostorLayer* l : layers) l->blob = w.addStoredBlob(blobOf(s, l->blob));
   out.impostors[h] = std::move(ci);
 }
 
@@ -159,7 +161,7 @@ MergeSummary mergeShards(const std::vector<std::string>& paths, const std::strin
   graph::parseBlocks(bs.data, bs.size, bs.offset, first.reader.blobCount(), blocks);
 
   package::PackageWriter w;
-  for (uint32_t i = 0; i < first.m.block_blobs; ++i) w.addBlob(copyOf(blobOf(first, i)));
+  for (uint32_t i = 0; i < first.m.block_blobs; ++i) w.addStoredBlob(blobOf(first, i));
   std::vector<graph::CellTables> from;
   for (const OpenShard& s : shards) from.push_back(tablesOf(s, g, uint32_t(blocks.size())));
   graph::CellTables merged;

@@ -110,9 +110,8 @@ TileLayout tileCity(graph::StreetGraph& g, std::vector<graph::BlockRecord>& bloc
       tables.impostors.push_back(std::move(c));
     }
     for (uint32_t i = 0; i < L.blobs; ++i) {
-      const std::vector<uint8_t>& bytes = writer.blob(i);
-      // translateGlb returns before addBlob can move the blob storage.
-      writer.addBlob(package::translateGlb(bytes.data(), bytes.size(), gltf_off));
+      const std::vector<uint8_t> glb = writer.blobContents(i);
+      writer.addBlob(package::translateGlb(glb.data(), glb.size(), gltf_off));
     }
   }
   return L;

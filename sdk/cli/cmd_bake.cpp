@@ -100,6 +100,11 @@ void addBake(CLI::App& app, Runner& run) {
                   "Draco compression of the block levels (--block-codec draco): 0 (fastest decode, biggest) .. 10 (smallest)")
       ->capture_default_str()
       ->check(CLI::Range(0, 10));
+  cmd->add_option("--blob-compression", o->bake.blob_compression,
+                  "zstd level the package stores every blob at: 0 (as is) .. 22 (smallest, slowest bake); decoding "
+                  "costs the same at any level")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 22));
   cmd->add_option("--lod", o->lod, "per-block levels of detail: chain (meshoptimizer, see --lod-ratios) or none")
       ->capture_default_str()->check(CLI::IsMember({"chain", "none"}));
   cmd->add_option("--lod-ratios", o->lod_ratios,

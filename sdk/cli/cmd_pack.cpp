@@ -128,9 +128,9 @@ int extract(const std::string& path, int block, int cell, const std::string& out
     const uint32_t blob = city.blocks()[block].blob;
     if (blob == 0xffffffffu) throw core::Error(core::Status::NotFound, "block " + std::to_string(block) + " is empty");
     package::Span s;
-    const core::Status st = city.package().readBlob(blob, glb, s, err);
+    const core::Status st = city.package().readBlobContents(blob, glb, s, err);
     if (st != core::Status::Ok) throw core::Error(st, err);
-    glb.resize(s.size);  // already a GLB: extracted byte for byte
+    glb.resize(s.size);  // already a GLB (decompressed when stored as a zstd frame): extracted byte for byte
   } else {
     const auto& g = city.graph();
     if (cell < 0 || static_cast<size_t>(cell) >= g.cellCount())

@@ -213,6 +213,7 @@ core::Status parseHeader(const uint8_t* data, size_t size, uint64_t file_size,
   ph.max_impostor_texture_height = get<uint16_t>(data + h::kMaxImpostorTextureHeight);
   ph.impostor_atlas_width = get<uint16_t>(data + h::kImpostorAtlasWidth);
   ph.impostor_atlas_height = get<uint16_t>(data + h::kImpostorAtlasHeight);
+  ph.max_blob_contents_bytes = get<uint32_t>(data + h::kMaxBlobContents);
 
   if (out.file_size != file_size)
     return corrupt(err, at(name, "header", h::kFileSize) + "header records " +
@@ -229,6 +230,10 @@ core::Status parseHeader(const uint8_t* data, size_t size, uint64_t file_size,
     if (!(std::isfinite(ph.bounds_min[i]) && std::isfinite(ph.bounds_max[i]) &&
           ph.bounds_min[i] <= ph.bounds_max[i]))
       return corrupt(err, at(name, "header", h::kBoundsMin) + "bounds are not finite or min > max");
+  if (ph.max_blob_contents_bytes > kMaxBlobContentsBytes)
+    return corrupt(err, at(name, "header", h::kMaxBlobContents) + "largest blob of " +
+                            std::to_string(ph.max_blob_contents_bytes) + " bytes is over the " +
+                            std::to_string(kMaxBlobContentsBytes) + " a reader accepts");
 
   const uint64_t dir_bytes = uint64_t{out.directory_count} * kDirEntrySize;
   if (out.directory_offset % kAlignment != 0 || out.directory_offset < header_size ||
@@ -327,7 +332,7 @@ core::Status parseDirectory(const uint8_t* data, size_t size, const HeaderLayout
 }
 
 core::Status parseBlobIndex(const uint8_t* data, size_t size, const SectionInfo& index,
-                            const SectionInfo& blob_data, const std::string& name,
+                            const SectionInfo& blob_data, uint32_t max_contents, const std::string& name,
                             std::vector<BlobInfo>& out, std::string& err) {
   namespace b = detail::blob;
   out.clear();
@@ -354,19 +359,28 @@ core::Status parseBlobIndex(const uint8_t* data, size_t size, const SectionInfo&
     bi.offset = get<uint64_t>(e + b::kOffset);
     bi.size = get<uint64_t>(e + b::kSize);
     bi.crc = get<uint32_t>(e + b::kCrc);
+    bi.flags = get<uint32_t>(e + b::kFlags);
+    bi.contents_size = get<uint64_t>(e + b::kContents);
     const std::string blob_where = "blob " + std::to_string(i);
+    const std::string entry_at = " (index entry at " + std::to_string(index.offset + entry_off) + ")";
     if (bi.offset % kAlignment != 0)
       return corrupt(err, at(name, blob_where, bi.offset) + "offset is not " +
-                              std::to_string(kAlignment) + "-byte aligned (index entry at " +
-                              std::to_string(index.offset + entry_off) + ")");
+                              std::to_string(kAlignment) + "-byte aligned" + entry_at);
     if (bi.offset < blob_data.offset ||
         !fits(bi.offset - blob_data.offset, bi.size, blob_data.size))
       return corrupt(err, at(name, blob_where, bi.offset) + "length " + std::to_string(bi.size) +
                               " lies outside section " + tagToString(blob_data.tag) + " [" +
                               std::to_string(blob_data.offset) + ", " +
-                              std::to_string(blob_data.offset + blob_data.size) +
-                              ") (index entry at " + std::to_string(index.offset + entry_off) +
-                              ")");
+                              std::to_string(blob_data.offset + blob_data.size) + ")" + entry_at);
+    if ((bi.flags & ~kBlobZstd) != 0)
+      return corrupt(err, at(name, blob_where, bi.offset) + "unknown flags " + std::to_string(bi.flags) + entry_at);
+    if ((bi.flags & kBlobZstd) == 0 && bi.contents_size != bi.size)
+      return corrupt(err, at(name, blob_where, bi.offset) + "stored as is, but its contents are " +
+                              std::to_string(bi.contents_size) + " bytes and it is " + std::to_string(bi.size) +
+                              entry_at);
+    if (bi.contents_size > max_contents)
+      return corrupt(err, at(name, blob_where, bi.offset) + "contents of " + std::to_string(bi.contents_size) +
+                              " bytes, more than the header's largest, " + std::to_string(max_contents) + entry_at);
     out.push_back(bi);
   }
   return core::Status::Ok;

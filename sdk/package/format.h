@@ -32,9 +32,10 @@ inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
 // 2.0: BLCK records carry the levels of detail, IMPO layers their vertex
 // counts, the header the pool sizing fields; 3.0: IMPO layers the run of the
 // cell they serve; 3.2: TPCR, a CRC per table page; 3.3: the impostor atlas's
-// size in the header (docs/package-format.md).
-inline constexpr uint16_t kVersionMajor = 3;  // a reader opens only its own major
-inline constexpr uint16_t kVersionMinor = 3;  // minors add, never change (see spec)
+// size in the header; 4.0: blobs stored as zstd frames (BIDX flags and
+// contents size, the header's largest contents) (docs/package-format.md).
+inline constexpr uint16_t kVersionMajor = 4;  // a reader opens only its own major
+inline constexpr uint16_t kVersionMinor = 0;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
 inline constexpr uint32_t kSectionSpatialIndex = fourcc('S', 'I', 'D', 'X');  // graph spatial index
@@ -55,8 +56,13 @@ inline constexpr uint32_t kSectionTablePages = fourcc('T', 'P', 'C', 'R');  // a
 inline constexpr size_t kHeaderSize = 256;     // v1.0 header bytes; later minors may grow it
 inline constexpr size_t kDirEntrySize = 32;    // one directory entry
 inline constexpr size_t kBlobIndexPrefix = 8;  // BIDX: u32 count, u32 entry size
-inline constexpr size_t kBlobEntrySize = 24;   // v1.0 BIDX entry; later minors may grow it
+inline constexpr size_t kBlobEntrySize = 32;   // 4.0 BIDX entry; later minors may grow it
 inline constexpr size_t kAlignment = 8;        // every section and blob starts 8-aligned
+// BIDX flags: the blob's bytes are one zstd frame of its contents (4.0).
+inline constexpr uint32_t kBlobZstd = 1u;
+// No blob's contents may exceed this (a reader refuses the package): a
+// corrupt contents size must not make a reader allocate gigabytes.
+inline constexpr uint64_t kMaxBlobContentsBytes = uint64_t{1} << 28;
 
 // What the bake knows about the city and the runtime needs before it reads
 // anything else. Plain data: PackageWriter::setHeader() copies it and
@@ -91,6 +97,9 @@ struct PackageHeader {
   // 3.3: the atlas a cell slot holds its impostor images in, packed by
   // render/slab_atlas.h, that every cell's fit (0 before 3.3, or no impostors).
   uint16_t impostor_atlas_width = 0, impostor_atlas_height = 0;
+  // 4.0: the largest blob's contents (after decompression), bytes. The
+  // writer fills it from its blobs, whatever setHeader() was given.
+  uint32_t max_blob_contents_bytes = 0;
 };
 
 // The pool sizing fields by name (max_block_blob_bytes, max_cell_blob_bytes
@@ -113,8 +122,10 @@ struct SectionInfo {
 // turns it straight into an HTTP Range header.
 struct BlobInfo {
   uint64_t offset = 0;
-  uint64_t size = 0;
-  uint32_t crc = 0;  // CRC32C of the blob's bytes
+  uint64_t size = 0;           // bytes in the file (what a range request fetches)
+  uint32_t crc = 0;            // CRC32C of those bytes
+  uint32_t flags = 0;          // kBlobZstd or 0
+  uint64_t contents_size = 0;  // bytes of the GLB (or heights) they hold: `size` when not compressed
 };
 
 // The header fields the reader needs to find everything else.
@@ -157,10 +168,12 @@ core::Status parseDirectory(const uint8_t* data, size_t size, const HeaderLayout
                             std::string& err);
 
 // `data`/`size` are the BIDX section's bytes (located by `index`); every blob
-// must be 8-aligned and inside `blob_data` (the BDAT entry). Does not check
-// the BIDX section's own CRC (verify does that).
+// must be 8-aligned and inside `blob_data` (the BDAT entry), carry no flag
+// but kBlobZstd, and hold at most `max_contents` bytes of contents (the
+// header's max_blob_contents_bytes). Does not check the BIDX section's own
+// CRC (verify does that).
 core::Status parseBlobIndex(const uint8_t* data, size_t size, const SectionInfo& index,
-                            const SectionInfo& blob_data, const std::string& name,
+                            const SectionInfo& blob_data, uint32_t max_contents, const std::string& name,
                             std::vector<BlobInfo>& out, std::string& err);
 
 }  // namespace blvd::package

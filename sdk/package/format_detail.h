@@ -77,7 +77,8 @@ constexpr size_t kMaxImpostorTextureWidth = 204;   // u16
 constexpr size_t kMaxImpostorTextureHeight = 206;  // u16
 constexpr size_t kImpostorAtlasWidth = 208;        // u16, 3.3
 constexpr size_t kImpostorAtlasHeight = 210;       // u16, 3.3
-constexpr size_t kReservedTail = 212; // zero up to header_size
+constexpr size_t kMaxBlobContents = 212;           // u32, 4.0
+constexpr size_t kReservedTail = 216; // zero up to header_size
 }  // namespace hdr
 
 namespace dir {  // one 32-byte directory entry
@@ -89,11 +90,12 @@ constexpr size_t kCrc = 24;      // u32
 constexpr size_t kReserved = 28; // u32, zero
 }  // namespace dir
 
-namespace blob {  // one 24-byte BIDX entry, after the 8-byte prefix
-constexpr size_t kOffset = 0;  // u64
-constexpr size_t kSize = 8;    // u64
-constexpr size_t kCrc = 16;    // u32
-constexpr size_t kFlags = 20;  // u32, zero in v1.0
+namespace blob {  // one 32-byte BIDX entry (4.0), after the 8-byte prefix
+constexpr size_t kOffset = 0;     // u64
+constexpr size_t kSize = 8;       // u64, bytes in the file
+constexpr size_t kCrc = 16;       // u32, of those bytes
+constexpr size_t kFlags = 20;     // u32, kBlobZstd or 0
+constexpr size_t kContents = 24;  // u64, bytes of contents
 }  // namespace blob
 
 }  // namespace blvd::package::detail

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "package/blob_codec.h"
 #include "package/format_detail.h"
 
 namespace blvd::package {
@@ -189,7 +190,8 @@ core::Status PackageReader::validate(std::string& err) {
       return core::Status::Corrupt;
     }
     if ((s = copy(section(kSectionBlobIndex), bytes, err)) != core::Status::Ok) return s;
-    s = parseBlobIndex(bytes.data(), bytes.size(), *index, *blob_data, name_, blobs_, err);
+    s = parseBlobIndex(bytes.data(), bytes.size(), *index, *blob_data, layout_.header.max_blob_contents_bytes, name_,
+                       blobs_, err);
     if (s != core::Status::Ok) return s;
   }
   has_table_pages_ = false;
@@ -314,6 +316,24 @@ core::Status PackageReader::readBlob(uint32_t i, std::vector<uint8_t>& into, Spa
     return st;
   }
   return checkBlob(i, into.data(), out, err);
+}
+
+core::Status PackageReader::blobContents(uint32_t i, std::vector<uint8_t>& into, Span& out, std::string& err) const {
+  Span stored;
+  const core::Status st = blob(i, stored, err);
+  if (st != core::Status::Ok) return st;
+  return unpackBlob(blobs_[i], i, stored.data, into, out, name_, err);
+}
+
+core::Status PackageReader::readBlobContents(uint32_t i, std::vector<uint8_t>& into, Span& out,
+                                             std::string& err) const {
+  if (i < blobs_.size() && (blobs_[i].flags & kBlobZstd) == 0) return readBlob(i, into, out, err);
+  // The stored frame lands in a buffer of the thread's own, kept like `into`.
+  thread_local std::vector<uint8_t> stored_bytes;
+  Span stored;
+  const core::Status st = readBlob(i, stored_bytes, stored, err);
+  if (st != core::Status::Ok) return st;
+  return unpackBlob(blobs_[i], i, stored.data, into, out, name_, err);
 }
 
 core::Status PackageReader::read(uint64_t offset, size_t size, uint8_t* dst, std::string& err) const {

@@ -116,6 +116,14 @@ class PackageReader {
   // CRC checked; `out` points into `into`. As blob(), plus Io when the file no
   // longer holds it (truncated since open). What the runtime uses.
   core::Status readBlob(uint32_t i, std::vector<uint8_t>& into, Span& out, std::string& err) const;
+  // Blob `i`'s contents (a GLB, a terrain tile), decompressed when BIDX says
+  // it is stored as a zstd frame (blob_codec.h); errors as blob() and
+  // readBlob(), plus Corrupt for a damaged frame. blobContents() reads through
+  // the mapping (tools; `out` may point into it), readBlobContents() with
+  // pread (the runtime; `out` points into `into`, which is grown when too
+  // small and never shrunk).
+  core::Status blobContents(uint32_t i, std::vector<uint8_t>& into, Span& out, std::string& err) const;
+  core::Status readBlobContents(uint32_t i, std::vector<uint8_t>& into, Span& out, std::string& err) const;
   // `size` bytes at file offset `offset` into `dst`: pread from the file (a
   // package read into memory: a copy). Io naming the offset and the file's
   // size now when it holds fewer (truncated since open); Misuse past the end

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -51,7 +52,35 @@ void PackageWriter::addSection(uint32_t tag, std::vector<uint8_t> bytes) {
   sections_.push_back(Section{tag, crc, std::move(bytes)});
 }
 
-uint32_t PackageWriter::addBlob(std::vector<uint8_t> bytes) {
+void PackageWriter::setBlobCompression(int level) {
+  packBlob({}, level);  // checks the level
+  blob_level_ = level;
+}
+
+uint32_t PackageWriter::addBlob(std::vector<uint8_t> contents) {
+  return addStoredBlob(packBlob(std::move(contents), blob_level_));
+}
+
+std::vector<uint8_t> PackageWriter::blobContents(uint32_t i) const {
+  const Blob& b = blobs_.at(i);
+  const BlobInfo info{b.rel_offset, b.bytes.size(), b.crc, b.flags, b.contents_size};
+  std::vector<uint8_t> out;
+  Span s;
+  std::string err;
+  if (unpackBlob(info, i, b.bytes.data(), out, s, "package writer", err) != core::Status::Ok)
+    throw core::Error(core::Status::Internal, err);
+  if (s.data != out.data()) out.assign(s.data, s.data + s.size);
+  return out;
+}
+
+uint32_t PackageWriter::addStoredBlob(StoredBlob blob) {
+  std::vector<uint8_t>& bytes = blob.bytes;
+  if ((blob.flags & ~kBlobZstd) != 0 || ((blob.flags & kBlobZstd) == 0 && blob.contents_size != bytes.size()) ||
+      blob.contents_size > kMaxBlobContentsBytes)
+    throw core::Error(core::Status::InvalidArg, "package: blob " + std::to_string(blobs_.size()) +
+                                                    " has flags " + std::to_string(blob.flags) + " and " +
+                                                    std::to_string(blob.contents_size) + " bytes of contents in " +
+                                                    std::to_string(bytes.size()));
   if (blobs_.size() >= std::numeric_limits<uint32_t>::max())
     throw core::Error(core::Status::InvalidArg, "package: too many blobs");
   // BDAT's CRC covers the zero padding between blobs as well, so that every
@@ -61,7 +90,7 @@ uint32_t PackageWriter::addBlob(std::vector<uint8_t> bytes) {
   const uint32_t crc = crc32c(bytes.data(), bytes.size());
   bdat_crc_ = crc32c(bytes.data(), bytes.size(), bdat_crc_);
   bdat_size_ = rel + bytes.size();
-  blobs_.push_back(Blob{crc, rel, std::move(bytes)});
+  blobs_.push_back(Blob{crc, rel, std::move(bytes), blob.flags, blob.contents_size});
   return static_cast<uint32_t>(blobs_.size() - 1);
 }
 
@@ -111,6 +140,8 @@ PackageWriter::Layout PackageWriter::layout() const {
     put<uint64_t>(e + b::kOffset, L.bdat_offset + blobs_[i].rel_offset);
     put<uint64_t>(e + b::kSize, blobs_[i].bytes.size());
     put<uint32_t>(e + b::kCrc, blobs_[i].crc);
+    put<uint32_t>(e + b::kFlags, blobs_[i].flags);
+    put<uint64_t>(e + b::kContents, blobs_[i].contents_size);
   }
 
   L.head.assign(kHeaderSize + n_dir * kDirEntrySize, 0);
@@ -173,6 +204,9 @@ PackageWriter::Layout PackageWriter::layout() const {
   put<uint16_t>(hp + h::kMaxImpostorTextureHeight, header_.max_impostor_texture_height);
   put<uint16_t>(hp + h::kImpostorAtlasWidth, header_.impostor_atlas_width);
   put<uint16_t>(hp + h::kImpostorAtlasHeight, header_.impostor_atlas_height);
+  uint64_t largest = 0;
+  for (const Blob& b : blobs_) largest = std::max(largest, b.contents_size);
+  put<uint32_t>(hp + h::kMaxBlobContents, static_cast<uint32_t>(largest));
   put<uint32_t>(hp + h::kCrc, detail::headerCrc(hp, kHeaderSize));
   return L;
 }

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "package/blob_codec.h"
 #include "package/format.h"
 
 namespace blvd::package {
@@ -26,13 +27,23 @@ class PackageWriter {
   // they are added, so put the small ones a remote client wants first.
   void addSection(uint32_t tag, std::vector<uint8_t> bytes);
 
-  // Adds a blob (a block or cell GLB) and returns its index, 0, 1, 2 ... in
-  // call order. The index is what the BLCK/CELL sections store.
-  uint32_t addBlob(std::vector<uint8_t> bytes);
+  // Adds a blob (a block or cell GLB, a terrain tile) and returns its index,
+  // 0, 1, 2 ... in call order. The index is what the BLCK/CELL sections
+  // store. Stored as packBlob(contents, level) with the level of
+  // setBlobCompression().
+  uint32_t addBlob(std::vector<uint8_t> contents);
+  // Adds a blob packed already (packBlob() on a worker thread, or a blob
+  // copied from another package's BDAT with its BIDX flags).
+  uint32_t addStoredBlob(StoredBlob blob);
+  // The zstd level addBlob() stores blobs at; 0 (the default) stores them as
+  // they are. Throws as packBlob() for a level outside 0..22.
+  void setBlobCompression(int level);
   uint32_t blobCount() const { return static_cast<uint32_t>(blobs_.size()); }
-  // The bytes of blob `i` (< blobCount()). The reference is valid until the
-  // next addBlob().
+  // The stored bytes of blob `i` (< blobCount()), what BIDX's size counts.
+  // The reference is valid until the next addBlob().
   const std::vector<uint8_t>& blob(uint32_t i) const { return blobs_.at(i).bytes; }
+  // Blob `i`'s contents, decompressed when it is stored compressed.
+  std::vector<uint8_t> blobContents(uint32_t i) const;
 
   // Bytes the section will occupy without padding; for BIDX and BDAT the size
   // (and TPCR) the writer will give them; 0 for a tag that was not added.
@@ -59,6 +70,8 @@ class PackageWriter {
     uint32_t crc;
     uint64_t rel_offset;  // from the start of BDAT (which is 8-aligned in the file)
     std::vector<uint8_t> bytes;
+    uint32_t flags;
+    uint64_t contents_size;
   };
   struct Layout;
   Layout layout() const;
@@ -73,6 +86,7 @@ class PackageWriter {
   // being recomputed over every blob at write time.
   uint64_t bdat_size_ = 0;
   uint32_t bdat_crc_ = 0;
+  int blob_level_ = 0;
 };
 
 }  // namespace blvd::package

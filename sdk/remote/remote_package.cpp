@@ -106,7 +106,8 @@ core::Status RemotePackage::openTables(const std::vector<uint8_t>& head, std::st
   } else if ((st = fetchChecked(bidx->offset, bidx->size, bidx->crc, "section BIDX", index, err)) != core::Status::Ok) {
     return st;
   }
-  return parseBlobIndex(index.data(), index.size(), *bidx, *bdat, url_, blobs_, err);
+  return parseBlobIndex(index.data(), index.size(), *bidx, *bdat, layout_.header.max_blob_contents_bytes, url_, blobs_,
+                        err);
 }
 
 core::Status RemotePackage::openTablePages(const SectionInfo& tpcr, std::string& err) {

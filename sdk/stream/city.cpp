@@ -8,6 +8,7 @@
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
 
+#include "package/blob_codec.h"
 #include "package/glb.h"
 
 namespace blvd::stream {
@@ -111,11 +112,14 @@ bool City::cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const {
 }
 
 core::Status City::blobBytes(uint32_t i, package::Span& s, std::vector<uint8_t>& hold, std::string& err) const {
-  if (!remote_) return reader_.readBlob(i, hold, s, err);  // pread: a file cut short is Io, not SIGBUS
-  const core::Status st = remote_->blob(i, hold, err);
+  if (!remote_) return reader_.readBlobContents(i, hold, s, err);  // pread: a file cut short is Io, not SIGBUS
+  const bool packed = i < remote_->blobCount() && (remote_->blobInfo(i).flags & package::kBlobZstd);
+  // A compressed blob comes over the link into a buffer of the thread's own, kept like `hold`.
+  thread_local std::vector<uint8_t> stored;
+  std::vector<uint8_t>& into = packed ? stored : hold;
+  const core::Status st = remote_->blob(i, into, err);
   if (st != core::Status::Ok) return st;
-  s = package::Span{hold.data(), hold.size(), remote_->blobInfo(i).offset};
-  return st;
+  return package::unpackBlob(remote_->blobInfo(i), i, into.data(), hold, s, reader_.name(), err);
 }
 
 City::NoLinkWait::NoLinkWait() : was_(t_no_link_wait) { t_no_link_wait = true; }

@@ -56,6 +56,7 @@ inline void writeGridPackage(const std::string& path, const PoolSizer& size_pool
   grid.build(g);
   PackageWriter gw;
   gw.setHeader(h);
+  gw.setBlobCompression(19);  // as the bake stores blobs: zstd frames where they are smaller
   gw.addSection(kSectionGraph, blvd::graph::serializeGraph(g));
   gw.addSection(kSectionCells, blvd::graph::serializeCells(g));
   gw.addSection(kSectionSpatialIndex, blvd::graph::serializeSegmentGrid(grid));

@@ -157,7 +157,16 @@ TEST_F(RemoteDriveTest, OnlineTheRestOfTheTablesArriveOnceTheLinkIsIdle) {
 TEST_F(RemoteDriveTest, ADriveDrawsWhatTheLocalFileDrawsInACacheThatNeverGrowsPastItsBytes) {
   const Drive dr = impostorDrive(24, 12.0);
   const std::string url = nginx_->url("/monaco.blvd"), cache = work_ + "/small";
-  const uint64_t cache_bytes = 1300000;  // the tables (0.77 MB), the largest blob (0.35 MB) and a little: evictions
+  // The least the runtime takes, the tables and the package's largest blob,
+  // and a little: less than the route's blobs, so blobs are evicted.
+  uint64_t tables = 0, largest = 0;
+  const blvd::package::PackageReader& pkg = localCity().package();
+  for (const blvd::package::SectionInfo& si : pkg.sections())
+    if (si.tag != blvd::package::kSectionBlobData) tables += si.size;
+  for (uint32_t b = 0; b < pkg.blobCount(); ++b) largest = std::max(largest, pkg.blobInfo(b).size);
+  const uint64_t route = uniqueBlobBytes(dr.cells);
+  const uint64_t cache_bytes = tables + largest + 16384;
+  ASSERT_LT(cache_bytes, tables + route);
   const blvd_runtime_desc dl = localDesc(), du = urlDesc(url, cache, cache_bytes);
   Rt local, remote;
   ASSERT_EQ(blvd_runtime_create(&dl, &local.rt), BLVD_OK) << blvd_last_error(nullptr);

@@ -50,7 +50,8 @@ void writeNewVersion(const std::string& path) {
     blvd::package::Span b;
     std::string err;
     ASSERT_EQ(old.blob(i, b, err), blvd::core::Status::Ok) << err;
-    w.addBlob(std::vector<uint8_t>(b.data, b.data + b.size));
+    const blvd::package::BlobInfo& info = old.blobInfo(i);  // copied as stored, compressed or not
+    w.addStoredBlob({std::vector<uint8_t>(b.data, b.data + b.size), info.flags, info.contents_size});
   }
   w.write(path + ".new");
   // nginx's ETag is the file's mtime (seconds) and size: a replacement within

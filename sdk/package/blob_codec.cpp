@@ -1,0 +1,87 @@
+#include "package/blob_codec.h"
+
+#include <zstd.h>
+
+#include <memory>
+#include <new>
+
+
+namespace blvd::package {
+
+namespace {
+
+struct DctxFree {
+  void operator()(ZSTD_DCtx* c) const { ZSTD_freeDCtx(c); }
+};
+
+// One context per thread, made at its first compressed blob and kept: a
+// loader thread decompresses every blob after that without allocating.
+ZSTD_DCtx* threadContext() {
+  thread_local std::unique_ptr<ZSTD_DCtx, DctxFree> ctx(ZSTD_createDCtx());
+  return ctx.get();
+}
+
+core::Status bad(const BlobInfo& info, uint32_t index, const std::string& name, const std::string& why,
+                 std::string& err) {
+  err = name + ": blob " + std::to_string(index) + " at offset " + std::to_string(info.offset) + ": " + why;
+  return core::Status::Corrupt;
+}
+
+}  // namespace
+
+StoredBlob packBlob(std::vector<uint8_t> contents, int level) {
+  if (level < 0 || level > ZSTD_maxCLevel())
+    throw core::Error(core::Status::InvalidArg, "blob compression level " + std::to_string(level) +
+                                                    " is outside 0.." + std::to_string(ZSTD_maxCLevel()));
+  if (contents.size() > kMaxBlobContentsBytes)
+    throw core::Error(core::Status::InvalidArg, "blob of " + std::to_string(contents.size()) +
+                                                    " bytes is over the package's limit of " +
+                                                    std::to_string(kMaxBlobContentsBytes));
+  StoredBlob out;
+  out.contents_size = contents.size();
+  if (level > 0 && !contents.empty()) {
+    std::vector<uint8_t> z(ZSTD_compressBound(contents.size()));
+    const size_t n = ZSTD_compress(z.data(), z.size(), contents.data(), contents.size(), level);
+    if (ZSTD_isError(n))
+      throw core::Error(core::Status::Internal, std::string("zstd: ") + ZSTD_getErrorName(n));
+    if (n < contents.size()) {
+      z.resize(n);
+      z.shrink_to_fit();
+      out.bytes = std::move(z);
+      out.flags = kBlobZstd;
+      return out;
+    }
+  }
+  out.bytes = std::move(contents);
+  return out;
+}
+
+core::Status unpackBlob(const BlobInfo& info, uint32_t index, const uint8_t* stored, std::vector<uint8_t>& into,
+                        Span& out, const std::string& name, std::string& err) {
+  out = Span{};
+  if ((info.flags & kBlobZstd) == 0) {
+    out = Span{stored, static_cast<size_t>(info.size), info.offset};
+    return core::Status::Ok;
+  }
+  ZSTD_DCtx* ctx = threadContext();
+  if (!ctx) {
+    err = name + ": blob " + std::to_string(index) + ": no memory for a zstd context";
+    return core::Status::NoMem;
+  }
+  const size_t want = static_cast<size_t>(info.contents_size);
+  try {
+    if (into.size() < want) into.resize(want);
+  } catch (const std::bad_alloc&) {
+    err = name + ": blob " + std::to_string(index) + ": no memory for its " + std::to_string(want) + " bytes";
+    return core::Status::NoMem;
+  }
+  const size_t n = ZSTD_decompressDCtx(ctx, into.data(), want, stored, static_cast<size_t>(info.size));
+  if (ZSTD_isError(n)) return bad(info, index, name, std::string("zstd frame: ") + ZSTD_getErrorName(n), err);
+  if (n != want)
+    return bad(info, index, name,
+               "zstd frame holds " + std::to_string(n) + " bytes, BIDX says " + std::to_string(want), err);
+  out = Span{into.data(), want, info.offset};
+  return core::Status::Ok;
+}
+
+}  // namespace blvd::package
