@@ -43,8 +43,11 @@ monaco() {
     --impostor-route auto:200 --seed 1 --texture-codec jpeg --cell-texels 163840 --run-length 100 --max-runs 4
   "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-webp1x.blvd" --impostor both \
     --impostor-route auto:200 --seed 1 --cell-texels 163840 --run-length 100 --max-runs 4
+  # The route package with its blobs stored as they are (decision 0029).
+  "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-z0.blvd" --impostor both \
+    --impostor-route auto:200 --seed 1 --blob-compression 0
   run decode "$blvd" bench decode "$out/osrm.blvd" "$out/osrm-jpeg1x.blvd" "$out/osrm-webp1x.blvd" \
-    "$out/osrm-none.blvd" --rounds 3 --json "$out/decode.json"
+    "$out/osrm-none.blvd" "$out/osrm-z0.blvd" --rounds 3 --json "$out/decode.json"
   "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/m1.blvd" --impostor both --impostor-route auto:40 --seed 7
   "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/m4.blvd" --impostor both --impostor-route auto:40 \
     --seed 7 --tile 2x2

@@ -15,9 +15,11 @@ struct DctxFree {
 };
 
 // One context per thread, made at its first compressed blob and kept: a
-// loader thread decompresses every blob after that without allocating.
+// loader thread decompresses every blob after that without allocating. An
+// allocation that failed is tried again at the next blob.
 ZSTD_DCtx* threadContext() {
-  thread_local std::unique_ptr<ZSTD_DCtx, DctxFree> ctx(ZSTD_createDCtx());
+  thread_local std::unique_ptr<ZSTD_DCtx, DctxFree> ctx;
+  if (!ctx) ctx.reset(ZSTD_createDCtx());
   return ctx.get();
 }
 
@@ -65,14 +67,14 @@ core::Status unpackBlob(const BlobInfo& info, uint32_t index, const uint8_t* sto
   }
   ZSTD_DCtx* ctx = threadContext();
   if (!ctx) {
-    err = name + ": blob " + std::to_string(index) + ": no memory for a zstd context";
+    err = name + ": blob " + std::to_string(index) + ": out of memory for a zstd context";
     return core::Status::NoMem;
   }
   const size_t want = static_cast<size_t>(info.contents_size);
   try {
     if (into.size() < want) into.resize(want);
   } catch (const std::bad_alloc&) {
-    err = name + ": blob " + std::to_string(index) + ": no memory for its " + std::to_string(want) + " bytes";
+    err = name + ": blob " + std::to_string(index) + ": out of memory for its " + std::to_string(want) + " bytes";
     return core::Status::NoMem;
   }
   const size_t n = ZSTD_decompressDCtx(ctx, into.data(), want, stored, static_cast<size_t>(info.size));
