@@ -31,10 +31,14 @@ core::Status bad(const BlobInfo& info, uint32_t index, const std::string& name, 
 
 }  // namespace
 
-StoredBlob packBlob(std::vector<uint8_t> contents, int level) {
+void checkBlobLevel(int level) {
   if (level < 0 || level > ZSTD_maxCLevel())
     throw core::Error(core::Status::InvalidArg, "blob compression level " + std::to_string(level) +
                                                     " is outside 0.." + std::to_string(ZSTD_maxCLevel()));
+}
+
+StoredBlob packBlob(std::vector<uint8_t> contents, int level) {
+  checkBlobLevel(level);
   if (contents.size() > kMaxBlobContentsBytes)
     throw core::Error(core::Status::InvalidArg, "blob of " + std::to_string(contents.size()) +
                                                     " bytes is over the package's limit of " +
@@ -56,6 +60,11 @@ StoredBlob packBlob(std::vector<uint8_t> contents, int level) {
   }
   out.bytes = std::move(contents);
   return out;
+}
+
+std::vector<uint8_t>& storedBuffer(const BlobInfo& info, std::vector<uint8_t>& hold) {
+  thread_local std::vector<uint8_t> frames;
+  return (info.flags & kBlobZstd) ? frames : hold;
 }
 
 core::Status unpackBlob(const BlobInfo& info, uint32_t index, const uint8_t* stored, std::vector<uint8_t>& into,

@@ -28,6 +28,14 @@ struct StoredBlob {
 // (InvalidArg) for a level outside 0..22 or contents over
 // kMaxBlobContentsBytes.
 StoredBlob packBlob(std::vector<uint8_t> contents, int level);
+// Throws as packBlob() for a level outside 0..22.
+void checkBlobLevel(int level);
+
+// Where to read blob `info`'s stored bytes before unpackBlob(): `hold`
+// itself when they are its contents, else a buffer of the calling thread's
+// own (kept, so a loader reads without allocating once it has held the
+// largest frame).
+std::vector<uint8_t>& storedBuffer(const BlobInfo& info, std::vector<uint8_t>& hold);
 
 // Blob `index`'s contents from its stored bytes (`stored`: info.size of them,
 // their CRC already checked). Not compressed: `out` spans `stored` itself.

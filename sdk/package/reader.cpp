@@ -327,12 +327,12 @@ core::Status PackageReader::blobContents(uint32_t i, std::vector<uint8_t>& into,
 
 core::Status PackageReader::readBlobContents(uint32_t i, std::vector<uint8_t>& into, Span& out,
                                              std::string& err) const {
-  if (i < blobs_.size() && (blobs_[i].flags & kBlobZstd) == 0) return readBlob(i, into, out, err);
-  // The stored frame lands in a buffer of the thread's own, kept like `into`.
-  thread_local std::vector<uint8_t> stored_bytes;
-  Span stored;
-  const core::Status st = readBlob(i, stored_bytes, stored, err);
+  out = Span{};
+  core::Status st = blobExists(i, err);
   if (st != core::Status::Ok) return st;
+  std::vector<uint8_t>& stored_bytes = storedBuffer(blobs_[i], into);
+  Span stored;
+  if ((st = readBlob(i, stored_bytes, stored, err)) != core::Status::Ok) return st;
   return unpackBlob(blobs_[i], i, stored.data, into, out, name_, err);
 }
 

@@ -53,7 +53,7 @@ void PackageWriter::addSection(uint32_t tag, std::vector<uint8_t> bytes) {
 }
 
 void PackageWriter::setBlobCompression(int level) {
-  packBlob({}, level);  // checks the level
+  checkBlobLevel(level);
   blob_level_ = level;
 }
 

@@ -113,10 +113,8 @@ bool City::cellCached(uint32_t cell, std::vector<uint32_t>& scratch) const {
 
 core::Status City::blobBytes(uint32_t i, package::Span& s, std::vector<uint8_t>& hold, std::string& err) const {
   if (!remote_) return reader_.readBlobContents(i, hold, s, err);  // pread: a file cut short is Io, not SIGBUS
-  const bool packed = i < remote_->blobCount() && (remote_->blobInfo(i).flags & package::kBlobZstd);
-  // A compressed blob comes over the link into a buffer of the thread's own, kept like `hold`.
-  thread_local std::vector<uint8_t> stored;
-  std::vector<uint8_t>& into = packed ? stored : hold;
+  if (i >= remote_->blobCount()) return remote_->blob(i, hold, err);  // NotFound, naming the count
+  std::vector<uint8_t>& into = package::storedBuffer(remote_->blobInfo(i), hold);
   const core::Status st = remote_->blob(i, into, err);
   if (st != core::Status::Ok) return st;
   return package::unpackBlob(remote_->blobInfo(i), i, into.data(), hold, s, reader_.name(), err);
