@@ -9,6 +9,7 @@ namespace blvd::render {
 
 struct Frustum {
   glm::dvec4 planes[6];  // (n, d): inside when dot(n, p) + d >= 0
+  double near_reach = 0;  // the eye's distance to the near rectangle's corners
 
   // From projection * view for eye-relative positions.
   static Frustum fromClip(const glm::dmat4& clip);
@@ -23,6 +24,13 @@ struct Frustum {
     }
     return true;
   }
+
+  // The distance from the eye (the origin) to the nearest point of the box
+  // that lies inside the frustum; kOutside when none does. A box reaching
+  // within near_reach of the eye gives its own nearest distance (it may hold
+  // part of the near plane, where nothing nearer can be seen anyway).
+  static constexpr double kOutside = 1e300;
+  double nearestInside(const glm::dvec3& center, const glm::dvec3& half_extent) const;
 };
 
 }  // namespace blvd::render

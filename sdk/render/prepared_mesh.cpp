@@ -1,7 +1,7 @@
 #include "render/prepared_mesh.h"
 
 #include <algorithm>
-
+#include <cfloat>
 #include <cmath>
 #include <cstring>
 
@@ -140,6 +140,73 @@ void* decodeImage(const geo::MeshData& mesh, StagingArena& arena, int& w, int& h
   if (!rgba) return failWith(err, "staging arena too small for the mesh's texture"), nullptr;
   return rgba;
 }
+
+// Parts: a grid over the box's ground plan (glTF x and z), up to 4 cells
+// along its longer side and 2 across, no more cells than the triangles fill
+// at kMinPartTriangles each; an impostor (textured) stays whole.
+struct PartGrid {
+  int nx = 1, nz = 1;
+  int cells() const { return nx * nz; }
+};
+
+PartGrid partGrid(const geo::MeshData& mesh, const glm::dvec3& half) {
+  PartGrid g;
+  const size_t most = std::min<size_t>(kMaxMeshParts, mesh.indices.size() / 3 / kMinPartTriangles);
+  if (!mesh.image.empty() || most < 2) return g;
+  const bool x_long = half.x >= half.z;
+  const double along = x_long ? half.x : half.z, across = x_long ? half.z : half.x;
+  const int n_along = int(std::min<size_t>(4, most));
+  const int n_across = (across * 2 >= along && size_t(n_along) * 2 <= most) ? 2 : 1;
+  (x_long ? g.nx : g.nz) = n_along;
+  (x_long ? g.nz : g.nx) = n_across;
+  return g;
+}
+
+// The grid cell of triangle t's centroid (positions relative to the centre).
+int partOf(const std::vector<uint32_t>& idx, size_t t, const Vertex* v, const glm::dvec3& half, const PartGrid& g) {
+  auto cell = [](double c, double h, int n) { return h > 0 ? std::clamp(int((c + h) / (2 * h) * n), 0, n - 1) : 0; };
+  double cx = 0, cz = 0;
+  for (int k = 0; k < 3; ++k) {
+    cx += v[idx[t + k]].position[0] / 3.0;
+    cz += v[idx[t + k]].position[2] / 3.0;
+  }
+  return cell(cz, half.z, g.nz) * g.nx + cell(cx, half.x, g.nx);
+}
+
+// The triangles written part by part (a counting sort by cell, their order
+// kept within each), and each non-empty part's range and box into `out`.
+void writeParts(const std::vector<uint32_t>& idx, const Vertex* v, const glm::dvec3& half, const PartGrid& g,
+                void* indices, bool small, PreparedMesh& out) {
+  uint32_t start[kMaxMeshParts + 1] = {};
+  for (size_t t = 0; t + 2 < idx.size(); t += 3) start[partOf(idx, t, v, half, g) + 1] += 3;
+  for (int c = 0; c < g.cells(); ++c) start[c + 1] += start[c];
+  uint32_t at[kMaxMeshParts];
+  MeshPart part[kMaxMeshParts];
+  for (int c = 0; c < g.cells(); ++c) {
+    at[c] = start[c];
+    part[c].first = start[c];
+    part[c].count = start[c + 1] - start[c];
+    for (int k = 0; k < 3; ++k) part[c].lo[k] = FLT_MAX, part[c].hi[k] = -FLT_MAX;
+  }
+  for (size_t t = 0; t + 2 < idx.size(); t += 3) {
+    const int c = partOf(idx, t, v, half, g);
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t i = idx[t + k];
+      if (small)
+        static_cast<uint16_t*>(indices)[at[c]++] = static_cast<uint16_t>(i);
+      else
+        static_cast<uint32_t*>(indices)[at[c]++] = i;
+      for (int a = 0; a < 3; ++a) {
+        part[c].lo[a] = std::min(part[c].lo[a], v[i].position[a]);
+        part[c].hi[a] = std::max(part[c].hi[a], v[i].position[a]);
+      }
+    }
+  }
+  out.part_count = 0;
+  for (int c = 0; c < g.cells(); ++c)
+    if (part[c].count) out.parts[out.part_count++] = part[c];
+}
+
 }  // namespace
 
 bool outOfMemory(const std::string& err) { return err == kNoMemory; }
@@ -213,7 +280,10 @@ bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& o
   const bool small = nv < 0xFFFF;
   void* indices = arena.take(mesh.indices.size() * (small ? 2 : 4));
   if (!indices) return failWith(err, "staging arena too small for the mesh's indices");
-  if (small) {
+  const PartGrid grid = partGrid(mesh, half);
+  if (grid.cells() > 1) {
+    writeParts(mesh.indices, vertices, half, grid, indices, small, out);
+  } else if (small) {
     auto* i16 = static_cast<uint16_t*>(indices);
     for (size_t i = 0; i < mesh.indices.size(); ++i) i16[i] = static_cast<uint16_t>(mesh.indices[i]);
   } else {

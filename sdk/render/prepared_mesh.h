@@ -27,6 +27,17 @@ struct StagingArena {
   void reset() { used = 0; }
 };
 
+// A run of a mesh's triangles within a box, for culling finer than the
+// mesh: indices [first, first + count), the box relative to the mesh's
+// centre (glTF axes).
+struct MeshPart {
+  uint32_t first = 0, count = 0;
+  float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+};
+inline constexpr int kMaxMeshParts = 8;
+// A part holds this many triangles at least on average (fewer parts else).
+inline constexpr uint32_t kMinPartTriangles = 512;
+
 struct PreparedMesh {
   const uint8_t* vertices = nullptr;  // vertex_count × kVertexBytes
   uint32_t vertex_count = 0;
@@ -45,6 +56,10 @@ struct PreparedMesh {
   int atlas_x = -1, atlas_y = -1;
   double center[3] = {0, 0, 0};       // box centre and half extents, glTF axes
   double half[3] = {0, 0, 0};
+  // An untextured mesh of 2 × kMinPartTriangles triangles or more has its
+  // triangles in parts by where they lie (prepareMesh); 0: one whole.
+  MeshPart parts[kMaxMeshParts];
+  int part_count = 0;
 
   uint64_t vertexBytes() const { return uint64_t(vertex_count) * kVertexBytes; }
   uint64_t indexBytes() const { return uint64_t(index_count) * (index16 ? 2 : 4); }
@@ -63,7 +78,8 @@ const uint8_t* mipLevel(const PreparedMesh& mesh, int level, int& w, int& h);
 size_t preparedBytes(uint64_t vertices, uint64_t indices, int texture_width, int texture_height);
 
 // Validates `mesh` (counts agree, indices in range, image decodes), computes
-// missing normals (area-weighted) and writes the GPU layout into `arena`.
+// missing normals (area-weighted) and writes the GPU layout into `arena`,
+// the triangles of a large untextured mesh grouped into parts.
 // False with `err` set when the mesh is malformed or the arena is too small,
 // or when the image decoder could not allocate (outOfMemory(err)).
 bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err);

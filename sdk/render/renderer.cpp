@@ -102,6 +102,8 @@ struct MeshSlot {
   glm::dvec3 center{0.0};  // glTF axes, package frame
   glm::dvec3 half{0.0};
   uint64_t bytes = 0;
+  MeshPart parts[kMaxMeshParts];  // culled one by one when there are two or more
+  int part_count = 0;
 };
 
 // Uniform locations of one program (-1 when the program does not use one).
@@ -545,6 +547,8 @@ bool Renderer::beginSlabCopy(SlabHandle h, MeshHandle source, SlabUpload& up) {
   shape.index_count = static_cast<uint32_t>(src.index_count);
   shape.index16 = src.index_type == GL_UNSIGNED_SHORT;
   for (int k = 0; k < 3; ++k) shape.center[k] = src.center[k], shape.half[k] = src.half[k];
+  std::copy(src.parts, src.parts + src.part_count, shape.parts);
+  shape.part_count = src.part_count;
   if (!reserve(impl_->slabs[h.id - 1], shape, up)) return false;
   up.slab = h.id;
   up.shape = shape;
@@ -764,6 +768,8 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUp
   s.center = glm::dvec3(p.center[0], p.center[1], p.center[2]);
   s.half = glm::dvec3(p.half[0], p.half[1], p.half[2]);
   s.bytes = vbytes + ibytes + (p.rgba ? p.textureBytes() * 4 / 3 : 0);
+  std::copy(p.parts, p.parts + p.part_count, s.parts);
+  s.part_count = p.part_count;
   s.live = true;
   if (slab) {
     slab->meshes.push_back(index);  // reserved for desc.meshes at createSlab
@@ -1096,6 +1102,38 @@ const char* Renderer::checkRender(const Camera& out, const MeshHandle* list, siz
   return nullptr;
 }
 
+namespace {
+
+// A mesh's triangles: whole, or those of its parts the frustum keeps, each
+// run of adjacent kept parts in one call.
+void drawParts(const GlApi& gl, const MeshSlot& s, const glm::dvec3& rel, const Frustum& frustum, FrameStats& fs) {
+  const uint64_t index_size = s.index_type == GL_UNSIGNED_SHORT ? 2 : 4;
+  auto draw = [&](uint32_t first, uint32_t count) {
+    gl.DrawElements(GL_TRIANGLES, GLsizei(count), s.index_type, byteOffset(s.index_offset + first * index_size));
+    ++fs.draw_calls;
+    fs.triangles += count / 3;
+  };
+  if (s.part_count < 2) return draw(0, uint32_t(s.index_count));
+  uint32_t first = 0, count = 0;
+  for (int k = 0; k < s.part_count; ++k) {
+    const MeshPart& p = s.parts[k];
+    const glm::dvec3 lo(p.lo[0], p.lo[1], p.lo[2]), hi(p.hi[0], p.hi[1], p.hi[2]);
+    if (!frustum.intersectsBox(rel + (lo + hi) * 0.5, (hi - lo) * 0.5)) {
+      ++fs.parts_culled;
+      continue;
+    }
+    if (count && first + count != p.first) {
+      draw(first, count);
+      count = 0;
+    }
+    if (!count) first = p.first;
+    count += p.count;
+  }
+  if (count) draw(first, count);
+}
+
+}  // namespace
+
 // The meshes list[from, to) with (textured) or without a texture that the
 // frustum keeps, nearest first, with the pass's program.
 void Renderer::drawMeshes(const Camera& cam, const MeshHandle* list, size_t from, size_t to, const RenderOptions& opt,
@@ -1155,10 +1193,8 @@ void Renderer::drawMeshes(const Camera& cam, const MeshHandle* list, size_t from
     }
     gl.Uniform3f(u->offset, static_cast<float>(rel.x), static_cast<float>(rel.y), static_cast<float>(rel.z));
     gl.BindVertexArray(s.vao);
-    gl.DrawElements(GL_TRIANGLES, s.index_count, s.index_type, byteOffset(s.index_offset));
-    ++fs.draw_calls;
+    drawParts(gl, s, rel, v.frustum, fs);
     ++fs.meshes_drawn;
-    fs.triangles += static_cast<uint64_t>(s.index_count / 3);
   }
 }
 

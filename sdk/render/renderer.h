@@ -106,6 +106,7 @@ struct FrameStats {
   uint32_t draw_calls = 0;      // every glDraw* issued, the background's included
   uint32_t meshes_drawn = 0;
   uint32_t meshes_culled = 0;   // outside the view frustum
+  uint32_t parts_culled = 0;    // parts of drawn meshes outside it (MeshPart)
   uint32_t meshes_invalid = 0;  // stale or null handles in the list, skipped
   uint64_t pixels = 0;          // pixels shaded: the view's, or the scaled view's
 };

@@ -110,14 +110,14 @@ void DrawList::clear() {
   degraded_ = false;
 }
 
-void DrawList::build(blvd_render_mode mode, float radius_m, uint32_t cell, double arc_m, const render::Camera& cam,
-                     const CellSlots& slots, const stream::FrameBudget* budget) {
+void DrawList::build(blvd_render_mode mode, float radius_m, uint32_t cell, double arc_m, const render::Camera* cams,
+                     uint32_t n_cams, const CellSlots& slots, const stream::FrameBudget* budget) {
   clear();
   if (mode == BLVD_MODE_FULL) {
     for (uint32_t b = 0; b < reference_blocks_.size(); ++b) addBlock(b);
     return;
   }
-  if (mode == BLVD_MODE_RADIUS) return addRadius(radius_m, cam);
+  if (mode == BLVD_MODE_RADIUS) return addRadius(radius_m, cams[0]);
   if (cell == graph::kNone) return;
   const CellSlot* slot = slots.resident(cell);
   if (!slot) {
@@ -128,7 +128,8 @@ void DrawList::build(blvd_render_mode mode, float radius_m, uint32_t cell, doubl
     if (!slot) return;
   }
   last_drawn_cell_ = slot->cell;
-  chooseLevels(*slot, cam, budget);
+  setCameras(cams, n_cams);
+  chooseLevels(*slot, budget);
   addCell(mode, *slot, cell, arc_m);
 }
 

@@ -14,6 +14,7 @@
 
 #include "blvd/blvd.h"
 #include "render/camera.h"
+#include "render/frustum.h"
 #include "render/renderer.h"
 #include "runtime/cell_slots.h"
 #include "stream/city.h"
@@ -26,11 +27,15 @@ class DrawList {
   // `lod_error_px`: the screen-space error bound when there is no frame budget.
   DrawList(const stream::City& city, const MemoryPlan& plan, float lod_error_px);
 
-  // Builds this frame's list for `cell` at `arc_m` (kNone: nothing local).
-  // A cell not resident yet draws the last cell drawn, if it still is, and
-  // the frame is degraded. `budget` may be null.
-  void build(blvd_render_mode mode, float radius_m, uint32_t cell, double arc_m, const render::Camera& cam,
-             const CellSlots& slots, const stream::FrameBudget* budget);
+  static constexpr uint32_t kMaxViews = 16;
+
+  // Builds this frame's list for `cell` at `arc_m` (kNone: nothing local),
+  // seen by `n_cams` cameras (1..kMaxViews: the frame's, or each view's; the
+  // first places the radius of RADIUS). A cell not resident yet draws the
+  // last cell drawn, if it still is, and the frame is degraded. `budget` may
+  // be null.
+  void build(blvd_render_mode mode, float radius_m, uint32_t cell, double arc_m, const render::Camera* cams,
+             uint32_t n_cams, const CellSlots& slots, const stream::FrameBudget* budget);
   // Every block uploaded once for the reference modes; throws core::Error.
   void ensureReferenceBlocks(render::Renderer& renderer);
   void releaseReferenceBlocks(render::Renderer& renderer);
@@ -62,9 +67,11 @@ class DrawList {
   void addBlock(uint32_t b);
   void addRadius(float radius_m, const render::Camera& cam);
   void addCell(blvd_render_mode mode, const CellSlot& slot, uint32_t cell, double arc_m);
-  // lod_choice.cpp: a level per block of `slot` into level_.
-  void chooseLevels(const CellSlot& slot, const render::Camera& cam, const stream::FrameBudget* budget);
-  void levelsByError(const CellSlot& slot, const render::Camera& cam);
+  // lod_choice.cpp: a level per block of `slot` into level_, for the
+  // cameras whose frusta setCameras() took.
+  void setCameras(const render::Camera* cams, uint32_t n_cams);
+  void chooseLevels(const CellSlot& slot, const stream::FrameBudget* budget);
+  void levelsByError(const CellSlot& slot);
 
   const stream::City& city_;
   float lod_error_px_;
@@ -80,6 +87,11 @@ class DrawList {
   bool degraded_ = false;
   uint64_t misses_ = 0;
   uint64_t block_tris_ = 0, floor_tris_ = 0;
+  // The frame's cameras: their frusta (eye-relative) and focal lengths.
+  render::Frustum frusta_[kMaxViews];
+  glm::dvec3 eyes_[kMaxViews];
+  double focal_px_[kMaxViews] = {};
+  uint32_t n_cams_ = 0;
   // chooseLevels scratch, sized for the largest cell at create.
   std::vector<float> ach_;
   std::vector<stream::LodChain> chains_;

@@ -28,10 +28,11 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
   // taken from the road's grade there, as a car's camera sits; flat packages
   // keep the pose as given.
   if (cell != graph::kNone) onRoad(cell, arc_m, pose_pitch_deg_, cam_.eye_enu.z, cam_.pitch_deg);
+  const uint32_t n_cams = frameCameras(views, n);
   if (off_map_)
     draw_->clear();  // sky and ground, in every mode
   else
-    draw_->build(mode_, radius_m_, cell, arc_m, cam_, *slots_, budget_.get());
+    draw_->build(mode_, radius_m_, cell, arc_m, frame_cams_, n_cams, *slots_, budget_.get());
   if (!off_map_) {
     draw_->addTerrain(terrain_tiles_.data(), terrain_->frame(cam_, terrain_tiles_.data()));
     link_prefetch_->wantTerrain(terrain_->uncachedBlobs());  // a package on a server: tiles not cached yet
@@ -46,7 +47,7 @@ void Runtime::render(blvd_frame_stats* stats, const blvd_view* views, uint32_t n
     if (!renderer_->render(cam_, draw_->meshes(), draw_->size(), &fs, ro))
       renderFailed();
   } else {
-    renderViews(views, n, ro, fs, full_pixels);
+    renderViews(n_cams, ro, fs, full_pixels);
   }
   rendered_ = true;
   items_drawn_ = false;
@@ -99,12 +100,24 @@ uint32_t Runtime::streamSteps(double& arc_m, double upload_budget_ms) {
   return cell;
 }
 
+// The frame's cameras into frame_cams_: the whole frame's, or each view's
+// (checked before anything is drawn); their count.
+uint32_t Runtime::frameCameras(const blvd_view* views, uint32_t n) {
+  if (!views) {
+    frame_cams_[0] = cam_;
+    return 1;
+  }
+  if (n == 0 || n > DrawList::kMaxViews) throw Error(Status::InvalidArg, "need 1..16 views");
+  for (uint32_t i = 0; i < n; ++i) frame_cams_[i] = viewCamera(core::sized(views[i]), i);
+  return n;
+}
+
 // One draw list for every view (Yilmaz et al. §3.4); each view only changes
 // the camera.
-void Runtime::renderViews(const blvd_view* views, uint32_t n, const render::RenderOptions& ro,
-                          render::FrameStats& fs, uint64_t& full_pixels) {
+void Runtime::renderViews(uint32_t n, const render::RenderOptions& ro, render::FrameStats& fs,
+                          uint64_t& full_pixels) {
   for (uint32_t i = 0; i < n; ++i) {
-    const render::Camera c = viewCamera(core::sized(views[i]), i);
+    const render::Camera& c = frame_cams_[i];
     render::FrameStats one;
     if (!renderer_->render(c, draw_->meshes(), draw_->size(), &one, ro))
       renderFailed();

@@ -1,51 +1,72 @@
 // Level of detail per local block (DrawList::chooseLevels): Marvie's budget
 // share when a frame-time target is set, else the coarsest level within
-// lod_error_px on screen.
+// lod_error_px on screen. Either way a block is seen only where it lies in a
+// camera's frustum: a long block beside the street is measured from its
+// nearest point in view, not from the street where the car is.
 #include <algorithm>
 #include <cmath>
 
 #include <glm/geometric.hpp>
 
 #include "core/math.h"
-#include "render/frustum.h"
 #include "runtime/draw_list.h"
 
 namespace blvd::runtime {
 
+void DrawList::setCameras(const render::Camera* cams, uint32_t n_cams) {
+  n_cams_ = std::min(n_cams, kMaxViews);
+  for (uint32_t v = 0; v < n_cams_; ++v) {
+    const render::Camera& c = cams[v];
+    frusta_[v] = render::Frustum::fromClip(render::viewProjectionRelative(c));
+    eyes_[v] = render::enuToGltf(c.eye_enu);
+    focal_px_[v] = c.height * 0.5 / std::tan(c.fov_y_deg * 0.5 * core::kDegToRad);
+  }
+}
+
 // No frame budget: the coarsest level whose simplification error stays
-// within lod_error_px on screen at the block box's nearest point.
-void DrawList::levelsByError(const CellSlot& slot, const render::Camera& cam) {
-  const glm::dvec3 eye = render::enuToGltf(cam.eye_enu);
-  const double focal_px = cam.height * 0.5 / std::tan(cam.fov_y_deg * 0.5 * core::kDegToRad);
+// within lod_error_px on screen at the block's nearest point in any view
+// (focal length over that distance: pixels per metre there). A block no
+// view sees takes its coarsest level and counts no triangles.
+void DrawList::levelsByError(const CellSlot& slot) {
   for (size_t i = 0; i < slot.blocks.size(); ++i) {
     const graph::BlockRecord& r = slot.blocks[i].record;
+    const uint32_t levels = slot.blocks[i].levels;
     const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
-    const double dist = std::max(glm::length(glm::max(glm::max(lo - eye, eye - hi), glm::dvec3(0.0))), 1e-3);
-    uint8_t level = 0;
-    for (uint32_t k = slot.blocks[i].levels; k-- > 1;)
-      if (r.error_m[k] * focal_px <= lod_error_px_ * dist) {
-        level = static_cast<uint8_t>(k);
-        break;
-      }
+    double px_per_m = 0;
+    for (uint32_t v = 0; v < n_cams_; ++v) {
+      const double dist = frusta_[v].nearestInside((lo + hi) * 0.5 - eyes_[v], (hi - lo) * 0.5);
+      if (dist < render::Frustum::kOutside) px_per_m = std::max(px_per_m, focal_px_[v] / std::max(dist, 1e-3));
+    }
+    uint8_t level = static_cast<uint8_t>(levels ? levels - 1 : 0);
+    if (px_per_m > 0) {
+      level = 0;
+      for (uint32_t k = levels; k-- > 1;)
+        if (r.error_m[k] * px_per_m <= lod_error_px_) {
+          level = static_cast<uint8_t>(k);
+          break;
+        }
+      block_tris_ += r.triangles[level];
+    }
     level_[i] = level;
-    block_tris_ += r.triangles[level];
   }
 }
 
 // Marvie et al.: frustum-cull, renormalise the cell's coverage hints over
-// the visible blocks, and share the polygon budget P_i = ACH_i · P.
-void DrawList::chooseLevels(const CellSlot& slot, const render::Camera& cam, const stream::FrameBudget* budget) {
+// the visible blocks (those any view's frustum holds), and share the polygon
+// budget P_i = ACH_i · P.
+void DrawList::chooseLevels(const CellSlot& slot, const stream::FrameBudget* budget) {
   block_tris_ = 0;
-  if (!budget) return levelsByError(slot, cam);
+  if (!budget) return levelsByError(slot);
   floor_tris_ = 0;
-  const glm::dvec3 eye = render::enuToGltf(cam.eye_enu);
-  const render::Frustum frustum = render::Frustum::fromClip(render::viewProjectionRelative(cam));
   size_t nv = 0;
   for (size_t i = 0; i < slot.blocks.size(); ++i) {
     const graph::BlockRecord& r = slot.blocks[i].record;
     const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
     level_[i] = static_cast<uint8_t>(slot.blocks[i].levels ? slot.blocks[i].levels - 1 : 0);  // culled anyway
-    if (!frustum.intersectsBox((lo + hi) * 0.5 - eye, (hi - lo) * 0.5)) continue;
+    bool seen = false;
+    for (uint32_t v = 0; v < n_cams_ && !seen; ++v)
+      seen = frusta_[v].intersectsBox((lo + hi) * 0.5 - eyes_[v], (hi - lo) * 0.5);
+    if (!seen) continue;
     visible_[nv] = static_cast<uint32_t>(i);
     ach_[nv] = slot.blocks[i].ach;
     chains_[nv] = stream::LodChain{r.triangles, slot.blocks[i].levels};

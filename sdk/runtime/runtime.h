@@ -96,7 +96,8 @@ class Runtime {
   void noteFeed(double t);
   bool referenceMode() const { return mode_ == BLVD_MODE_FULL || mode_ == BLVD_MODE_RADIUS; }
   // frame.cpp
-  void renderViews(const blvd_view* views, uint32_t n, const render::RenderOptions& ro, render::FrameStats& fs,
+  uint32_t frameCameras(const blvd_view* views, uint32_t n);
+  void renderViews(uint32_t n, const render::RenderOptions& ro, render::FrameStats& fs,
                    uint64_t& full_pixels);
   render::Camera viewCamera(const blvd_view& v, uint32_t i) const;
   void afterFrame(double frame_ms, const render::FrameStats& fs, uint64_t full_pixels, double scale);
@@ -123,6 +124,7 @@ class Runtime {
   std::unique_ptr<stream::FrameBudget> budget_;  // with target_frame_ms
   FrameClock* clock_ = nullptr;  // this runtime's frames, for the loaders' gap scheduling
   render::Camera cam_;
+  render::Camera frame_cams_[DrawList::kMaxViews];  // this frame's: cam_, or each view's
   double pose_pitch_deg_ = 0;  // the pose's pitch; cam_'s adds the road's grade on terrain (frame.cpp)
   track::Pose posed_;          // pose()'s answer, on the road's ground where the package has terrain
   blvd_render_mode mode_ = BLVD_MODE_BLVD;

@@ -1,6 +1,9 @@
 // Camera matrices and frustum culling, without GL.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "render/camera.h"
 #include "render/frustum.h"
 
@@ -68,6 +71,72 @@ TEST(Frustum, CullsBehindBesideAndBeyond) {
   EXPECT_FALSE(f.intersectsBox({0, 0, -3100}, half));  // beyond far
   EXPECT_TRUE(f.intersectsBox({0, 0, -2999}, half));   // straddles far
   EXPECT_TRUE(f.intersectsBox({0, 0, 0}, half));       // contains the eye
+}
+
+// The nearest point of a box in view, by brute force: a grid over the box,
+// its points within `slack` metres of the frustum counted in.
+double sampledNearestInside(const Frustum& f, const glm::dvec3& c, const glm::dvec3& h, int n, double slack = 0) {
+  double best = Frustum::kOutside;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j)
+      for (int k = 0; k <= n; ++k) {
+        const glm::dvec3 p = c - h + 2.0 * h * glm::dvec3(i, j, k) / double(n);
+        bool in = true;
+        for (const glm::dvec4& pl : f.planes)
+          in = in && pl.x * p.x + pl.y * p.y + pl.z * p.z + pl.w >= -slack * glm::length(glm::dvec3(pl));
+        if (in) best = std::min(best, glm::length(p));
+      }
+  return best;
+}
+
+TEST(Frustum, NearestPointInViewOfABlockBesideTheStreet) {
+  Camera cam;  // looking north (-z) from the origin, 45 degrees, 800x480
+  const Frustum f = Frustum::fromClip(viewProjectionRelative(cam));
+  EXPECT_GT(f.near_reach, cam.near_m);
+  EXPECT_LT(f.near_reach, 2 * cam.near_m);
+  // A facade 6 m to the right, from 20 m behind to 60 m ahead: its nearest
+  // point is beside the car, 6 m away; the nearest it shows is where the
+  // frustum's right side meets it, 6 / tan(half the horizontal angle) ahead.
+  const glm::dvec3 c(10, 5, -20), h(4, 5, 40);
+  const double half_h = std::atan(std::tan(22.5 * 3.14159265358979 / 180) * 800.0 / 480.0);
+  const double ahead = 6.0 / std::tan(half_h);
+  const double d = f.nearestInside(c, h);
+  EXPECT_NEAR(d, std::sqrt(ahead * ahead + 36.0), 1e-6);
+  EXPECT_GT(d, 1.5 * 6.0);
+  EXPECT_NEAR(d, sampledNearestInside(f, c, h, 80), 1.0);
+}
+
+TEST(Frustum, NearestPointInViewAgreesWithSampling) {
+  Camera cam;
+  cam.heading_deg = 30;
+  cam.pitch_deg = 5;
+  const Frustum f = Frustum::fromClip(viewProjectionRelative(cam));
+  uint32_t seed = 7;
+  auto next = [&seed](double lo, double hi) {
+    seed = seed * 1664525u + 1013904223u;
+    return lo + (hi - lo) * double(seed >> 8) / double(1u << 24);
+  };
+  int seen = 0, unseen = 0;
+  for (int t = 0; t < 200; ++t) {
+    const glm::dvec3 c(next(-60, 60), next(-5, 20), next(-60, 60)), h(next(0.5, 20), next(0.5, 15), next(0.5, 20));
+    const double cell = glm::length(2.0 * h / 24.0);
+    const double exact = f.nearestInside(c, h), sampled = sampledNearestInside(f, c, h, 24);
+    // Every point in view is within a grid cell of a grid point within a
+    // cell of the frustum: the exact answer is at most a cell nearer.
+    const double relaxed = sampledNearestInside(f, c, h, 24, cell);
+    if (sampled == Frustum::kOutside) {
+      ++unseen;  // the grid can miss a sliver of the box in view; never the other way round
+      EXPECT_TRUE(exact == Frustum::kOutside || f.intersectsBox(c, h)) << t;
+      continue;
+    }
+    ++seen;
+    EXPECT_LE(exact, sampled + 1e-9) << t;
+    EXPECT_GE(exact, relaxed - cell) << t;
+  }
+  EXPECT_GT(seen, 20);
+  EXPECT_GT(unseen, 20);
+  EXPECT_EQ(f.nearestInside({0, 0, 30}, glm::dvec3(2.0)), Frustum::kOutside);  // behind
+  EXPECT_EQ(f.nearestInside({0, 0, 0}, glm::dvec3(2.0)), 0.0);                // holds the eye
 }
 
 }  // namespace

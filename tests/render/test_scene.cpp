@@ -356,7 +356,49 @@ TEST(Render, LargeMeshUses32BitIndices) {
   cam.height = 48;
   FrameStats stats;
   ASSERT_TRUE(r.render(cam, &h, 1, &stats)) << r.lastError();
-  EXPECT_EQ(stats.triangles, 2800u * 12u);
+  // Its parts beside the view are culled (LongMeshDrawsOnlyItsPartsInView).
+  EXPECT_GT(stats.triangles, 0u);
+  EXPECT_EQ(stats.triangles % 12u, 0u);
+  EXPECT_LE(stats.triangles, 2800u * 12u);
+}
+
+// A row of 200 boxes 200 m long as one mesh: four parts of 50 m, and the
+// camera 20 m away sees the middle two. Only they are drawn, in one call,
+// and the frame is what the same boxes give as 200 meshes of their own.
+TEST(Render, LongMeshDrawsOnlyItsPartsInView) {
+  std::string why;
+  Rig rig = makeRig(Backend::Auto, kW, kH, why, 256);
+  ASSERT_NE(rig.renderer, nullptr) << why;
+  Renderer& r = *rig.renderer;
+  geo::MeshData row;
+  std::vector<MeshHandle> each;
+  for (int i = 0; i < 200; ++i) {
+    const geo::MeshData box = test::makeBox(float(i) - 99.5f, 1.0f, -20.0f, 0.6f, 2.0f, 0.6f, kRed);
+    row.append(box);
+    each.push_back(r.upload(box));
+    ASSERT_TRUE(r.isValid(each.back())) << r.lastError();
+  }
+  const MeshHandle h = r.upload(row);
+  ASSERT_TRUE(r.isValid(h)) << r.lastError();
+  const Camera cam = boxCamera();
+  FrameStats one;
+  ASSERT_TRUE(r.render(cam, &h, 1, &one)) << r.lastError();
+  std::vector<uint8_t> a(size_t(kW) * kH * 4), b(a.size());
+  ASSERT_TRUE(r.readPixels(a.data()));
+  EXPECT_EQ(one.parts_culled, 2u);
+  EXPECT_EQ(one.triangles, 100u * 12u);
+  EXPECT_EQ(one.draw_calls, 2u);  // the two parts in one call, and the sky
+  FrameStats many;
+  ASSERT_TRUE(r.render(cam, each.data(), each.size(), &many)) << r.lastError();
+  ASSERT_TRUE(r.readPixels(b.data()));
+  EXPECT_LT(many.triangles, one.triangles);  // whole boxes culled finer still
+  size_t differ = 0, red = 0;
+  for (size_t i = 0; i < a.size(); i += 4) {
+    differ += std::abs(int(a[i]) - int(b[i])) > 8;
+    red += a[i] > a[i + 1] + 60;
+  }
+  EXPECT_GT(red, size_t(kW));  // the boxes show
+  EXPECT_LE(differ, a.size() / 4 / 200);  // edge pixels at most
 }
 
 }  // namespace
