@@ -142,8 +142,9 @@ void* decodeImage(const geo::MeshData& mesh, StagingArena& arena, int& w, int& h
 }
 
 // Parts: a grid over the box's ground plan (glTF x and z), up to 4 cells
-// along its longer side and 2 across, no more cells than the triangles fill
-// at kMinPartTriangles each; an impostor (textured) stays whole.
+// along its longer side and as many across as keep the cells near square,
+// no more cells than the triangles fill at kMinPartTriangles each; an
+// impostor (textured) stays whole.
 struct PartGrid {
   int nx = 1, nz = 1;
   int cells() const { return nx * nz; }
@@ -156,7 +157,8 @@ PartGrid partGrid(const geo::MeshData& mesh, const glm::dvec3& half) {
   const bool x_long = half.x >= half.z;
   const double along = x_long ? half.x : half.z, across = x_long ? half.z : half.x;
   const int n_along = int(std::min<size_t>(4, most));
-  const int n_across = (across * 2 >= along && size_t(n_along) * 2 <= most) ? 2 : 1;
+  const int n_across = int(std::clamp<double>(std::round(n_along * across / std::max(along, 1e-9)), 1.0,
+                                              double(std::min<size_t>(4, most / size_t(n_along)))));
   (x_long ? g.nx : g.nz) = n_along;
   (x_long ? g.nz : g.nx) = n_across;
   return g;

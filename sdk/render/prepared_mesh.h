@@ -34,9 +34,9 @@ struct MeshPart {
   uint32_t first = 0, count = 0;
   float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
 };
-inline constexpr int kMaxMeshParts = 8;
+inline constexpr int kMaxMeshParts = 16;
 // A part holds this many triangles at least on average (fewer parts else).
-inline constexpr uint32_t kMinPartTriangles = 512;
+inline constexpr uint32_t kMinPartTriangles = 256;
 
 struct PreparedMesh {
   const uint8_t* vertices = nullptr;  // vertex_count × kVertexBytes
