@@ -177,6 +177,8 @@ int partOf(const std::vector<uint32_t>& idx, size_t t, const Vertex* v, const gl
 
 // The triangles written part by part (a counting sort by cell, their order
 // kept within each), and each non-empty part's range and box into `out`.
+// Each triangle's cell is worked out twice, once to count and once to place,
+// rather than kept: the staging arena holds nothing beyond the mesh.
 void writeParts(const std::vector<uint32_t>& idx, const Vertex* v, const glm::dvec3& half, const PartGrid& g,
                 void* indices, bool small, PreparedMesh& out) {
   uint32_t start[kMaxMeshParts + 1] = {};

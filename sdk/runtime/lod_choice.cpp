@@ -12,6 +12,16 @@
 #include "runtime/draw_list.h"
 
 namespace blvd::runtime {
+namespace {
+
+// A block's box: its centre relative to `eye`, and its half extents.
+void blockBox(const graph::BlockRecord& r, const glm::dvec3& eye, glm::dvec3& center, glm::dvec3& half) {
+  const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
+  center = (lo + hi) * 0.5 - eye;
+  half = (hi - lo) * 0.5;
+}
+
+}  // namespace
 
 void DrawList::setCameras(const render::Camera* cams, uint32_t n_cams) {
   n_cams_ = std::min(n_cams, kMaxViews);
@@ -31,10 +41,11 @@ void DrawList::levelsByError(const CellSlot& slot) {
   for (size_t i = 0; i < slot.blocks.size(); ++i) {
     const graph::BlockRecord& r = slot.blocks[i].record;
     const uint32_t levels = slot.blocks[i].levels;
-    const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
     double px_per_m = 0;
     for (uint32_t v = 0; v < n_cams_; ++v) {
-      const double dist = frusta_[v].nearestInside((lo + hi) * 0.5 - eyes_[v], (hi - lo) * 0.5);
+      glm::dvec3 center, half;
+      blockBox(r, eyes_[v], center, half);
+      const double dist = frusta_[v].nearestInside(center, half);
       if (dist < render::Frustum::kOutside) px_per_m = std::max(px_per_m, focal_px_[v] / std::max(dist, 1e-3));
     }
     uint8_t level = static_cast<uint8_t>(levels ? levels - 1 : 0);
@@ -61,11 +72,13 @@ void DrawList::chooseLevels(const CellSlot& slot, const stream::FrameBudget* bud
   size_t nv = 0;
   for (size_t i = 0; i < slot.blocks.size(); ++i) {
     const graph::BlockRecord& r = slot.blocks[i].record;
-    const glm::dvec3 lo(r.bbox_min[0], r.bbox_min[1], r.bbox_min[2]), hi(r.bbox_max[0], r.bbox_max[1], r.bbox_max[2]);
     level_[i] = static_cast<uint8_t>(slot.blocks[i].levels ? slot.blocks[i].levels - 1 : 0);  // culled anyway
     bool seen = false;
-    for (uint32_t v = 0; v < n_cams_ && !seen; ++v)
-      seen = frusta_[v].intersectsBox((lo + hi) * 0.5 - eyes_[v], (hi - lo) * 0.5);
+    for (uint32_t v = 0; v < n_cams_ && !seen; ++v) {
+      glm::dvec3 center, half;
+      blockBox(r, eyes_[v], center, half);
+      seen = frusta_[v].intersectsBox(center, half);
+    }
     if (!seen) continue;
     visible_[nv] = static_cast<uint32_t>(i);
     ach_[nv] = slot.blocks[i].ach;
