@@ -45,7 +45,7 @@ struct ImpostorOptions {
   double vantage_at = 0.5;        // where along its run a run's vantage point stands: 0 its start, 1 its end
   double max_span_deg = 45.0;     // widest azimuth one capture holds (capture_plan.h)
   double view_margin_deg = 10.0;  // azimuths covered past half the display's field, each side
-  int cell_texels = 327680;       // texel budget of a cell's captures together (capture_plan.h)
+  int cell_texels = 655360;       // texel budget of a cell's captures together (capture_plan.h)
   double run_length_m = 35.0;     // a longer cell gets several runs (vantage points) ...
   double run_turn_deg = 90.0;     // ... and so does one turning more than this
   double run_climb_m = 3.0;       // ... or whose ground rises or falls more than this (on terrain; 0: off)

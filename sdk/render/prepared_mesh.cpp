@@ -166,7 +166,13 @@ PartGrid partGrid(const geo::MeshData& mesh, const glm::dvec3& half) {
 
 // The grid cell of triangle t's centroid (positions relative to the centre).
 int partOf(const std::vector<uint32_t>& idx, size_t t, const Vertex* v, const glm::dvec3& half, const PartGrid& g) {
-  auto cell = [](double c, double h, int n) { return h > 0 ? std::clamp(int((c + h) / (2 * h) * n), 0, n - 1) : 0; };
+  // Clamped as a double first: a vertex far outside the box (or not finite)
+  // must not overflow the int conversion.
+  auto cell = [](double c, double h, int n) {
+    if (!(h > 0)) return 0;
+    const double f = (c + h) / (2 * h) * n;
+    return f >= 0 ? int(std::min(f, double(n - 1))) : 0;
+  };
   double cx = 0, cz = 0;
   for (int k = 0; k < 3; ++k) {
     cx += v[idx[t + k]].position[0] / 3.0;
