@@ -14,11 +14,11 @@
 namespace blvd::render {
 namespace {
 
+// prepared_mesh.h's layout: the position, then 8 bytes that an untextured
+// mesh fills with its normal and colour and a textured one with its uv.
 struct Vertex {
   float position[3];
-  float normal[3];
-  uint8_t color[4];
-  float uv[2];
+  uint8_t rest[8];
 };
 static_assert(sizeof(Vertex) == kVertexBytes, "Vertex must be tightly packed");
 
@@ -217,6 +217,53 @@ void writeParts(const std::vector<uint32_t>& idx, const Vertex* v, const glm::dv
     if (part[c].count) out.parts[out.part_count++] = part[c];
 }
 
+
+// Area-weighted sums of the triangles' normals at each vertex, accumulated in
+// the vertices' position fields (their positions are written after): the
+// cross product's length is twice the triangle's area, so raw crosses weight.
+void sumFaceNormals(const geo::MeshData& mesh, Vertex* out) {
+  for (size_t v = 0; v < mesh.vertexCount(); ++v) std::fill_n(out[v].position, 3, 0.0f);
+  const std::vector<float>& p = mesh.positions;
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const uint32_t ia = mesh.indices[t], ib = mesh.indices[t + 1], ic = mesh.indices[t + 2];
+    const glm::vec3 a(p[ia * 3], p[ia * 3 + 1], p[ia * 3 + 2]);
+    const glm::vec3 b(p[ib * 3], p[ib * 3 + 1], p[ib * 3 + 2]);
+    const glm::vec3 c(p[ic * 3], p[ic * 3 + 1], p[ic * 3 + 2]);
+    const glm::vec3 n = glm::cross(b - a, c - a);
+    for (uint32_t i : {ia, ib, ic})
+      for (int k = 0; k < 3; ++k) out[i].position[k] += n[k];
+  }
+}
+
+int8_t snorm8(float x) { return static_cast<int8_t>(std::lround(std::clamp(x, -1.0f, 1.0f) * 127.0f)); }
+
+// An untextured mesh's vertices: the unit normal as 3 signed normalised
+// bytes (and one of padding), then the sRGB colour (light grey without one).
+void writeLit(const geo::MeshData& mesh, Vertex* out) {
+  const bool own = !mesh.normals.empty();
+  if (!own) sumFaceNormals(mesh, out);
+  for (size_t v = 0; v < mesh.vertexCount(); ++v) {
+    const float* src = own ? &mesh.normals[v * 3] : out[v].position;
+    glm::vec3 n(src[0], src[1], src[2]);
+    const float len = glm::length(n);
+    n = len > 0.0f && std::isfinite(len) ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
+    uint8_t* r = out[v].rest;
+    for (int k = 0; k < 3; ++k) r[k] = static_cast<uint8_t>(snorm8(n[k]));
+    r[3] = 0;
+    if (mesh.colors.empty()) {
+      std::memset(r + 4, 200, 3);  // light grey
+      r[7] = 255;
+    } else {
+      std::memcpy(r + 4, &mesh.colors[v * 4], 4);
+    }
+  }
+}
+
+// A textured mesh's vertices: its uv as two floats (its shader reads no
+// normal or colour: the texture holds the lit colour).
+void writeTextured(const geo::MeshData& mesh, Vertex* out) {
+  for (size_t v = 0; v < mesh.vertexCount(); ++v) std::memcpy(out[v].rest, &mesh.texcoords[v * 2], 8);
+}
 }  // namespace
 
 bool outOfMemory(const std::string& err) { return err == kNoMemory; }
@@ -250,40 +297,13 @@ bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& o
 
   auto* vertices = static_cast<Vertex*>(arena.take(nv * sizeof(Vertex)));
   if (!vertices) return failWith(err, "staging arena too small for the mesh's vertices");
-  for (size_t v = 0; v < nv; ++v) {
-    Vertex& o = vertices[v];
-    for (int k = 0; k < 3; ++k) {
-      o.position[k] = static_cast<float>(mesh.positions[v * 3 + k] - center[k]);
-      o.normal[k] = mesh.normals.empty() ? 0.0f : mesh.normals[v * 3 + k];
-    }
-    if (mesh.colors.empty()) {
-      std::memset(o.color, 200, 3);  // light grey
-      o.color[3] = 255;
-    } else {
-      std::memcpy(o.color, &mesh.colors[v * 4], 4);
-    }
-    o.uv[0] = mesh.texcoords.empty() ? 0.0f : mesh.texcoords[v * 2];
-    o.uv[1] = mesh.texcoords.empty() ? 0.0f : mesh.texcoords[v * 2 + 1];
-  }
-  if (mesh.normals.empty()) {
-    // Area-weighted vertex normals, accumulated in place: the cross product's
-    // length is twice the triangle's area, so summing raw crosses weights.
-    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-      const uint32_t ia = mesh.indices[t], ib = mesh.indices[t + 1], ic = mesh.indices[t + 2];
-      const glm::vec3 a(mesh.positions[ia * 3], mesh.positions[ia * 3 + 1], mesh.positions[ia * 3 + 2]);
-      const glm::vec3 b(mesh.positions[ib * 3], mesh.positions[ib * 3 + 1], mesh.positions[ib * 3 + 2]);
-      const glm::vec3 c(mesh.positions[ic * 3], mesh.positions[ic * 3 + 1], mesh.positions[ic * 3 + 2]);
-      const glm::vec3 n = glm::cross(b - a, c - a);
-      for (uint32_t i : {ia, ib, ic})
-        for (int k = 0; k < 3; ++k) vertices[i].normal[k] += n[k];
-    }
-    for (size_t v = 0; v < nv; ++v) {
-      glm::vec3 n(vertices[v].normal[0], vertices[v].normal[1], vertices[v].normal[2]);
-      const float len = glm::length(n);
-      n = len > 0.0f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
-      for (int k = 0; k < 3; ++k) vertices[v].normal[k] = n[k];
-    }
-  }
+  const bool textured = !mesh.image.empty() && !mesh.texcoords.empty();
+  if (textured)
+    writeTextured(mesh, vertices);
+  else
+    writeLit(mesh, vertices);
+  for (size_t v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k) vertices[v].position[k] = static_cast<float>(mesh.positions[v * 3 + k] - center[k]);
 
   // 16-bit indices halve index bandwidth for typical blocks. The bound is
   // 65535 exclusive: 0xFFFF is the primitive-restart index a host may enable.
@@ -300,7 +320,7 @@ bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& o
     std::memcpy(indices, mesh.indices.data(), mesh.indices.size() * 4);
   }
 
-  if (!mesh.image.empty() && !mesh.texcoords.empty()) {
+  if (textured) {
     int tw = 0, th = 0, levels = 0;
     void* rgba = decodeImage(mesh, arena, tw, th, levels, err);
     if (!rgba) return false;

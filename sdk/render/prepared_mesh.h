@@ -14,9 +14,11 @@
 
 namespace blvd::render {
 
-// Interleaved vertex: position (3 × f32, relative to the mesh's box centre),
-// normal (3 × f32), colour (4 × u8, sRGB), uv (2 × f32).
-inline constexpr size_t kVertexBytes = 36;
+// Interleaved vertex, 20 bytes: position (3 × f32, relative to the mesh's box
+// centre), then for an untextured mesh its unit normal (3 × snorm8 and a byte
+// of padding) and colour (4 × u8, sRGB), for a textured one its uv (2 × f32)
+// in the same 8 bytes: a textured mesh's shader reads no normal or colour.
+inline constexpr size_t kVertexBytes = 20;
 
 struct StagingArena {
   uint8_t* base = nullptr;

@@ -722,14 +722,16 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUp
     if (!slab) gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vbytes), p.vertices, GL_STATIC_DRAW);
     gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.ibo);
     if (!slab) gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(ibytes), p.indices, GL_STATIC_DRAW);
+    // Normal and colour share their bytes with the uv (prepared_mesh.h): each
+    // program reads only what its kind of mesh holds.
     gl.EnableVertexAttribArray(0);
     gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, kVertexBytes, byteOffset(voff + 0));
     gl.EnableVertexAttribArray(1);
-    gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, kVertexBytes, byteOffset(voff + 12));
+    gl.VertexAttribPointer(1, 3, GL_BYTE, GL_TRUE, kVertexBytes, byteOffset(voff + 12));
     gl.EnableVertexAttribArray(2);
-    gl.VertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, kVertexBytes, byteOffset(voff + 24));
+    gl.VertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, kVertexBytes, byteOffset(voff + 16));
     gl.EnableVertexAttribArray(3);
-    gl.VertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, kVertexBytes, byteOffset(voff + 28));
+    gl.VertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, kVertexBytes, byteOffset(voff + 12));
     gl.BindVertexArray(0);
     if (p.rgba && slab) {
       // Texels and mip levels are in already (continueSlabUpload).

@@ -283,7 +283,7 @@ TEST(Render, HandlesAndPool) {
   ASSERT_TRUE(r.isValid(a));
   ASSERT_TRUE(r.isValid(b));
   EXPECT_EQ(r.meshCount(), 2u);
-  EXPECT_EQ(r.meshBytes(), 2u * (24u * 36u + 36u * 2u));  // 16-bit indices
+  EXPECT_EQ(r.meshBytes(), 2u * (24u * 20u + 36u * 2u));  // 20-byte vertices, 16-bit indices
   EXPECT_FALSE(r.isValid(r.upload(box)));                  // pool full
   EXPECT_NE(r.lastError().find("pool full"), std::string::npos) << r.lastError();
 
@@ -350,7 +350,7 @@ TEST(Render, LargeMeshUses32BitIndices) {
   }
   const MeshHandle h = r.upload(big);
   ASSERT_TRUE(r.isValid(h)) << r.lastError();
-  EXPECT_EQ(r.meshBytes(), 67200u * 36u + big.indices.size() * 4u);
+  EXPECT_EQ(r.meshBytes(), 67200u * 20u + big.indices.size() * 4u);
   Camera cam = boxCamera();
   cam.width = 64;
   cam.height = 48;
