@@ -217,7 +217,6 @@ void writeParts(const std::vector<uint32_t>& idx, const Vertex* v, const glm::dv
     if (part[c].count) out.parts[out.part_count++] = part[c];
 }
 
-
 // Area-weighted sums of the triangles' normals at each vertex, accumulated in
 // the vertices' position fields (their positions are written after): the
 // cross product's length is twice the triangle's area, so raw crosses weight.
@@ -264,6 +263,7 @@ void writeLit(const geo::MeshData& mesh, Vertex* out) {
 void writeTextured(const geo::MeshData& mesh, Vertex* out) {
   for (size_t v = 0; v < mesh.vertexCount(); ++v) std::memcpy(out[v].rest, &mesh.texcoords[v * 2], 8);
 }
+
 }  // namespace
 
 bool outOfMemory(const std::string& err) { return err == kNoMemory; }

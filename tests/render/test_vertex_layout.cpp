@@ -67,8 +67,9 @@ TEST(VertexLayout, AnUntexturedVertexHoldsItsPositionNormalAndColourIn20Bytes) {
 // its triangles' normals; a non-unit normal it brings is made unit.
 TEST(VertexLayout, NormalsAMeshLacksAreTheAreaWeightedFaceNormals) {
   geo::MeshData tent;
-  // Two triangles sharing the edge (0,0,0)-(0,0,1): one rises towards +x
-  // (area 1 × its slant), the other, four times as wide, towards −x.
+  // Two triangles sharing the edge (0,0,0)-(0,0,1), one reaching to x = 1,
+  // the other, with 2.9 times its area, to x = −4: their area-weighted sum
+  // points straight up, where an unweighted mean of unit normals would not.
   tent.positions = {0, 0, 0, 0, 0, 1, 1, 1, 0, -4, 1, 0};
   tent.indices = {0, 1, 2, 0, 3, 1};
   std::vector<uint8_t> block;
