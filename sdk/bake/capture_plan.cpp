@@ -71,15 +71,25 @@ void addOutlines(std::vector<CoveredRay>& rays, const glm::dvec3& eye_enu, doubl
   const glm::dvec3 eye = render::enuToGltf(eye_enu);
   const double sin_lo = std::sin(glm::radians(opt.min_elevation_deg));
   const double sin_hi = std::sin(glm::radians(opt.max_elevation_deg));
+  // One-degree azimuth bins within a bin of one the scout saw something in:
+  // an outline point there only nudges a capture's edge.
+  const int n = std::max(1, static_cast<int>(std::ceil(az_hi - az_lo)));
+  std::vector<uint8_t> scouted(size_t(n), 0);
+  auto bin = [&](double az) { return std::clamp(static_cast<int>(az - az_lo), 0, n - 1); };
+  for (const CoveredRay& r : rays)
+    for (int b = std::max(0, bin(r.azimuth_deg) - 1); b <= std::min(n - 1, bin(r.azimuth_deg) + 1); ++b)
+      scouted[size_t(b)] = 1;
   for (size_t i = 0; i < blocks.size(); ++i) {
-    if (seen[i] >= uint32_t(opt.scout_min_px) || blocks[i] >= outlines.size()) continue;
+    if (blocks[i] >= outlines.size()) continue;
+    const bool barely = seen[i] < uint32_t(opt.scout_min_px);
     for (const glm::dvec3& p : outlines[blocks[i]]) {
       const glm::dvec3 v = render::enuToGltf(p) - eye;
       const double len = glm::length(v);
       if (len < opt.near_m || len > opt.far_m) continue;
       const glm::dvec3 d = v / len;
       const double az = azimuthOf(d, heading_deg);
-      if (az >= az_lo && az <= az_hi && d.y >= sin_lo && d.y <= sin_hi) rays.push_back({az, d});
+      if (!(az >= az_lo && az <= az_hi && d.y >= sin_lo && d.y <= sin_hi)) continue;
+      if (barely || (opt.outline_gaps && !scouted[size_t(bin(az))])) rays.push_back({az, d});
     }
   }
 }

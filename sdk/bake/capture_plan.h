@@ -15,7 +15,10 @@
 //     far may hold a building beside the vantage point).
 //     A block the scout sees on fewer than `scout_min_px` pixels (a far
 //     ground strip thinner than a scout row, seen edge-on) is added by its
-//     outline: points along its ground footprint, as rays from the eye.
+//     outline: points along its ground footprint, as rays from the eye. So
+//     are the outline points of any block in azimuths where the scout found
+//     nothing of the layer within a degree (the strip of a large block that
+//     the scout saw elsewhere; decision 0034).
 //  3. The covered azimuths, split at gaps, are cut into pieces of at most
 //     `max_span_deg`, and each piece gets one planar capture fitted to the
 //     covered rays inside it (heading, pitch and both half-fields), so no
@@ -50,6 +53,10 @@ struct CapturePlanOptions {
   // outline. At 32 (of 0, 8, 32, 128 and every block measured) San Francisco's
   // poses missing a far block fell from 36 to 25 (decision 0015).
   int scout_min_px = 32;
+  // Also add any block's outline points in azimuths the scout found empty
+  // (at the 2016 route and San Francisco: missing-object poses 2 -> 1 and
+  // 18 -> 14, decision 0034).
+  bool outline_gaps = true;
   double near_m = 0.5, far_m = kViewDistanceM;
 };
 

@@ -129,7 +129,25 @@ int verify(const std::string& path) {
   return 0;
 }
 
-int extract(const std::string& path, int block, int cell, const std::string& out) {
+// Layered impostor layer `layer` of `cell` (counted as `pack cell` lists
+// them), decoded: its depth mesh in the package frame, with its texture.
+std::vector<uint8_t> impostorGlb(const stream::City& city, int cell, int layer) {
+  std::vector<stream::LayerInfo> layers(city.maxCellLayers());
+  uint32_t layered = 0, single = 0;
+  city.cellLayers(uint32_t(cell), layers.data(), uint32_t(layers.size()), &layered, &single);
+  if (layer < 0 || uint32_t(layer) >= layered)
+    throw core::Error(core::Status::NotFound, "cell " + std::to_string(cell) + " has " + std::to_string(layered) +
+                                                  " layered impostor layers, not " + std::to_string(layer));
+  geo::MeshData mesh;
+  std::string err;
+  const core::Status st = city.decodeImpostorBlob(layers[size_t(layer)].blob, mesh, err);
+  if (st != core::Status::Ok) throw core::Error(st, err);
+  package::GlbOptions plain;
+  plain.codec = package::GlbCodec::Plain;
+  return package::encodeGlb(mesh, plain);
+}
+
+int extract(const std::string& path, int block, int cell, int layer, const std::string& out) {
   const auto opened = openCity(path);
   const stream::City& city = *opened;
   std::vector<uint8_t> glb;
@@ -155,7 +173,7 @@ int extract(const std::string& path, int block, int cell, const std::string& out
       if (st != core::Status::Ok) throw core::Error(st, err);
       all.append(one);
     }
-    glb = package::encodeGlb(all);
+    glb = layer >= 0 ? impostorGlb(city, cell, layer) : package::encodeGlb(all);
   }
   std::ofstream f(out, std::ios::binary);
   if (!f.write(reinterpret_cast<const char*>(glb.data()), static_cast<std::streamsize>(glb.size())))
@@ -233,11 +251,14 @@ void addPack(CLI::App& app, Runner& run) {
   ex->add_option("package", *path)->required();
   auto* ob = ex->add_option("--block", *block, "block index");
   auto* oc = ex->add_option("--cell", *cell, "cell index (writes its local blocks)");
+  auto layer = std::make_shared<int>(-1);
+  auto* ol = ex->add_option("--layer", *layer, "with --cell: its layered impostor layer N instead (decoded, with its texture)");
   ob->excludes(oc);
+  ol->needs(oc);
   ex->add_option("-o,--output", *out, "GLB file to write")->required();
-  ex->callback([&run, path, block, cell, out] {
+  ex->callback([&run, path, block, cell, layer, out] {
     if (*block < 0 && *cell < 0) throw CLI::ValidationError("extract", "give --block N or --cell N");
-    run = [path, block, cell, out] { return extract(*path, *block, *cell, *out); };
+    run = [path, block, cell, layer, out] { return extract(*path, *block, *cell, *layer, *out); };
   });
   addPackMerge(*pack, run);
 }

@@ -20,6 +20,7 @@ namespace {
 
 struct ViewOpts {
   std::string package, out, size = "800x480", backend = "auto", path, mode = "blvd";
+  std::string items;  // one pose: also write its object-id buffer as a PNG
   double lat = NAN, lon = NAN, heading = 0, pitch = 0, fov = 45, step = 8;
   uint64_t seed = 1;
   int repeat = 1;
@@ -52,6 +53,19 @@ blvd_backend parseBackendName(const std::string& s) {
   if (s == "egl-device") return BLVD_BACKEND_EGL_DEVICE;
   if (s == "osmesa") return BLVD_BACKEND_OSMESA;
   throw core::Error(core::Status::InvalidArg, "unknown backend '" + s + "' (auto, egl-surfaceless, egl-device, osmesa)");
+}
+
+// The object ids of the frame just drawn as a PNG: RGB holds the 24-bit id
+// (block + 1, or BLVD_ITEM_IMPOSTOR | layer + 1), alpha 0 where nothing is.
+void writeItems(blvd_runtime* rt, int w, int h, const std::string& path, std::vector<uint8_t>& rgba) {
+  std::vector<uint32_t> ids(size_t(w) * h);
+  check(blvd_read_items(rt, ids.data(), ids.size()), rt, "read items");
+  for (size_t i = 0; i < ids.size(); ++i) {
+    uint8_t* p = &rgba[4 * i];
+    p[0] = uint8_t(ids[i]), p[1] = uint8_t(ids[i] >> 8), p[2] = uint8_t(ids[i] >> 16), p[3] = ids[i] ? 255 : 0;
+  }
+  std::string err;
+  if (!imaging::writePng(path, w, h, rgba.data(), err)) throw core::Error(core::Status::Io, err);
 }
 
 void writeFrame(blvd_runtime* rt, int w, int h, const std::string& path, std::vector<uint8_t>& rgba) {
@@ -118,6 +132,7 @@ int run(const ViewOpts& o) {
       if (i > 0 || o.repeat <= 1) ms.push_back(fs.frame_ms);
     }
     writeFrame(rt, w, h, o.out, rgba);
+    if (!o.items.empty()) writeItems(rt, w, h, o.items, rgba);
     blvd_stats st{};
     st.struct_size = sizeof st;
     check(blvd_runtime_stats(rt, &st), rt, "stats");
@@ -223,6 +238,7 @@ void addView(CLI::App& app, Runner& runner) {
   cmd->add_option("--seed", o->seed, "seed of the auto path")->capture_default_str();
   cmd->add_option("--step", o->step, "metres between frames of a drive")->capture_default_str()->check(CLI::Range(0.5, 500.0));
   cmd->add_option("-o,--output", o->out, "PNG to write (or folder, with --path)")->required();
+  cmd->add_option("--items", o->items, "one pose: also write its object ids as a PNG (RGB = block + 1, or 0x800000 | layer + 1)");
   cmd->add_flag("--with-full", o->with_full, "a drive also writes each pose's full-model frame; index.html flips between them");
   cmd->callback([o, &runner] { runner = [o] { return run(*o); }; });
 }

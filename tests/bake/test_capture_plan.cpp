@@ -86,15 +86,55 @@ TEST(CapturePlan, AFarGroundStripThinnerThanAScoutRowIsPlannedByItsOutline) {
 
 TEST(CapturePlan, GroundTheScoutSeesNeedsNoOutline) {
   // 40-200 m north: several scout rows, planned by the scout alone; the
-  // outline changes nothing for a block seen on enough pixels.
+  // outline of a block seen on enough pixels adds nothing where the scout
+  // found the block.
   Plan p;
   p.meshes = {groundQuad(-30, 30, 40, 200)};
   p.outlines = {outline(-30, 30, 40, 200)};
+  p.opt.outline_gaps = false;
   const std::vector<CaptureShot> bare = p.plan(false), with = p.plan(true);
   ASSERT_FALSE(bare.empty());
   EXPECT_TRUE(held(bare, 0, 41) && held(bare, 0, 199) && held(bare, -25, 150) && held(bare, 25, 150));
   ASSERT_EQ(with.size(), bare.size());
   for (size_t i = 0; i < bare.size(); ++i) EXPECT_EQ(with[i].tan_x, bare[i].tan_x);
+  // The scout leaves the near corners out (their last pixels fall outside
+  // the fitted shots); the outline points in the azimuths it found empty
+  // bring them in, and nothing taller.
+  EXPECT_FALSE(held(bare, 29.5, 40.5));
+  p.opt.outline_gaps = true;
+  const std::vector<CaptureShot> gaps = p.plan(true);
+  ASSERT_EQ(gaps.size(), bare.size());
+  EXPECT_TRUE(held(gaps, 29.5, 40.5) && held(gaps, -29.5, 40.5));
+  for (size_t i = 0; i < bare.size(); ++i) EXPECT_NEAR(gaps[i].tan_y, bare[i].tan_y, 0.1 * bare[i].tan_y);
+}
+
+// A mesh of both quads: one block.
+geo::MeshData twoQuads(const geo::MeshData& a, const geo::MeshData& b) {
+  geo::MeshData m = a;
+  m.append(b);
+  return m;
+}
+
+TEST(CapturePlan, AStripOfABlockTheScoutSeesElsewhereIsPlannedByItsOutline) {
+  // One block: ground the scout sees well ahead, and a thin far strip 45-55°
+  // to the right that falls between its rows. The block counts as seen, so
+  // only the outline points in directions the scout found empty add rays.
+  Plan p;
+  p.meshes = {twoQuads(groundQuad(-30, 30, 40, 200), groundQuad(330, 420, 350, 358))};
+  std::vector<glm::dvec3> o = outline(-30, 30, 40, 200), far = outline(330, 420, 350, 358);
+  o.insert(o.end(), far.begin(), far.end());
+  p.outlines = {o};
+  auto farHeld = [](const std::vector<CaptureShot>& shots) {
+    for (double x = 335; x <= 415; x += 20)
+      if (!held(shots, x, 350.5) || !held(shots, x, 357.5)) return false;
+    return true;
+  };
+  p.opt.outline_gaps = false;
+  EXPECT_FALSE(farHeld(p.plan(true)));
+  p.opt.outline_gaps = true;
+  const std::vector<CaptureShot> shots = p.plan(true);
+  EXPECT_TRUE(farHeld(shots));
+  EXPECT_TRUE(held(shots, 0, 41) && held(shots, 0, 199));  // the seen ground stays planned
 }
 
 // The runs of a straight 80 m street (shorter than a run of 100 m, no turn): one on

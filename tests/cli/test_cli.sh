@@ -88,6 +88,40 @@ assert b[:8] == b"\x89PNG\r\n\x1a\n"
 w, h = struct.unpack(">II", b[16:24])
 assert (w, h) == (320, 200), (w, h)
 PY
+# view --items: the pose's object ids as a PNG, each a block of the package
+# or an impostor layer (BLVD_ITEM_IMPOSTOR | k).
+"$blvd" view "$pkg" --lat 43.735370 --lon 7.417288 --heading 211 --size 320x200 -o "$work/view2.png" \
+  --items "$work/items.png" > /dev/null
+blocks=$("$blvd" pack info "$pkg" --json | python3 -c 'import json,sys; print(json.load(sys.stdin)["counts"]["blocks"])')
+python3 - "$work/items.png" "$blocks" <<'PY'
+import struct, sys, zlib
+b = open(sys.argv[1], "rb").read()
+w, h, depth, ctype = struct.unpack(">IIBB", b[16:26])
+assert (w, h, depth, ctype) == (320, 200, 8, 6), (w, h, depth, ctype)
+pos, idat = 8, b""
+while pos < len(b):
+    n, = struct.unpack(">I", b[pos:pos + 4])
+    if b[pos + 4:pos + 8] == b"IDAT": idat += b[pos + 8:pos + 8 + n]
+    pos += 12 + n
+raw, stride, prev, ids = zlib.decompress(idat), w * 4, bytearray(w * 4), set()
+for y in range(h):
+    f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+    for x in range(stride):
+        a = line[x - 4] if x >= 4 else 0
+        c = prev[x - 4] if x >= 4 else 0
+        p = a + prev[x] - c
+        pred = [0, a, prev[x], (a + prev[x]) // 2,
+                a if abs(p - a) <= abs(p - prev[x]) and abs(p - a) <= abs(p - c) else (prev[x] if abs(p - prev[x]) <= abs(p - c) else c)][f]
+        line[x] = (line[x] + pred) & 255
+    for x in range(w):
+        r, g, bl, al = line[4 * x:4 * x + 4]
+        ids.add((r | g << 8 | bl << 16) if al else 0)
+    prev = line
+blocks = [i for i in ids if i and not i & 0x800000]
+layers = [i & 0x7FFFFF for i in ids if i & 0x800000]
+assert blocks and all(i <= int(sys.argv[2]) for i in blocks), sorted(ids)
+assert all(k >= 1 for k in layers), layers
+PY
 # view: a pose 700 km from the package is refused, naming it, and writes no frame.
 set +e
 err=$("$blvd" view "$pkg" --lat 50 --lon 7.4246 --heading 304 --size 160x96 -o "$work/far.png" 2>&1); rc=$?
@@ -106,6 +140,26 @@ set -e
 [ -f "$work/drive/frame_0000.png" ] && [ -f "$work/drive/frame_0000_full.png" ] || fail "view --with-full wrote no full-model frame"
 n_frames=$(ls "$work/drive" | grep -c '^frame_[0-9]*\.png$')
 [ "$(grep -c 'data-full="frame_' "$work/drive/index.html")" = "$n_frames" ] || fail "index.html does not flip every frame"
+# pack extract --layer: a cell's impostor layer as a plain GLB with its texture.
+# The drive above starts the package's impostor route (auto:40, seed 7).
+cell=$(grep -o 'cell [0-9]*' "$work/drive/index.html" | head -1 | cut -d' ' -f2)
+"$blvd" pack cell "$pkg" "$cell" | python3 -c 'import json,sys; assert json.load(sys.stdin)["layered"]' ||
+  fail "cell $cell of the impostor route has no layers"
+"$blvd" pack extract "$pkg" --cell "$cell" --layer 0 -o "$work/layer0.glb" > /dev/null
+python3 - "$work/layer0.glb" <<'PY'
+import json, struct, sys
+b = open(sys.argv[1], "rb").read()
+clen, = struct.unpack_from("<I", b, 12)
+j = json.loads(b[20:20 + clen])
+prim = j["meshes"][0]["primitives"][0]
+assert "extensionsRequired" not in j or not any("compression" in e for e in j["extensionsRequired"]), j
+assert "TEXCOORD_0" in prim["attributes"] and j["accessors"][prim["indices"]]["count"] >= 3, prim
+assert j["images"][0]["mimeType"] in ("image/webp", "image/jpeg"), j["images"]
+PY
+set +e
+err=$("$blvd" pack extract "$pkg" --cell "$cell" --layer 999 -o "$work/x.glb" 2>&1); rc=$?
+set -e
+[ "$rc" != 0 ] && grep -q "layered impostor layers, not 999" <<< "$err" || fail "extract of a missing layer: $err"
 set +e
 "$blvd" view "$pkg" --lat 43.7 --size 12x3 -o "$work/x.png" > /dev/null 2>&1; rc=$?
 set -e
