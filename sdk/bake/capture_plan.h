@@ -54,8 +54,8 @@ struct CapturePlanOptions {
   // poses missing a far block fell from 36 to 25 (decision 0015).
   int scout_min_px = 32;
   // Also add any block's outline points in azimuths the scout found empty
-  // (at the 2016 route and San Francisco: missing-object poses 2 -> 1 and
-  // 18 -> 14, decision 0034).
+  // (on the 2016 route and San Francisco: missing-object poses 2 -> 1 and
+  // 18 -> 15, decision 0034).
   bool outline_gaps = true;
   double near_m = 0.5, far_m = kViewDistanceM;
 };
