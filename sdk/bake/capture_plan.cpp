@@ -63,6 +63,9 @@ std::vector<CoveredRay> scout(CaptureRig& rig, const glm::dvec3& eye_enu, double
   return rays;
 }
 
+// The one-degree azimuth bin of `az` among the n bins from `lo`.
+int azimuthBin(double az, double lo, int n) { return std::clamp(static_cast<int>(az - lo), 0, n - 1); }
+
 // Rays to the outline points of the blocks the scout saw on fewer than
 // scout_min_px pixels, inside the azimuth and elevation range.
 void addOutlines(std::vector<CoveredRay>& rays, const glm::dvec3& eye_enu, double heading_deg, double az_lo,
@@ -75,10 +78,10 @@ void addOutlines(std::vector<CoveredRay>& rays, const glm::dvec3& eye_enu, doubl
   // an outline point there only nudges a capture's edge.
   const int n = std::max(1, static_cast<int>(std::ceil(az_hi - az_lo)));
   std::vector<uint8_t> scouted(size_t(n), 0);
-  auto bin = [&](double az) { return std::clamp(static_cast<int>(az - az_lo), 0, n - 1); };
-  for (const CoveredRay& r : rays)
-    for (int b = std::max(0, bin(r.azimuth_deg) - 1); b <= std::min(n - 1, bin(r.azimuth_deg) + 1); ++b)
-      scouted[size_t(b)] = 1;
+  for (const CoveredRay& r : rays) {
+    const int b = azimuthBin(r.azimuth_deg, az_lo, n);
+    for (int k = std::max(0, b - 1); k <= std::min(n - 1, b + 1); ++k) scouted[size_t(k)] = 1;
+  }
   for (size_t i = 0; i < blocks.size(); ++i) {
     if (blocks[i] >= outlines.size()) continue;
     const bool barely = seen[i] < uint32_t(opt.scout_min_px);
@@ -89,7 +92,7 @@ void addOutlines(std::vector<CoveredRay>& rays, const glm::dvec3& eye_enu, doubl
       const glm::dvec3 d = v / len;
       const double az = azimuthOf(d, heading_deg);
       if (!(az >= az_lo && az <= az_hi && d.y >= sin_lo && d.y <= sin_hi)) continue;
-      if (barely || (opt.outline_gaps && !scouted[size_t(bin(az))])) rays.push_back({az, d});
+      if (barely || (opt.outline_gaps && !scouted[size_t(azimuthBin(az, az_lo, n))])) rays.push_back({az, d});
     }
   }
 }
@@ -99,7 +102,7 @@ void addOutlines(std::vector<CoveredRay>& rays, const glm::dvec3& eye_enu, doubl
 std::vector<std::pair<double, double>> coveredIntervals(const std::vector<CoveredRay>& rays, double lo, double hi) {
   const int n = std::max(1, static_cast<int>(std::ceil(hi - lo)));
   std::vector<uint8_t> bin(size_t(n), 0);
-  for (const CoveredRay& r : rays) bin[size_t(std::clamp(static_cast<int>(r.azimuth_deg - lo), 0, n - 1))] = 1;
+  for (const CoveredRay& r : rays) bin[size_t(azimuthBin(r.azimuth_deg, lo, n))] = 1;
   std::vector<std::pair<double, double>> out;
   int start = -1, last = -1;
   for (int i = 0; i <= n; ++i) {

@@ -167,13 +167,17 @@ int extract(const std::string& path, int block, int cell, int layer, const std::
     if (cell < 0 || static_cast<size_t>(cell) >= g.cellCount())
       throw core::Error(core::Status::NotFound, "cell " + std::to_string(cell) + " does not exist (" +
                                                     std::to_string(g.cellCount()) + " cells)");
-    geo::MeshData all, one;
-    for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) {
-      const core::Status st = city.decodeBlock(*b, one, err);
-      if (st != core::Status::Ok) throw core::Error(st, err);
-      all.append(one);
+    if (layer >= 0) {
+      glb = impostorGlb(city, cell, layer);
+    } else {
+      geo::MeshData all, one;
+      for (const uint32_t* b = g.local_blocks.begin(cell); b != g.local_blocks.end(cell); ++b) {
+        const core::Status st = city.decodeBlock(*b, one, err);
+        if (st != core::Status::Ok) throw core::Error(st, err);
+        all.append(one);
+      }
+      glb = package::encodeGlb(all);
     }
-    glb = layer >= 0 ? impostorGlb(city, cell, layer) : package::encodeGlb(all);
   }
   std::ofstream f(out, std::ios::binary);
   if (!f.write(reinterpret_cast<const char*>(glb.data()), static_cast<std::streamsize>(glb.size())))
