@@ -9,7 +9,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <thread>
 
 #include "geo/local_frame.h"
@@ -53,6 +56,35 @@ uint64_t uniqueBlobBytes(const std::vector<uint32_t>& cells, uint64_t per_blob =
   uint64_t n = 0;
   for (const uint32_t b : all) n += localCity().package().blobInfo(b).size + per_blob;
   return n;
+}
+
+// Where two frames of the same pose differ, what each runtime drew there (the
+// item ids of their last frames: block + 1, impostor layers with the
+// BLVD_ITEM_IMPOSTOR bit), the most frequent pairs first, and what each has
+// loaded, reused and evicted: enough to tell a slot's content from a cell
+// choice when a drive's frames part.
+std::string whatDiffers(blvd_runtime* a, blvd_runtime* b, const std::vector<uint8_t>& fa,
+                        const std::vector<uint8_t>& fb, const blvd_runtime_desc& d) {
+  std::vector<uint32_t> ia(size_t(d.width) * d.height), ib(ia.size());
+  if (blvd_read_items(a, ia.data(), ia.size()) != BLVD_OK || blvd_read_items(b, ib.data(), ib.size()) != BLVD_OK)
+    return "items not read";
+  std::map<std::pair<uint32_t, uint32_t>, uint32_t> pairs;
+  for (size_t k = 0; k < ia.size(); ++k)
+    if (std::memcmp(&fa[4 * k], &fb[4 * k], 3) != 0) ++pairs[{ia[k], ib[k]}];
+  std::vector<std::pair<uint32_t, std::pair<uint32_t, uint32_t>>> top;
+  for (const auto& [ids, n] : pairs) top.push_back({n, ids});
+  std::sort(top.rbegin(), top.rend());
+  std::ostringstream os;
+  os << "items local/remote (pixels):";
+  for (size_t k = 0; k < top.size() && k < 6; ++k)
+    os << std::hex << " 0x" << top[k].second.first << "/0x" << top[k].second.second << std::dec << " (" << top[k].first
+       << ")";
+  for (blvd_runtime* rt : {a, b}) {
+    const blvd_stats s = stats(rt);
+    os << (rt == a ? "; local" : "; remote") << " loads " << s.loads << " evictions " << s.evictions
+       << " blocks reused " << s.blocks_reused << " load errors " << s.load_errors;
+  }
+  return os.str();
 }
 
 // A runtime on `url` with a 64 MiB cache in `cache`, `route` set or not, its
@@ -176,7 +208,8 @@ TEST_F(RemoteDriveTest, ADriveDrawsWhatTheLocalFileDrawsInACacheThatNeverGrowsPa
   for (size_t i = 0; i < dr.poses.size(); ++i) {
     const std::vector<uint8_t> fl = wholeFrame(local.rt, dr.poses[i], dl), fu = wholeFrame(remote.rt, dr.poses[i], du);
     if (fl != fu && differing++ < 3)
-      ADD_FAILURE() << "pose " << i << " (cell " << dr.poses[i].cell << "): " << differingPixels(fl, fu) << " pixels differ";
+      ADD_FAILURE() << "pose " << i << " (cell " << dr.poses[i].cell << "): " << differingPixels(fl, fu)
+                    << " pixels differ; " << whatDiffers(local.rt, remote.rt, fl, fu, dl);
     const blvd_stats s = stats(remote.rt);
     ASSERT_LE(s.cache_bytes, cache_bytes) << "pose " << i;
     ASSERT_LE(diskBytes(cache), cache_bytes + 4096) << "pose " << i;  // the mirror's last block
@@ -239,7 +272,8 @@ TEST_F(RemoteDriveTest, ADriveThroughABadLinkKeepsDrawingAndEndsWithTheSamePoses
     }
     const std::vector<uint8_t> fl = wholeFrame(local.rt, p, dl), fu = wholeFrame(remote.rt, p, du);
     if (fl != fu && differing++ < 3)
-      ADD_FAILURE() << "pose " << i << " (cell " << p.cell << "): " << differingPixels(fl, fu) << " pixels differ";
+      ADD_FAILURE() << "pose " << i << " (cell " << p.cell << "): " << differingPixels(fl, fu) << " pixels differ; "
+                    << whatDiffers(local.rt, remote.rt, fl, fu, dl);
     blvd_gnss_fix fix{};
     fix.struct_size = sizeof fix;
     fix.t = double(i);
