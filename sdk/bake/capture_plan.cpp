@@ -132,11 +132,11 @@ CaptureShot fitOne(const std::vector<const CoveredRay*>& rays, const glm::dvec3&
   cam.pitch_deg = std::clamp(0.5 * (e0 + e1), -80.0, 80.0);
   cam.near_m = opt.near_m;
   cam.far_m = opt.far_m;
-  double tx = 0, ty = 0;
+  double tx = 0, ty = 0, sy0 = 0, sy1 = 0;
   for (int pass = 0; pass < 2; ++pass) {  // the second pass centres the pitch on the rays' image rows
     cam.fov_y_deg = 90.0, cam.width = cam.height = 64;
     const PinholeCamera pin = pinholeOf(cam);
-    double sy0 = 1e9, sy1 = -1e9;
+    sy0 = 1e9, sy1 = -1e9;
     tx = 0;
     for (const CoveredRay* r : rays) {
       const double z = glm::dot(r->dir, pin.forward);
@@ -148,11 +148,23 @@ CaptureShot fitOne(const std::vector<const CoveredRay*>& rays, const glm::dvec3&
     ty = std::max(std::abs(sy0), std::abs(sy1));
     if (pass == 0) cam.pitch_deg = std::clamp(cam.pitch_deg + glm::degrees(std::atan(0.5 * (sy0 + sy1))), -80.0, 80.0);
   }
+  // margin_deg at the sides and below; above, less where the rays span
+  // little height (capture_plan.h, thin_margin_deg). The pitch moves to the
+  // middle of the rows so kept; at these few degrees the tangents shift by
+  // well under the 2 % added.
   const double m = std::tan(glm::radians(opt.margin_deg));
+  const double above =
+      opt.thin_margin_deg > 0 ? std::min(m, std::max(ty, std::tan(glm::radians(opt.thin_margin_deg)))) : m;
+  double half_y = ty + m;
+  if (above < m && sy1 >= sy0) {
+    const double lo = sy0 - m, hi = sy1 + above;
+    cam.pitch_deg = std::clamp(cam.pitch_deg + glm::degrees(std::atan(0.5 * (lo + hi))), -80.0, 80.0);
+    half_y = 0.5 * (hi - lo) * 1.02;
+  }
   CaptureShot shot;
   shot.cam = cam;
   shot.tan_x = std::min(tx + m, std::tan(glm::radians(80.0)));
-  shot.tan_y = std::min(ty + m, std::tan(glm::radians(80.0)));
+  shot.tan_y = std::min(half_y, std::tan(glm::radians(80.0)));
   sizeCapture(shot, 1.0, opt);
   return shot;
 }
@@ -165,7 +177,7 @@ void sizeCapture(CaptureShot& shot, double density, const CapturePlanOptions& op
   shot.density = std::min(density, opt.texture_max / std::max(W, H));
   render::Camera& cam = shot.cam;
   cam.height = std::clamp(ceil4(H * shot.density), 16, opt.texture_max);
-  cam.width = std::clamp(ceil4(cam.height * tx / ty), 16, opt.texture_max);
+  cam.width = std::clamp(ceil4(cam.height * tx / ty), 16, (opt.texture_max - 2 * opt.gutter_px) / 4 * 4);
   // The rounded size keeps both half-fields covered.
   const double ty_eff = std::max(ty, tx * cam.height / cam.width);
   cam.fov_y_deg = 2.0 * glm::degrees(std::atan(ty_eff));

@@ -21,9 +21,10 @@
 //     the scout saw elsewhere; decision 0034).
 //  3. The covered azimuths, split at gaps, are cut into pieces of at most
 //     `max_span_deg`, and each piece gets one planar capture fitted to the
-//     covered rays inside it (heading, pitch and both half-fields), so no
-//     capture is wider than a display and none is stretched by a wide-angle
-//     projection.
+//     covered rays inside it (heading, pitch and both half-fields, plus a
+//     margin: margin_deg at the sides and below, less above far low
+//     content, decision 0035), so no capture is wider than a display and
+//     none is stretched by a wide-angle projection.
 //  4. Each capture is sized for one texel per display pixel at the vantage
 //     point (the display's pixels per radian at its centre), scaled down to
 //     `texture_max` on its longer side where that caps it, and all of a
@@ -42,8 +43,19 @@ namespace blvd::bake {
 struct CapturePlanOptions {
   double max_span_deg = 45.0;       // widest piece of azimuth one capture holds
   int texture_max = 512;            // longest texture side
+  int gutter_px = 0;                // kept clear round each capture in its layer's atlas (of texture_max)
   double display_ppr = 579.4;       // display pixels per unit of tan at its centre (800x480, 45°)
   double margin_deg = 1.5;          // added around the covered directions
+  // Above its rays, a capture whose rays span less than margin_deg each way
+  // from their middle (far ground, a low row of far blocks) gets a margin of
+  // that half-span, and at least this (0: margin_deg all round). Its rows
+  // then fall on what it shows: a far ground strip 0.15° tall had a 16-row
+  // capture 3.1° tall, and fell between its rows. Above far low content lie
+  // its far edge and the sky, whose elevation barely changes along a run;
+  // below, the near ground drops down the view as the viewer drives on
+  // (at eye height h, ground d metres away is atan(h / d) below the
+  // horizon), so the margin there stays margin_deg (decision 0035).
+  double thin_margin_deg = 0.25;
   double min_elevation_deg = -50.0, max_elevation_deg = 80.0;  // the scout's vertical reach
   // Rows of a scout view: at 256 (0.51° a row) a far block's ground seen
   // edge-on and thin far blocks fell between rows, their directions went

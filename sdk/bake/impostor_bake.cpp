@@ -219,7 +219,15 @@ AtlasLayout layoutAtlas(std::vector<CaptureShot>& shots, const CapturePlanOption
     std::vector<std::pair<int, int>> sizes;
     for (const CaptureShot& s : shots) sizes.emplace_back(s.cam.width, s.cam.height);
     if (packAtlas(sizes, popt.texture_max, kAtlasGutter, layout)) return layout;
-    for (CaptureShot& s : shots) sizeCapture(s, 0.85 * s.density, popt);
+    bool smaller = false;
+    for (CaptureShot& s : shots) {
+      const int w = s.cam.width, h = s.cam.height;
+      sizeCapture(s, 0.85 * s.density, popt);
+      smaller |= s.cam.width < w || s.cam.height < h;
+    }
+    if (!smaller)  // each at its least size (capture_plan.h sizeCapture): a bug, not a loop
+      throw core::Error(core::Status::Internal, "impostor captures at their least size do not fit one " +
+                                                    std::to_string(popt.texture_max) + " texel atlas");
   }
 }
 
@@ -489,6 +497,7 @@ ImpostorBakeResult bakeImpostors(const graph::StreetGraph& g, const std::vector<
   const size_t H = g.halfedges.size();
   CapturePlanOptions popt;
   popt.texture_max = opt.texture_max;
+  popt.gutter_px = kAtlasGutter;
   popt.max_span_deg = opt.max_span_deg;
   popt.display_ppr = 0.5 * opt.display_height / std::tan(glm::radians(opt.display_fov_y_deg) * 0.5);
   const std::vector<BlockInfo> info = blockInfo(block_meshes);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "bake/capture.h"
@@ -135,6 +136,60 @@ TEST(CapturePlan, AStripOfABlockTheScoutSeesElsewhereIsPlannedByItsOutline) {
   const std::vector<CaptureShot> shots = p.plan(true);
   EXPECT_TRUE(farHeld(shots));
   EXPECT_TRUE(held(shots, 0, 41) && held(shots, 0, 199));  // the seen ground stays planned
+}
+
+// The rows of shot `s` on the ground from north n0 to n1 straight ahead.
+double rowsOn(const CaptureShot& s, double n0, double n1) {
+  const double tall = std::atan(kEye / n0) - std::atan(kEye / n1);  // radians
+  return tall / glm::radians(s.cam.fov_y_deg) * s.cam.height;
+}
+
+// The elevations, degrees, of a shot's bottom and top rows.
+double bottomDeg(const CaptureShot& s) { return s.cam.pitch_deg - 0.5 * s.cam.fov_y_deg; }
+double topDeg(const CaptureShot& s) { return s.cam.pitch_deg + 0.5 * s.cam.fov_y_deg; }
+
+TEST(CapturePlan, AFarGroundStripKeepsItsRowsWhereTheTexelBudgetBites) {
+  // 250-330 m north, 60 m wide: 0.08° tall from the eye. At the density a
+  // cell's texel budget leaves (0.4), a capture has its least 16 rows: with
+  // margin_deg above and below they spread over 3°, the strip under half a
+  // row; with the thin margin above they spread over less, and the strip
+  // gets more of them. Below, where the near ground drops as a viewer drives
+  // on, the margin stays.
+  Plan p;
+  p.meshes = {groundQuad(-30, 30, 250, 330)};
+  p.outlines = {outline(-30, 30, 250, 330)};
+  p.opt.thin_margin_deg = 0;
+  std::vector<CaptureShot> all_round = p.plan(true);
+  p.opt.thin_margin_deg = 0.25;
+  std::vector<CaptureShot> thin = p.plan(true);
+  ASSERT_EQ(all_round.size(), 1u);
+  ASSERT_EQ(thin.size(), 1u);
+  for (CaptureShot* s : {&all_round[0], &thin[0]}) sizeCapture(*s, 0.4, p.opt);
+  const CaptureShot &a = all_round[0], &t = thin[0];
+  EXPECT_EQ(t.cam.height, 16);
+  EXPECT_LT(rowsOn(a, 250, 330), 0.5);
+  EXPECT_GT(rowsOn(t, 250, 330), 1.5 * rowsOn(a, 250, 330));
+  EXPECT_NEAR(bottomDeg(t), bottomDeg(a), 0.05);
+  EXPECT_LT(topDeg(t), topDeg(a) - 1.0);
+  EXPECT_TRUE(held(thin, 0, 250.5) && held(thin, 0, 329.5) && held(thin, -29, 300) && held(thin, 29, 300));
+  std::printf("strip rows: %.2f with the margin all round, %.2f with the thin margin above (%dx%d, %.2f deg tall)\n",
+              rowsOn(a, 250, 330), rowsOn(t, 250, 330), t.cam.width, t.cam.height, t.cam.fov_y_deg);
+}
+
+TEST(CapturePlan, AThinWideCaptureLeavesRoomForItsGutterInTheAtlas) {
+  // 45° wide, 0.2° tall: 16 rows at least, so its width is capped, and the
+  // cap leaves the atlas's gutter on both sides (a 512-wide capture never
+  // packs into a 512 atlas with a gutter round it); the field grows to keep
+  // both half-fields.
+  CapturePlanOptions opt;
+  opt.gutter_px = 4;
+  CaptureShot s;
+  s.tan_x = std::tan(glm::radians(22.5));
+  s.tan_y = std::tan(glm::radians(0.1));
+  sizeCapture(s, 1.0, opt);
+  EXPECT_EQ(s.cam.width, 504);
+  EXPECT_EQ(s.cam.height, 16);
+  EXPECT_GE(std::tan(glm::radians(0.5 * s.cam.fov_y_deg)), s.tan_x * 16 / 504 - 1e-9);
 }
 
 // The runs of a straight 80 m street (shorter than a run of 100 m, no turn): one on
