@@ -81,10 +81,16 @@ inline blvd_frame_stats render(blvd_runtime* rt, const DrivePose& p) {
   return fs;
 }
 
+// Does pixel i's colour differ between two RGBA8 frames?
+inline bool pixelDiffers(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, size_t i) {
+  const size_t k = 4 * i;
+  return a[k] != b[k] || a[k + 1] != b[k + 1] || a[k + 2] != b[k + 2];
+}
+
 // Pixels whose colour differs between two frames.
 inline size_t differingPixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   size_t n = 0;
-  for (size_t k = 0; k + 3 < a.size() && k + 3 < b.size(); k += 4) n += a[k] != b[k] || a[k + 1] != b[k + 1] || a[k + 2] != b[k + 2];
+  for (size_t i = 0; 4 * i + 3 < a.size() && 4 * i + 3 < b.size(); ++i) n += pixelDiffers(a, b, i);
   return n;
 }
 

@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -70,7 +69,7 @@ std::string whatDiffers(blvd_runtime* a, blvd_runtime* b, const std::vector<uint
     return "items not read";
   std::map<std::pair<uint32_t, uint32_t>, uint32_t> pairs;
   for (size_t k = 0; k < ia.size(); ++k)
-    if (std::memcmp(&fa[4 * k], &fb[4 * k], 3) != 0) ++pairs[{ia[k], ib[k]}];
+    if (pixelDiffers(fa, fb, k)) ++pairs[{ia[k], ib[k]}];
   std::vector<std::pair<uint32_t, std::pair<uint32_t, uint32_t>>> top;
   for (const auto& [ids, n] : pairs) top.push_back({n, ids});
   std::sort(top.rbegin(), top.rend());
