@@ -171,13 +171,18 @@ CaptureShot fitOne(const std::vector<const CoveredRay*>& rays, const glm::dvec3&
 
 }  // namespace
 
+// The most texels a capture may have each way: the layer atlas's side less
+// its gutter on both sides, on the 4-texel grid.
+int captureSideMax(const CapturePlanOptions& opt) { return std::max(16, (opt.texture_max - 2 * opt.gutter_px) / 4 * 4); }
+
 void sizeCapture(CaptureShot& shot, double density, const CapturePlanOptions& opt) {
   const double tx = shot.tan_x, ty = shot.tan_y;
   const double W = 2 * tx * opt.display_ppr, H = 2 * ty * opt.display_ppr;
-  shot.density = std::min(density, opt.texture_max / std::max(W, H));
+  const int side = captureSideMax(opt);
+  shot.density = std::min(density, side / std::max(W, H));
   render::Camera& cam = shot.cam;
-  cam.height = std::clamp(ceil4(H * shot.density), 16, opt.texture_max);
-  cam.width = std::clamp(ceil4(cam.height * tx / ty), 16, (opt.texture_max - 2 * opt.gutter_px) / 4 * 4);
+  cam.height = std::clamp(ceil4(H * shot.density), 16, side);
+  cam.width = std::clamp(ceil4(cam.height * tx / ty), 16, side);
   // The rounded size keeps both half-fields covered.
   const double ty_eff = std::max(ty, tx * cam.height / cam.width);
   cam.fov_y_deg = 2.0 * glm::degrees(std::atan(ty_eff));
@@ -185,7 +190,7 @@ void sizeCapture(CaptureShot& shot, double density, const CapturePlanOptions& op
 
 uint64_t fullDensityTexels(const CaptureShot& shot, const CapturePlanOptions& opt) {
   const double W = 2 * shot.tan_x * opt.display_ppr, H = 2 * shot.tan_y * opt.display_ppr;
-  const double cap = std::min(1.0, opt.texture_max / std::max(W, H));
+  const double cap = std::min(1.0, captureSideMax(opt) / std::max(W, H));
   return uint64_t(W * cap * H * cap);
 }
 

@@ -79,11 +79,12 @@ struct CaptureShot {
 };
 
 // Sizes a capture for `density` texels per display pixel at its centre (at
-// most 1, and less where texture_max caps its longer side): width, height
-// and the vertical field that keeps both half-fields inside.
+// most 1, and less where its longer side would pass texture_max less the
+// gutter on both sides): width, height and the vertical field that keeps
+// both half-fields inside.
 void sizeCapture(CaptureShot& shot, double density, const CapturePlanOptions& opt);
 
-// Texels of the capture at one texel per display pixel (or texture_max).
+// Texels of the capture at one texel per display pixel (or at the side cap).
 uint64_t fullDensityTexels(const CaptureShot& shot, const CapturePlanOptions& opt);
 
 // Per block id, points (ENU) along its ground footprint: what the planner

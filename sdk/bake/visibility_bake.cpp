@@ -12,12 +12,26 @@ namespace {
 // Sparse per-sample pixel counts: (block, pixels).
 using Counts = std::vector<std::pair<uint32_t, uint32_t>>;
 
+// One position's counts: of the blocks' surfaces, and of the outlines of
+// those no pixel centre fell on (CaptureRig::itemBuffer), when drawn.
+struct Sample {
+  Counts px, outline;
+};
+
 constexpr size_t kBatch = 64;  // tasks between progress reports
 
-// D99 §5.3's item buffer at one point: 6 views of 90°, each block's pixels.
-Counts sampleAt(CaptureRig& rig, glm::dvec2 p, const ImpostorOptions& opt) {
+Counts sparse(const std::vector<uint32_t>& counts) {
+  Counts c;
+  for (uint32_t b = 0; b < counts.size(); ++b)
+    if (counts[b]) c.emplace_back(b, counts[b]);
+  return c;
+}
+
+// D99 §5.3's item buffer at one point: 6 views of 90°, each block's pixels;
+// with `outlines`, also the outline pixels of what no pixel centre fell on.
+Sample sampleAt(CaptureRig& rig, glm::dvec2 p, const ImpostorOptions& opt, bool outlines) {
   const int res = opt.item_resolution;
-  std::vector<uint32_t> counts(rig.blockCount(), 0u);
+  std::vector<uint32_t> counts(rig.blockCount(), 0u), lines(outlines ? rig.blockCount() : 0, 0u);
   render::Camera cam;
   cam.eye_enu = eyeAt(p, opt.ground);
   cam.fov_y_deg = 90.0;
@@ -28,38 +42,43 @@ Counts sampleAt(CaptureRig& rig, glm::dvec2 p, const ImpostorOptions& opt) {
   for (const auto& d : dirs) {
     cam.heading_deg = d[0];
     cam.pitch_deg = d[1];
-    rig.itemBuffer(cam, counts);
+    rig.itemBuffer(cam, counts, outlines ? &lines : nullptr);
   }
-  Counts c;
-  for (uint32_t b = 0; b < counts.size(); ++b)
-    if (counts[b]) c.emplace_back(b, counts[b]);
-  return c;
+  return Sample{sparse(counts), sparse(lines)};
 }
 
 // The samples of a bake: one per junction (shared), and interior ones per street.
 struct Samples {
   std::vector<uint32_t> vertices;  // sorted graph vertices of the wanted streets' ends
-  std::vector<Counts> at_vertex;   // their samples
-  const Counts& atVertex(uint32_t v) const {
+  std::vector<Sample> at_vertex;   // their samples
+  const Sample& atVertex(uint32_t v) const {
     return at_vertex[size_t(std::lower_bound(vertices.begin(), vertices.end(), v) - vertices.begin())];
   }
 };
 
 // Street h's PVS and ACH: its two end samples, n_in interior ones (taken
 // here), every block any of them saw, and the cell's local blocks at 0.
+// The ends and the middle sample also draw outlines: a strip thinner than a
+// pixel stays so along the street, and three of eight positions find it at a
+// fraction of the cost of all eight (docs/decisions/0036). A block only an
+// outline showed is in the PVS with its outline's pixels as its ACH; the
+// others' ACH is their surfaces' pixels alone, as the papers estimate it.
 graph::CellVisibility streetVisibility(const graph::StreetGraph& g, uint32_t h, CaptureRig& rig,
                                        const ImpostorOptions& opt, const Samples& ends) {
   const graph::HalfEdge& e = g.halfedges[h];
-  std::vector<const Counts*> samples = {&ends.atVertex(e.origin), &ends.atVertex(g.endVertex(h))};
+  std::vector<const Sample*> samples = {&ends.atVertex(e.origin), &ends.atVertex(g.endVertex(h))};
   const int n_in = std::max(0, opt.positions_per_cell - 2);
-  std::vector<Counts> interior;
+  std::vector<Sample> interior;
   interior.reserve(size_t(n_in));
   for (int i = 1; i <= n_in; ++i)
-    interior.push_back(sampleAt(rig, pointAt(g, e, e.length * i / (n_in + 1)), opt));
-  for (const Counts& c : interior) samples.push_back(&c);
-  std::map<uint32_t, double> acc;
-  for (const Counts* c : samples)
-    for (const auto& [b, px] : *c) acc[b] += px;
+    interior.push_back(sampleAt(rig, pointAt(g, e, e.length * i / (n_in + 1)), opt, i == (n_in + 1) / 2));
+  for (const Sample& c : interior) samples.push_back(&c);
+  std::map<uint32_t, double> acc, by_outline;
+  for (const Sample* c : samples) {
+    for (const auto& [b, px] : c->px) acc[b] += px;
+    for (const auto& [b, px] : c->outline) by_outline[b] += px;
+  }
+  for (const auto& [b, px] : by_outline) acc.emplace(b, px);  // only where no surface showed
   for (uint32_t l = g.local_blocks.offsets[h]; l < g.local_blocks.offsets[h + 1]; ++l)
     acc.emplace(g.local_blocks.items[l], 0.0);
   const double norm = 1.0 / (double(samples.size()) * 6.0 * opt.item_resolution * opt.item_resolution);
@@ -97,7 +116,7 @@ void bakeVisibility(const graph::StreetGraph& g, RigPool& pool, const ImpostorOp
   pool.runInBatches(
       nv, kBatch,
       [&](CaptureRig& rig, size_t i) {
-        ends.at_vertex[i] = sampleAt(rig, g.vertices[ends.vertices[i]].p, opt);
+        ends.at_vertex[i] = sampleAt(rig, g.vertices[ends.vertices[i]].p, opt, true);
       },
       report);
   pool.runInBatches(

@@ -1050,10 +1050,24 @@ Status decodeGlb(const uint8_t* data, size_t size, geo::MeshData& out, std::stri
   return decodeGlbLevel(data, size, 0, out, err);
 }
 
+// Empties `j` leaves first. nlohmann's destructor of a non-empty array or
+// object allocates (it moves the children onto a heap stack); emptied from
+// the leaves up, nothing does, so closing a document cannot throw
+// std::bad_alloc out of a destructor where memory has run out.
+namespace {
+void drainJson(json& j) noexcept {
+  if (!j.is_array() && !j.is_object()) return;
+  for (json& child : j) drainJson(child);
+  if (j.is_array()) j.get_ref<json::array_t&>().clear();
+  else j.get_ref<json::object_t&>().clear();
+}
+}  // namespace
+
 struct GlbDocument::Impl {
   json doc;
   const uint8_t* bin = nullptr;
   size_t bin_size = 0;
+  ~Impl() { drainJson(doc); }
 };
 
 GlbDocument::GlbDocument() = default;

@@ -238,9 +238,12 @@ int8_t snorm8(float x) { return static_cast<int8_t>(std::lround(std::clamp(x, -1
 
 // An untextured mesh's vertices: the unit normal as 3 signed normalised
 // bytes (and one of padding), then the sRGB colour (light grey without one).
-void writeLit(const geo::MeshData& mesh, Vertex* out) {
+void writeLit(const geo::MeshData& mesh, bool lines, Vertex* out) {
   const bool own = !mesh.normals.empty();
-  if (!own) sumFaceNormals(mesh, out);
+  if (!own && lines)
+    for (size_t v = 0; v < mesh.vertexCount(); ++v) std::fill_n(out[v].position, 3, 0.0f);  // up, below
+  else if (!own)
+    sumFaceNormals(mesh, out);
   for (size_t v = 0; v < mesh.vertexCount(); ++v) {
     const float* src = own ? &mesh.normals[v * 3] : out[v].position;
     glm::vec3 n(src[0], src[1], src[2]);
@@ -264,16 +267,15 @@ void writeTextured(const geo::MeshData& mesh, Vertex* out) {
   for (size_t v = 0; v < mesh.vertexCount(); ++v) std::memcpy(out[v].rest, &mesh.texcoords[v * 2], 8);
 }
 
-}  // namespace
-
-bool outOfMemory(const std::string& err) { return err == kNoMemory; }
-
-bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err) {
+// prepareMesh and prepareLines: triangles, or (lines) pairs of indices.
+bool prepare(const geo::MeshData& mesh, bool lines, StagingArena& arena, PreparedMesh& out, std::string& err) {
   out = PreparedMesh{};
+  out.lines = lines;
   const size_t nv = mesh.vertexCount();
-  if (mesh.positions.size() % 3 != 0 || mesh.indices.size() % 3 != 0)
-    return failWith(err, "mesh positions or indices are not a multiple of 3");
-  if (mesh.empty() || nv == 0) return failWith(err, "mesh has no triangles");
+  if (mesh.positions.size() % 3 != 0 || mesh.indices.size() % (lines ? 2 : 3) != 0)
+    return failWith(err, lines ? "line mesh positions are not a multiple of 3 or its indices not pairs"
+                               : "mesh positions or indices are not a multiple of 3");
+  if (mesh.empty() || nv == 0) return failWith(err, lines ? "line mesh has no segments" : "mesh has no triangles");
   if (nv > 0xFFFFFFFFull || mesh.indices.size() > 0x7FFFFFFFull)
     return failWith(err, "mesh too large for 32-bit indices");
   if (!mesh.normals.empty() && mesh.normals.size() != nv * 3)
@@ -297,11 +299,11 @@ bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& o
 
   auto* vertices = static_cast<Vertex*>(arena.take(nv * sizeof(Vertex)));
   if (!vertices) return failWith(err, "staging arena too small for the mesh's vertices");
-  const bool textured = !mesh.image.empty() && !mesh.texcoords.empty();
+  const bool textured = !lines && !mesh.image.empty() && !mesh.texcoords.empty();
   if (textured)
     writeTextured(mesh, vertices);
   else
-    writeLit(mesh, vertices);
+    writeLit(mesh, lines, vertices);
   for (size_t v = 0; v < nv; ++v)
     for (int k = 0; k < 3; ++k) vertices[v].position[k] = static_cast<float>(mesh.positions[v * 3 + k] - center[k]);
 
@@ -310,7 +312,7 @@ bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& o
   const bool small = nv < 0xFFFF;
   void* indices = arena.take(mesh.indices.size() * (small ? 2 : 4));
   if (!indices) return failWith(err, "staging arena too small for the mesh's indices");
-  const PartGrid grid = partGrid(mesh, half);
+  const PartGrid grid = lines ? PartGrid{} : partGrid(mesh, half);
   if (grid.cells() > 1) {
     writeParts(mesh.indices, vertices, half, grid, indices, small, out);
   } else if (small) {
@@ -347,6 +349,18 @@ bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& o
     out.half[k] = half[k];
   }
   return true;
+}
+
+}  // namespace
+
+bool outOfMemory(const std::string& err) { return err == kNoMemory; }
+
+bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err) {
+  return prepare(mesh, false, arena, out, err);
+}
+
+bool prepareLines(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err) {
+  return prepare(mesh, true, arena, out, err);
 }
 
 }  // namespace blvd::render

@@ -62,6 +62,7 @@ struct PreparedMesh {
   // triangles in parts by where they lie (prepareMesh); 0: one whole.
   MeshPart parts[kMaxMeshParts];
   int part_count = 0;
+  bool lines = false;  // indices are pairs, drawn as GL_LINES (prepareLines)
 
   uint64_t vertexBytes() const { return uint64_t(vertex_count) * kVertexBytes; }
   uint64_t indexBytes() const { return uint64_t(index_count) * (index16 ? 2 : 4); }
@@ -85,6 +86,9 @@ size_t preparedBytes(uint64_t vertices, uint64_t indices, int texture_width, int
 // False with `err` set when the mesh is malformed or the arena is too small,
 // or when the image decoder could not allocate (outOfMemory(err)).
 bool prepareMesh(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err);
+// The same for line segments: `mesh.indices` are pairs, normals and
+// colours as given (up and light grey when absent), no image, no parts.
+bool prepareLines(const geo::MeshData& mesh, StagingArena& arena, PreparedMesh& out, std::string& err);
 // Whether prepareMesh's `err` is an allocation that failed (the mesh may be good).
 bool outOfMemory(const std::string& err);
 

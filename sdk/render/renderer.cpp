@@ -104,6 +104,7 @@ struct MeshSlot {
   uint64_t bytes = 0;
   MeshPart parts[kMaxMeshParts];  // culled one by one when there are two or more
   int part_count = 0;
+  bool lines = false;             // GL_LINES, not GL_TRIANGLES
 };
 
 // Uniform locations of one program (-1 when the program does not use one).
@@ -478,6 +479,17 @@ MeshHandle Renderer::upload(const geo::MeshData& mesh) {
   return place(p, 0);
 }
 
+MeshHandle Renderer::uploadLines(const geo::MeshData& mesh) {
+  if (lost()) return {};
+  Impl& m = *impl_;
+  const size_t need = preparedBytes(mesh.vertexCount(), mesh.indices.size(), 0, 0);
+  if (m.scratch.size() < need) m.scratch.resize(need);
+  StagingArena arena{m.scratch.data(), m.scratch.size(), 0};
+  PreparedMesh p;
+  if (!prepareLines(mesh, arena, p, error_)) return {};
+  return place(p, 0);
+}
+
 MeshHandle Renderer::uploadToSlab(SlabHandle slab, const PreparedMesh& mesh) {
   SlabUpload up;
   if (!beginSlabUpload(slab, mesh, up)) return {};
@@ -772,6 +784,7 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUp
   s.bytes = vbytes + ibytes + (p.rgba ? p.textureBytes() * 4 / 3 : 0);
   std::copy(p.parts, p.parts + p.part_count, s.parts);
   s.part_count = p.part_count;
+  s.lines = p.lines;
   s.live = true;
   if (slab) {
     slab->meshes.push_back(index);  // reserved for desc.meshes at createSlab
@@ -1010,7 +1023,9 @@ void setDepthRange(const GlApi& gl, float near_d, float far_d) {
 
 // The pass's target, viewport (clears stay inside this view: a frame may hold
 // several), fixed state, and cleared buffers.
-void beginPass(const GlApi& gl, const Renderer::Impl& m, const Camera& cam, Pass pass, bool scaled, bool shared) {
+void beginPass(const GlApi& gl, const Renderer::Impl& m, const Camera& cam, const RenderOptions& opt, bool scaled,
+               bool shared) {
+  const Pass pass = opt.pass;
   // Scaled views draw into the scaled target and are blitted at the end.
   if (scaled) gl.BindFramebuffer(GL_FRAMEBUFFER, m.scaled_fbo);
   else if (!shared) gl.BindFramebuffer(GL_FRAMEBUFFER, m.fbo);
@@ -1031,7 +1046,7 @@ void beginPass(const GlApi& gl, const Renderer::Impl& m, const Camera& cam, Pass
   } else {
     // Bake captures start from nothing: transparent black, far depth.
     gl.ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
-    gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    gl.Clear(opt.keep_depth ? GL_COLOR_BUFFER_BIT : GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   }
   if (pass == Pass::CaptureColor || pass == Pass::CaptureDepth) {
     gl.Disable(GL_CULL_FACE);
@@ -1040,7 +1055,7 @@ void beginPass(const GlApi& gl, const Renderer::Impl& m, const Camera& cam, Pass
     gl.CullFace(GL_BACK);
     gl.FrontFace(cam.mirror ? GL_CW : GL_CCW);  // a mirrored projection flips the winding
   }
-  gl.DepthFunc(GL_LESS);
+  gl.DepthFunc(opt.keep_depth ? GL_LEQUAL : GL_LESS);
 }
 
 // The program (and its uniforms) that draws the pass's untextured meshes, or
@@ -1101,6 +1116,7 @@ const char* Renderer::checkRender(const Camera& out, const MeshHandle* list, siz
     return "camera viewport is larger than the renderer's framebuffer";
   if (n > 0 && !list) return "draw list is null";
   if (opt.pass == Pass::ItemBuffer && n > 0 && !opt.item_ids) return "item buffer pass without item ids";
+  if (opt.keep_depth && opt.pass != Pass::ItemBuffer) return "keep_depth outside an item buffer pass";
   return nullptr;
 }
 
@@ -1111,9 +1127,10 @@ namespace {
 void drawParts(const GlApi& gl, const MeshSlot& s, const glm::dvec3& rel, const Frustum& frustum, FrameStats& fs) {
   const uint64_t index_size = s.index_type == GL_UNSIGNED_SHORT ? 2 : 4;
   auto draw = [&](uint32_t first, uint32_t count) {
-    gl.DrawElements(GL_TRIANGLES, GLsizei(count), s.index_type, byteOffset(s.index_offset + first * index_size));
+    gl.DrawElements(s.lines ? GL_LINES : GL_TRIANGLES, GLsizei(count), s.index_type,
+                    byteOffset(s.index_offset + first * index_size));
     ++fs.draw_calls;
-    fs.triangles += count / 3;
+    if (!s.lines) fs.triangles += count / 3;
   };
   if (s.part_count < 2) return draw(0, uint32_t(s.index_count));
   uint32_t first = 0, count = 0;
@@ -1222,7 +1239,7 @@ bool Renderer::render(const Camera& out, const MeshHandle* list, size_t n, Frame
   {
     ScopedGlState guard(gl, shared_);
     if (shared_) m.host_fbo = guard.saved().draw_framebuffer;
-    beginPass(gl, m, cam, opt.pass, scaled, shared_);
+    beginPass(gl, m, cam, opt, scaled, shared_);
     // Meshes: untextured with the pass's program, then the textured impostors
     // with theirs; those drawn behind them last, in the far depth range.
     const size_t front = std::min(n, opt.behind_from);

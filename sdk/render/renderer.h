@@ -135,6 +135,10 @@ struct RenderOptions {
   // (kBehindDepth..1), the others in the near part, so that they show only
   // where the others drew nothing and still hide one another. SIZE_MAX: none.
   size_t behind_from = SIZE_MAX;
+  // ItemBuffer only: clear the colour but keep the depth the last render()
+  // left, and test against it (less or equal): a second set of items (lines)
+  // drawn where the first's surfaces do not hide them, the nearest winning.
+  bool keep_depth = false;
 };
 // Where the depth range is split when a list has entries drawn behind.
 inline constexpr float kBehindDepth = 0.75f;
@@ -166,6 +170,10 @@ class Renderer {
   // mesh is empty or malformed (index out of range, array sizes disagree) or
   // the pool is full.
   MeshHandle upload(const geo::MeshData& mesh);
+  // Copies line segments (`mesh.indices` in pairs; prepareLines), drawn as
+  // GL_LINES, one pixel wide, by every pass: a line marks each pixel it
+  // crosses however thin its subject (the bake's conservative item buffer).
+  MeshHandle uploadLines(const geo::MeshData& mesh);
   // Raises the mesh pool's capacity by `more` (outside a frame: it may
   // allocate), for meshes a mode needs only when chosen (the runtime's
   // reference modes hold every block). False past 2^20 - 1 meshes.

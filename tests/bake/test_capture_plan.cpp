@@ -176,20 +176,40 @@ TEST(CapturePlan, AFarGroundStripKeepsItsRowsWhereTheTexelBudgetBites) {
               rowsOn(a, 250, 330), rowsOn(t, 250, 330), t.cam.width, t.cam.height, t.cam.fov_y_deg);
 }
 
+// A capture of half-fields half_x by half_y degrees sized at density 1 with
+// the layer atlas's gutter of 4 texels.
+CaptureShot sizedWithGutter(double half_x_deg, double half_y_deg, CapturePlanOptions& opt) {
+  opt.gutter_px = 4;
+  CaptureShot s;
+  s.tan_x = std::tan(glm::radians(half_x_deg));
+  s.tan_y = std::tan(glm::radians(half_y_deg));
+  sizeCapture(s, 1.0, opt);
+  return s;
+}
+
 TEST(CapturePlan, AThinWideCaptureLeavesRoomForItsGutterInTheAtlas) {
   // 45° wide, 0.2° tall: 16 rows at least, so its width is capped, and the
   // cap leaves the atlas's gutter on both sides (a 512-wide capture never
   // packs into a 512 atlas with a gutter round it); the field grows to keep
   // both half-fields.
   CapturePlanOptions opt;
-  opt.gutter_px = 4;
-  CaptureShot s;
-  s.tan_x = std::tan(glm::radians(22.5));
-  s.tan_y = std::tan(glm::radians(0.1));
-  sizeCapture(s, 1.0, opt);
+  const CaptureShot s = sizedWithGutter(22.5, 0.1, opt);
   EXPECT_EQ(s.cam.width, 504);
   EXPECT_EQ(s.cam.height, 16);
   EXPECT_GE(std::tan(glm::radians(0.5 * s.cam.fov_y_deg)), s.tan_x * 16 / 504 - 1e-9);
+}
+
+TEST(CapturePlan, ATallCaptureLeavesRoomForItsGutterToo) {
+  // 20° wide, 70° tall: more display rows than the atlas holds, so the
+  // density is cut until its height is the atlas's side less the gutter
+  // (it would have packed at 512 only after the shrink loop cut both sides
+  // by 15 %), and its width follows at the same density.
+  CapturePlanOptions opt;
+  const CaptureShot s = sizedWithGutter(10.0, 35.0, opt);
+  EXPECT_EQ(s.cam.height, 504);
+  EXPECT_NEAR(s.density, 504.0 / (2 * s.tan_y * opt.display_ppr), 1e-9);
+  EXPECT_LT(s.cam.width, 504);
+  EXPECT_NEAR(double(fullDensityTexels(s, opt)), 2 * s.tan_x * opt.display_ppr * s.density * 504, 1.0);
 }
 
 // The runs of a straight 80 m street (shorter than a run of 100 m, no turn): one on

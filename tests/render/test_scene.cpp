@@ -174,6 +174,75 @@ TEST_P(BackendScene, MeshesDrawnBehindShowOnlyWhereNothingElseDrew) {
   for (const MeshHandle& h : list) r.release(h);
 }
 
+// A line mesh: one segment east-west, x in [-half, half], `z` metres ahead
+// (glTF z = -north), at height y.
+geo::MeshData lineAcross(float z, float y, float half) {
+  geo::MeshData m;
+  m.positions = {-half, y, z, half, y, z};
+  m.indices = {0, 1};
+  return m;
+}
+
+// The ids (RGB, 0 = nothing) of an item-buffer read-back.
+std::vector<uint32_t> idsOf(const std::vector<uint8_t>& img) {
+  std::vector<uint32_t> ids(img.size() / 4);
+  for (size_t i = 0; i < ids.size(); ++i)
+    ids[i] = img[i * 4 + 3] ? uint32_t(img[i * 4]) | uint32_t(img[i * 4 + 1]) << 8 | uint32_t(img[i * 4 + 2]) << 16 : 0;
+  return ids;
+}
+
+// Lines drawn over the depth an item buffer left (keep_depth) mark the
+// pixels they cross where no surface hides them: the bake's conservative
+// item buffer. GL_LINES on GLES (EGL) and on desktop GL (OSMesa) alike.
+TEST_P(BackendScene, LinesOverTheKeptDepthShowOnlyWhereNothingHidesThem) {
+  Renderer& r = *rig.renderer;
+  const MeshHandle box = r.upload(test::makeBox(0, 2, -10, 4, 4, 4, kRed));
+  const MeshHandle behind = r.uploadLines(lineAcross(-30.0f, 1.0f, 40.0f));
+  const MeshHandle before = r.uploadLines(lineAcross(-5.0f, 1.9f, 1.0f));  // before the box's face
+  ASSERT_TRUE(r.isValid(box) && r.isValid(behind) && r.isValid(before)) << r.lastError();
+  RenderOptions opt;
+  opt.pass = Pass::ItemBuffer;
+  const uint32_t box_id = 1, line_ids[2] = {2, 3};
+  opt.item_ids = &box_id;
+  std::vector<uint8_t> img(static_cast<size_t>(kW) * kH * 4);
+  ASSERT_TRUE(r.render(boxCamera(), &box, 1, nullptr, opt)) << r.lastError();
+  ASSERT_TRUE(r.readPixels(img.data())) << r.lastError();
+  const std::vector<uint32_t> boxes = idsOf(img);
+  FrameStats stats;
+  opt.keep_depth = true;
+  opt.item_ids = line_ids;
+  const MeshHandle lines[2] = {behind, before};
+  ASSERT_TRUE(r.render(boxCamera(), lines, 2, &stats, opt)) << r.lastError();
+  EXPECT_EQ(stats.triangles, 0u);  // lines are not triangles
+  ASSERT_TRUE(r.readPixels(img.data())) << r.lastError();
+  const std::vector<uint32_t> ids = idsOf(img);
+  int behind_px = 0, before_px = 0, box_px = 0;
+  for (size_t i = 0; i < ids.size(); ++i) {
+    box_px += boxes[i] == 1;
+    EXPECT_NE(ids[i], 1u) << "the colour was not cleared at pixel " << i;
+    if (ids[i] == 2) {
+      ++behind_px;
+      EXPECT_EQ(boxes[i], 0u) << "the line behind the box shows through it at pixel " << i;
+    }
+    if (ids[i] == 3) {
+      ++before_px;
+      EXPECT_EQ(boxes[i], 1u) << "pixel " << i;  // it crosses the box's face only
+    }
+  }
+  EXPECT_GT(box_px, 1000);
+  EXPECT_GT(behind_px, kW / 3);   // a pixel a column beside the box
+  EXPECT_GT(before_px, 10);       // the near line over the box's face
+  // Only an item buffer keeps its depth; a line mesh's indices come in pairs.
+  opt.pass = Pass::Shaded;
+  EXPECT_FALSE(r.render(boxCamera(), lines, 2, nullptr, opt));
+  EXPECT_NE(r.lastError().find("keep_depth"), std::string::npos);
+  geo::MeshData odd = lineAcross(-5.0f, 1.0f, 1.0f);
+  odd.indices.push_back(1);
+  EXPECT_FALSE(r.isValid(r.uploadLines(odd)));
+  EXPECT_NE(r.lastError().find("pairs"), std::string::npos);
+  for (const MeshHandle& h : {box, behind, before}) r.release(h);
+}
+
 INSTANTIATE_TEST_SUITE_P(Render, BackendScene,
                          ::testing::Values(Backend::EglSurfaceless, Backend::EglDevice,
                                            Backend::OSMesa),
