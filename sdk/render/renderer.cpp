@@ -463,31 +463,24 @@ bool Renderer::isValid(MeshHandle h) const {
   return s.live && s.generation == (h.id >> kIndexBits);
 }
 
-MeshHandle Renderer::upload(const geo::MeshData& mesh) {
+MeshHandle Renderer::upload(const geo::MeshData& mesh) { return uploadOwn(mesh, false); }
+
+MeshHandle Renderer::uploadLines(const geo::MeshData& mesh) { return uploadOwn(mesh, true); }
+
+MeshHandle Renderer::uploadOwn(const geo::MeshData& mesh, bool lines) {
   if (lost()) return {};
   Impl& m = *impl_;
   // Prepared into a scratch arena kept between calls, then copied into GL
   // buffers of its own.
   int tw = 0, th = 0, tc = 0;
-  if (!mesh.image.empty() && mesh.image.size() <= 0x7fffffff)
+  if (!lines && !mesh.image.empty() && mesh.image.size() <= 0x7fffffff)
     stbi_info_from_memory(mesh.image.data(), static_cast<int>(mesh.image.size()), &tw, &th, &tc);
   const size_t need = preparedBytes(mesh.vertexCount(), mesh.indices.size(), tw, th);
   if (m.scratch.size() < need) m.scratch.resize(need);
   StagingArena arena{m.scratch.data(), m.scratch.size(), 0};
   PreparedMesh p;
-  if (!prepareMesh(mesh, arena, p, error_)) return {};
-  return place(p, 0);
-}
-
-MeshHandle Renderer::uploadLines(const geo::MeshData& mesh) {
-  if (lost()) return {};
-  Impl& m = *impl_;
-  const size_t need = preparedBytes(mesh.vertexCount(), mesh.indices.size(), 0, 0);
-  if (m.scratch.size() < need) m.scratch.resize(need);
-  StagingArena arena{m.scratch.data(), m.scratch.size(), 0};
-  PreparedMesh p;
-  if (!prepareLines(mesh, arena, p, error_)) return {};
-  return place(p, 0);
+  const bool ok = lines ? prepareLines(mesh, arena, p, error_) : prepareMesh(mesh, arena, p, error_);
+  return ok ? place(p, 0) : MeshHandle{};
 }
 
 MeshHandle Renderer::uploadToSlab(SlabHandle slab, const PreparedMesh& mesh) {

@@ -262,6 +262,8 @@ class Renderer {
                   const FrameView& v, bool textured, FrameStats& fs);
   // A mesh's slot and vertex array; copies its bytes unless `copied` (a
   // finished SlabUpload) says where they already are.
+  // upload and uploadLines: a mesh with GL buffers of its own.
+  MeshHandle uploadOwn(const geo::MeshData& mesh, bool lines);
   MeshHandle place(const PreparedMesh& mesh, uint32_t slab_id, const SlabUpload* copied = nullptr);
   // Takes room for `mesh` in `slab` (no GL): its offsets, texture and byte
   // count into `up`. False with lastError() set when it has none.
