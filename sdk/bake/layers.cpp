@@ -182,16 +182,17 @@ double capLayers(LayerAssignment& la, size_t n, size_t max_layers) {
   while (la.layers.size() > max_layers) {
     std::vector<uint32_t> last = std::move(la.layers.back());
     la.layers.pop_back();
-    size_t best = 0;
-    double best_w = 1e300;
-    for (size_t l = 0; l < la.layers.size(); ++l) {
-      double w = 0;
-      for (uint32_t i : last)
+    for (uint32_t i : last) {
+      size_t best = 0;
+      double best_w = 1e300;
+      for (size_t l = 0; l < la.layers.size(); ++l) {
+        double w = 0;
         for (uint32_t j : la.layers[l]) w = std::max(w, la.weights[i * n + j]);
-      if (w < best_w) best_w = w, best = l;
+        if (w < best_w) best_w = w, best = l;
+      }
+      worst = std::max(worst, best_w);
+      la.layers[best].push_back(i);
     }
-    worst = std::max(worst, best_w);
-    la.layers[best].insert(la.layers[best].end(), last.begin(), last.end());
   }
   return worst;
 }

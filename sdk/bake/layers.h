@@ -49,10 +49,11 @@ struct LayerAssignment {
 LayerAssignment assignLayers(glm::dvec2 P, glm::dvec2 Q, const std::vector<LayerObject>& objects,
                              double threshold_rad);
 
-// Caps the layer count at `max_layers` by merging, one at a time, the last
-// layer into the earlier one whose largest cross weight with it is smallest
-// (the merge that adds the least visibility-event error). Returns the largest
-// weight a merge admitted (0 when nothing had to merge).
+// Caps the layer count at `max_layers` by dropping, one at a time, the last
+// layer and moving each of its objects into the layer whose largest weight to
+// that object is smallest (the move that adds the least visibility-event
+// error for it; decision 0037). Returns the largest weight a move admitted
+// (0 when nothing had to merge).
 double capLayers(LayerAssignment& la, size_t n_objects, size_t max_layers);
 
 // The threshold T given in pixels at a display of `width_px` pixels across a

@@ -126,3 +126,25 @@ TEST(Layers, CapMergesTheCheapestLayers) {
   for (int s : seen) EXPECT_EQ(s, 1);
   EXPECT_EQ(capLayers(la, objs.size(), 2), 0.0);  // already within the cap
 }
+
+TEST(Layers, CapMovesEachObjectOfTheDroppedLayerOnItsOwn) {
+  // Layers {0} {1} {2,3}; object 2 conflicts with 0, object 3 with 1. Merging
+  // the last layer whole puts a heavy pair together whichever layer takes it;
+  // object by object, 2 joins 1 and 3 joins 0, and the worst admitted weight
+  // is the light one.
+  LayerAssignment la;
+  la.layers = {{0}, {1}, {2, 3}};
+  const size_t n = 4;
+  la.weights.assign(n * n, 0.0);
+  auto w = [&](uint32_t i, uint32_t j, double v) { la.weights[i * n + j] = la.weights[j * n + i] = v; };
+  w(0, 1, 0.5);
+  w(2, 0, 0.9);
+  w(2, 1, 0.01);
+  w(3, 0, 0.02);
+  w(3, 1, 0.8);
+  const double worst = capLayers(la, n, 2);
+  ASSERT_EQ(la.layers.size(), 2u);
+  EXPECT_DOUBLE_EQ(worst, 0.02);
+  EXPECT_EQ(la.layers[0], (std::vector<uint32_t>{0, 3}));
+  EXPECT_EQ(la.layers[1], (std::vector<uint32_t>{1, 2}));
+}
