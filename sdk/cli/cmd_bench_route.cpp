@@ -93,7 +93,9 @@ std::string viewCommand(const RouteBenchOpts& o, const stream::City& city, const
   double lat = 0, lon = 0, hgt = 0;
   city.frame().reverse({p.x, p.y, 0.0}, lat, lon, hgt);
   char b[512];
-  std::snprintf(b, sizeof b, "blvd view %s --lat %.7f --lon %.7f --heading %.1f --size %s --mode %s -o %s.png",
+  // 0.1 mm and 0.0001°: far ground seen edge-on changes with less than the
+  // 0.05° a heading of one decimal would move it.
+  std::snprintf(b, sizeof b, "blvd view %s --lat %.9f --lon %.9f --heading %.4f --size %s --mode %s -o %s.png",
                 o.package.c_str(), lat, lon, p.heading_deg, o.size.c_str(), mode, mode);
   return b;
 }

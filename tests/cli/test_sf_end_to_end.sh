@@ -12,9 +12,43 @@ rm -rf "$work" && mkdir -p "$work"
 "$blvd" pack verify "$work/sf.blvd" > /dev/null
 "$blvd" pack info "$work/sf.blvd" --json > "$work/info.json"
 "$blvd" view "$work/sf.blvd" --path auto:6 --seed 1 --step 20 --with-full -o "$work/drive" > /dev/null
-"$blvd" bench route "$work/sf.blvd" --route auto:6 --seed 1 --json "$work/route.json" > /dev/null 2>&1
-python3 - "$work" <<'PY'
-import glob, hashlib, json, os, sys
+"$blvd" bench route "$work/sf.blvd" --route auto:6 --seed 1 --json "$work/route.json" --html "$work/route_html" \
+  > /dev/null 2>&1
+python3 - "$work" "$blvd" <<'PY'
+import glob, hashlib, json, os, re, shlex, struct, subprocess, sys, zlib
+
+
+def read_png(path):
+    """8-bit RGB or RGBA PNG -> (w, h, RGBA bytes)."""
+    b = open(path, "rb").read()
+    w, h, depth, ctype = struct.unpack(">IIBB", b[16:26])
+    assert depth == 8 and ctype in (2, 6), (path, depth, ctype)
+    ch = 4 if ctype == 6 else 3
+    pos, idat = 8, b""
+    while pos < len(b):
+        n, = struct.unpack(">I", b[pos:pos + 4])
+        if b[pos + 4:pos + 8] == b"IDAT": idat += b[pos + 8:pos + 8 + n]
+        pos += 12 + n
+    raw, stride, prev, out = zlib.decompress(idat), w * ch, bytearray(w * ch), bytearray()
+    for y in range(h):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for x in range(stride):
+            a = line[x - ch] if x >= ch else 0
+            c = prev[x - ch] if x >= ch else 0
+            p = a + prev[x] - c
+            pred = [0, a, prev[x], (a + prev[x]) // 2,
+                    a if abs(p - a) <= abs(p - prev[x]) and abs(p - a) <= abs(p - c)
+                    else (prev[x] if abs(p - prev[x]) <= abs(p - c) else c)][f]
+            line[x] = (line[x] + pred) & 255
+        for x in range(w):
+            out += line[ch * x:ch * x + 3] + b"\xff"
+        prev = line
+    return w, h, out
+
+
+# The same pose draws the same frame: 0 pixels differ (45-51 of 384,000 when the command
+# gave the heading to 0.1 deg and lat/lon to 1e-7 deg); a few are left for rounding ties.
+REPRO_MAX_SHARE = 2e-5
 work = sys.argv[1]
 info = json.load(open(os.path.join(work, "info.json")))
 c, m = info["counts"], info["meta"]["counts"]
@@ -38,6 +72,23 @@ blvd, local = r["modes"]["blvd"], r["modes"]["local"]
 # The impostors stand for the far city: far less of it is wrong than with the local model alone.
 assert blvd["far_bad_p50"] < 0.5 * local["far_bad_p50"], (blvd["far_bad_p50"], local["far_bad_p50"])
 assert blvd["triangles_p50"] < r["modes"]["full"]["triangles_p50"], blvd
+# Each worst frame's caption is the `blvd view` command that draws it again: run the first
+# one's full and blvd commands and compare their frames with the gallery's, pixel by pixel.
+html = open(os.path.join(work, "route_html", "index.html")).read()
+g = re.search(r"pose (\d+), cell \d+: (blvd view [^<]*?-o full\.png)</figcaption>.*?"
+              r"<figcaption>(blvd view [^<]*?-o blvd\.png)</figcaption>", html, re.S)
+assert g, "the worst-frames gallery names no blvd view command"
+pose = g.group(1)
+for cmd in g.group(2, 3):
+    args = shlex.split(cmd)
+    mode = args[args.index("--mode") + 1]
+    out = os.path.join(work, "repro-%s.png" % mode)
+    subprocess.run([sys.argv[2]] + args[1:-2] + ["-o", out], check=True, stdout=subprocess.DEVNULL)
+    w, h, a = read_png(out)
+    w2, h2, b = read_png(os.path.join(work, "route_html", "frames", "worst%04d_%s.png" % (int(pose), mode)))
+    assert (w, h) == (w2, h2), ((w, h), (w2, h2))
+    off = sum(1 for i in range(0, len(a), 4) if max(abs(a[i + k] - b[i + k]) for k in range(3)) > 25)
+    assert off <= REPRO_MAX_SHARE * w * h, "%s: %d of %d pixels differ from the gallery's frame" % (cmd, off, w * h)
 print("sf end to end: %d buildings, %d cells, %d frames, blvd far_bad p50 %.3f (local %.3f)"
       % (c["buildings"], c["cells"], len(frames), blvd["far_bad_p50"], local["far_bad_p50"]))
 PY
