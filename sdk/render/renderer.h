@@ -260,10 +260,10 @@ class Renderer {
   const char* checkRender(const Camera& out, const MeshHandle* list, size_t n, const RenderOptions& opt) const;
   void drawMeshes(const Camera& cam, const MeshHandle* list, size_t from, size_t to, const RenderOptions& opt,
                   const FrameView& v, bool textured, FrameStats& fs);
-  // A mesh's slot and vertex array; copies its bytes unless `copied` (a
-  // finished SlabUpload) says where they already are.
   // upload and uploadLines: a mesh with GL buffers of its own.
   MeshHandle uploadOwn(const geo::MeshData& mesh, bool lines);
+  // A mesh's slot and vertex array; copies its bytes unless `copied` (a
+  // finished SlabUpload) says where they already are.
   MeshHandle place(const PreparedMesh& mesh, uint32_t slab_id, const SlabUpload* copied = nullptr);
   // Takes room for `mesh` in `slab` (no GL): its offsets, texture and byte
   // count into `up`. False with lastError() set when it has none.

@@ -93,30 +93,12 @@ PY
 "$blvd" view "$pkg" --lat 43.735370 --lon 7.417288 --heading 211 --size 320x200 -o "$work/view2.png" \
   --items "$work/items.png" > /dev/null
 blocks=$("$blvd" pack info "$pkg" --json | python3 -c 'import json,sys; print(json.load(sys.stdin)["counts"]["blocks"])')
-python3 - "$work/items.png" "$blocks" <<'PY'
-import struct, sys, zlib
-b = open(sys.argv[1], "rb").read()
-w, h, depth, ctype = struct.unpack(">IIBB", b[16:26])
-assert (w, h, depth, ctype) == (320, 200, 8, 6), (w, h, depth, ctype)
-pos, idat = 8, b""
-while pos < len(b):
-    n, = struct.unpack(">I", b[pos:pos + 4])
-    if b[pos + 4:pos + 8] == b"IDAT": idat += b[pos + 8:pos + 8 + n]
-    pos += 12 + n
-raw, stride, prev, ids = zlib.decompress(idat), w * 4, bytearray(w * 4), set()
-for y in range(h):
-    f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-    for x in range(stride):
-        a = line[x - 4] if x >= 4 else 0
-        c = prev[x - 4] if x >= 4 else 0
-        p = a + prev[x] - c
-        pred = [0, a, prev[x], (a + prev[x]) // 2,
-                a if abs(p - a) <= abs(p - prev[x]) and abs(p - a) <= abs(p - c) else (prev[x] if abs(p - prev[x]) <= abs(p - c) else c)][f]
-        line[x] = (line[x] + pred) & 255
-    for x in range(w):
-        r, g, bl, al = line[4 * x:4 * x + 4]
-        ids.add((r | g << 8 | bl << 16) if al else 0)
-    prev = line
+PYTHONPATH="$(dirname "$0")" python3 - "$work/items.png" "$blocks" <<'PY'
+import sys
+import png_rgba
+w, h, rows = png_rgba.read(sys.argv[1])
+assert (w, h) == (320, 200), (w, h)
+ids = {(r[4 * x] | r[4 * x + 1] << 8 | r[4 * x + 2] << 16) if r[4 * x + 3] else 0 for r in rows for x in range(w)}
 blocks = [i for i in ids if i and not i & 0x800000]
 layers = [i & 0x7FFFFF for i in ids if i & 0x800000]
 assert blocks and all(i <= int(sys.argv[2]) for i in blocks), sorted(ids)

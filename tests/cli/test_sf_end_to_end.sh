@@ -14,37 +14,10 @@ rm -rf "$work" && mkdir -p "$work"
 "$blvd" view "$work/sf.blvd" --path auto:6 --seed 1 --step 20 --with-full -o "$work/drive" > /dev/null
 "$blvd" bench route "$work/sf.blvd" --route auto:6 --seed 1 --json "$work/route.json" --html "$work/route_html" \
   > /dev/null 2>&1
-python3 - "$work" "$blvd" <<'PY'
-import glob, hashlib, json, os, re, shlex, struct, subprocess, sys, zlib
+PYTHONPATH="$(dirname "$0")" python3 - "$work" "$blvd" <<'PY'
+import glob, hashlib, json, os, re, shlex, subprocess, sys
 
-
-def read_png(path):
-    """8-bit RGB or RGBA PNG -> (w, h, RGBA bytes)."""
-    b = open(path, "rb").read()
-    w, h, depth, ctype = struct.unpack(">IIBB", b[16:26])
-    assert depth == 8 and ctype in (2, 6), (path, depth, ctype)
-    ch = 4 if ctype == 6 else 3
-    pos, idat = 8, b""
-    while pos < len(b):
-        n, = struct.unpack(">I", b[pos:pos + 4])
-        if b[pos + 4:pos + 8] == b"IDAT": idat += b[pos + 8:pos + 8 + n]
-        pos += 12 + n
-    raw, stride, prev, out = zlib.decompress(idat), w * ch, bytearray(w * ch), bytearray()
-    for y in range(h):
-        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for x in range(stride):
-            a = line[x - ch] if x >= ch else 0
-            c = prev[x - ch] if x >= ch else 0
-            p = a + prev[x] - c
-            pred = [0, a, prev[x], (a + prev[x]) // 2,
-                    a if abs(p - a) <= abs(p - prev[x]) and abs(p - a) <= abs(p - c)
-                    else (prev[x] if abs(p - prev[x]) <= abs(p - c) else c)][f]
-            line[x] = (line[x] + pred) & 255
-        for x in range(w):
-            out += line[ch * x:ch * x + 3] + b"\xff"
-        prev = line
-    return w, h, out
-
+import png_rgba
 
 # The same pose draws the same frame: 0 pixels differ (45-51 of 384,000 when the command
 # gave the heading to 0.1 deg and lat/lon to 1e-7 deg); a few are left for rounding ties.
@@ -84,10 +57,10 @@ for cmd in g.group(2, 3):
     mode = args[args.index("--mode") + 1]
     out = os.path.join(work, "repro-%s.png" % mode)
     subprocess.run([sys.argv[2]] + args[1:-2] + ["-o", out], check=True, stdout=subprocess.DEVNULL)
-    w, h, a = read_png(out)
-    w2, h2, b = read_png(os.path.join(work, "route_html", "frames", "worst%04d_%s.png" % (int(pose), mode)))
+    w, h, a = png_rgba.read(out)
+    w2, h2, b = png_rgba.read(os.path.join(work, "route_html", "frames", "worst%04d_%s.png" % (int(pose), mode)))
     assert (w, h) == (w2, h2), ((w, h), (w2, h2))
-    off = sum(1 for i in range(0, len(a), 4) if max(abs(a[i + k] - b[i + k]) for k in range(3)) > 25)
+    off = sum(1 for ra, rb in zip(a, b) for i in range(0, 4 * w, 4) if max(abs(ra[i + k] - rb[i + k]) for k in range(3)) > 25)
     assert off <= REPRO_MAX_SHARE * w * h, "%s: %d of %d pixels differ from the gallery's frame" % (cmd, off, w * h)
 print("sf end to end: %d buildings, %d cells, %d frames, blvd far_bad p50 %.3f (local %.3f)"
       % (c["buildings"], c["cells"], len(frames), blvd["far_bad_p50"], local["far_bad_p50"]))
