@@ -33,8 +33,9 @@ inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
 // counts, the header the pool sizing fields; 3.0: IMPO layers the run of the
 // cell they serve; 3.2: TPCR, a CRC per table page; 3.3: the impostor atlas's
 // size in the header; 4.0: blobs stored as zstd frames (BIDX flags and
-// contents size, the header's largest contents) (docs/package-format.md).
-inline constexpr uint16_t kVersionMajor = 4;  // a reader opens only its own major
+// contents size, the header's largest contents); 5.0: Draco streams hold no
+// POSITION-typed attribute (docs/package-format.md).
+inline constexpr uint16_t kVersionMajor = 5;  // a reader opens only its own major
 inline constexpr uint16_t kVersionMinor = 0;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph

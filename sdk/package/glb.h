@@ -94,7 +94,9 @@ inline constexpr size_t kMaxDecodedVertices = size_t{1} << 24;
 // scene at all, of every root node; with no nodes, every mesh once) into one
 // mesh, with node transforms applied (matrix or TRS, normals by the inverse
 // transpose, winding flipped under mirroring). Draco-compressed primitives are
-// decoded and their counts checked against the accessors; EXT_meshopt_compression
+// decoded and their counts checked against the accessors (Draco streams in
+// blvd's profile only, what encodeGlb writes: bitstream 2.2, no attribute of
+// Draco type POSITION; others are Unsupported, draco_decode.cpp says why); EXT_meshopt_compression
 // bufferViews are decoded (and filtered) before their accessors read them. Missing normals
 // become flat normals (the primitive's triangles are unwelded); missing
 // colours are white; the material's baseColorFactor multiplies the colours.

@@ -16,8 +16,6 @@
 #include "package/glb.h"
 #include "package/glb_detail.h"
 
-#include <draco/compression/decode.h>
-#include <draco/core/decoder_buffer.h>
 #include <draco/mesh/mesh.h>
 #include <meshoptimizer.h>
 
@@ -74,32 +72,6 @@ struct DecodeError {
 };
 
 [[noreturn]] void fail(const std::string& msg, Status s = Status::Corrupt) { throw DecodeError{s, msg}; }
-
-}  // namespace
-
-namespace glb_detail {
-
-core::Status decodeDracoBuffer(const uint8_t* data, size_t size, std::unique_ptr<draco::Mesh>& mesh,
-                         std::string& err) {
-  draco::DecoderBuffer db;
-  db.Init(reinterpret_cast<const char*>(data), size);
-  draco::Decoder dec;
-  auto result = dec.DecodeMeshFromBuffer(&db);
-  if (!result.ok()) {
-    err = std::string("Draco decode failed: ") + result.status().error_msg();
-    return core::Status::Corrupt;
-  }
-  mesh = std::move(result).value();
-  if (!mesh) {
-    err = "Draco decode returned no mesh";
-    return core::Status::Corrupt;
-  }
-  return core::Status::Ok;
-}
-
-}  // namespace glb_detail
-
-namespace {
 
 // One primitive's vertex streams before node transforms.
 struct Primitive {
@@ -681,7 +653,8 @@ class Decoder {
     if (dattrs == ext.end() || !dattrs->is_object()) fail(dwhere + ".attributes: expected an object");
     std::unique_ptr<draco::Mesh> mesh;
     std::string err;
-    if (decodeDracoBuffer(view.bytes.data, view.bytes.size, mesh, err) != Status::Ok) fail(dwhere + ": " + err);
+    const Status ds = decodeDracoBuffer(view.bytes.data, view.bytes.size, mesh, err);
+    if (ds != Status::Ok) fail(dwhere + ": " + err, ds);
     const size_t points = mesh->num_points();
     const size_t faces = mesh->num_faces();
     if (points > kMaxDecodedVertices || faces > kMaxDecodedVertices)

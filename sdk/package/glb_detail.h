@@ -47,8 +47,11 @@ struct Chunks {
 // Corrupt or Unsupported, with `err` naming the chunk and offset, for a bad container.
 core::Status splitChunks(const uint8_t* data, size_t size, Chunks& c, std::string& err);
 
-// One Draco-compressed buffer into a mesh; Corrupt with Draco's reason (the
-// encoder decodes what it wrote back, to check it).
+// One Draco-compressed buffer into a mesh (draco_decode.cpp); Corrupt with
+// Draco's reason, Unsupported for a stream outside blvd's profile: bitstream
+// 2.2, edgebreaker or sequential, no attribute of Draco type POSITION (the
+// encoder stores positions as GENERIC; why: draco_decode.cpp). The encoder
+// decodes what it wrote back, to check it.
 core::Status decodeDracoBuffer(const uint8_t* data, size_t size, std::unique_ptr<draco::Mesh>& mesh, std::string& err);
 
 }  // namespace blvd::package::glb_detail

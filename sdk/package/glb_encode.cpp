@@ -276,7 +276,12 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
       pa->SetAttributeValue(draco::AttributeValueIndex(static_cast<uint32_t>(i)), p + i * elem_bytes);
     return pa->unique_id();
   };
-  const uint32_t pos_id = addAttribute(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32,
+  // Positions as GENERIC, not POSITION: a Draco stream with a POSITION
+  // attribute is refused by our decoder (draco_decode.cpp says why). Without
+  // one, Draco's edgebreaker must split the mesh on attribute seams
+  // (split_mesh_on_seams below): its per-attribute connectivity is built
+  // around the POSITION attribute.
+  const uint32_t pos_id = addAttribute(draco::GeometryAttribute::GENERIC, 3, draco::DT_FLOAT32,
                                        false, 12, mesh.positions.data());
   std::optional<uint32_t> nrm_id, col_id, tex_id;
   if (!mesh.normals.empty())
@@ -297,12 +302,13 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
   }
 
   draco::Encoder enc;
-  if (opt.position_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::POSITION, opt.position_bits);
+  if (opt.position_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::GENERIC, opt.position_bits);
   if (opt.normal_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, opt.normal_bits);
   if (opt.color_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::COLOR, opt.color_bits);
   if (opt.texcoord_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::TEX_COORD, opt.texcoord_bits);
   const int speed = 10 - opt.compression_level;
   enc.SetSpeedOptions(speed, speed);
+  enc.options().SetGlobalBool("split_mesh_on_seams", true);
   draco::EncoderBuffer eb;
   const draco::Status st = enc.EncodeMeshToBuffer(dm, &eb);
   if (!st.ok()) throw core::Error(Status::Internal, std::string("encodeGlb: Draco encoder: ") + st.error_msg());
@@ -318,7 +324,7 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
     throw core::Error(Status::Internal, "encodeGlb: own Draco output does not decode: " + err);
   const size_t points = back->num_points();
   const draco::PointAttribute* bpos = back->GetAttributeByUniqueId(pos_id);
-  if (!bpos) throw core::Error(Status::Internal, "encodeGlb: Draco lost the POSITION attribute");
+  if (!bpos) throw core::Error(Status::Internal, "encodeGlb: Draco lost the position attribute");
   std::array<float, 3> lo{0, 0, 0}, hi{0, 0, 0};
   for (draco::PointIndex i(0); i < back->num_points(); ++i) {
     float v[3] = {0, 0, 0};
