@@ -490,7 +490,7 @@ TEST(Glb, AnUnboundedDracoPredictionIsRefusedBeforeItRuns) {
 }
 
 // Our Draco streams keep to the profile the decoder reads: no attribute of
-// Draco type POSITION, whatever the compression level (below level 5 Draco's
+// Draco type POSITION, whatever the compression level (from level 5 up, Draco's
 // edgebreaker would build per-attribute connectivity around a POSITION: the
 // encoder splits the mesh on seams instead).
 TEST(Glb, OwnDracoStreamsHoldNoPositionTypedAttribute) {
