@@ -234,7 +234,24 @@ typedef struct blvd_runtime_desc {
                                   * the tables plus the largest blob: BLVD_ERR_INVALID_ARG */
   uint64_t link_max_bytes_per_s; /* bandwidth cap of the package's link; 0: none */
   uint32_t link_mode;            /* a blvd_link_mode; 0 means BLVD_LINK_ONLINE */
+
+  uint32_t reserved0; /* ignored: the tail padding of descriptors before impostor_texture */
+
+  /* How each cell slot's atlas holds the impostor images on the GPU: a blvd_impostor_texture; 0 means
+   * BLVD_TEXTURE_RGBA8. */
+  uint32_t impostor_texture;
 } blvd_runtime_desc;
+
+/* What a cell slot's impostor atlas holds a texel as. */
+typedef enum blvd_impostor_texture {
+  BLVD_TEXTURE_RGBA8 = 0, /* 4 bytes a texel */
+  /* ETC2 RGB8 (GL_COMPRESSED_RGB8_ETC2): half a byte a texel, decoded in hardware by every OpenGL ES 3.0
+   * device. The loader thread encodes each image after decoding it (more CPU a cell: docs/benchmarks.md),
+   * and images are placed on a 32-texel grid. Needs OpenGL ES 3.0 or OpenGL 4.3: create fails with
+   * BLVD_ERR_BACKEND on an older desktop context. */
+  BLVD_TEXTURE_ETC2 = 1,
+  BLVD_TEXTURE_FORCE_32 = 0x7fffffff
+} blvd_impostor_texture;
 
 /* What a package on a server may fetch. */
 typedef enum blvd_link_mode {

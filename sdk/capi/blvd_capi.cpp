@@ -55,6 +55,7 @@ blvd_runtime_desc blvd_runtime_desc_defaults(const blvd_runtime_desc* in) {
   if (d.lod_error_px == 0) d.lod_error_px = 1.f;
   if (d.min_render_scale == 0) d.min_render_scale = 1.f;
   if (d.prefetch_share == 0) d.prefetch_share = 0.1f;
+  d.reserved0 = 0;
   return d;
 }
 
@@ -99,6 +100,8 @@ blvd_status checkDesc(const blvd_runtime_desc& d, const char* who) {
   if (!(d.prefetch_share < 0 || (d.prefetch_share > 0 && d.prefetch_share <= 1)))
     return invalid(who, "prefetch_share must be within (0, 1], or negative for no bound (0 means 0.1)");
   if (!d.allocator.alloc != !d.allocator.free) return invalid(who, "allocator needs both alloc and free, or neither");
+  if (d.impostor_texture != BLVD_TEXTURE_RGBA8 && d.impostor_texture != BLVD_TEXTURE_ETC2)
+    return invalid(who, "impostor_texture must be BLVD_TEXTURE_RGBA8 or BLVD_TEXTURE_ETC2");
   return BLVD_OK;
 }
 }  // namespace

@@ -20,6 +20,9 @@ void addBench(CLI::App& app, Runner& run) {
   r->add_option("--json", o->json_path, "write the JSON here too");
   r->add_option("--html", o->html_dir, "write an HTML page with frames and SVG plots into this folder");
   r->add_option("--pictures", o->pictures, "poses shown in the HTML page")->capture_default_str();
+  r->add_option("--impostor-texture", o->impostor_texture, "how cell slots hold impostor images: rgba8 or etc2")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"rgba8", "etc2"}));
   r->callback([o, &run] { run = [o] { return runRouteBench(*o); }; });
   addBenchMemory(*bench, run);
   addBenchBudget(*bench, run);

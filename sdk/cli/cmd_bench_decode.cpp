@@ -8,7 +8,10 @@
 // cell's impostors together (p50 / max: what one cell load decodes), the
 // package bytes, the memory plan at the default descriptor (GPU bytes of one
 // cell slot, all of the GPU and CPU pools), and each package's total against
-// the first's.
+// the first's. With ETC2 atlases (blvd_runtime_desc.impostor_texture) the
+// loader also encodes each image's atlas levels: `impostors_etc2` and
+// `cell_impostors_etc2` time decode and encode together, in the same run, and
+// `memory_etc2` is the plan with that descriptor.
 #include <sys/stat.h>
 #include <time.h>
 
@@ -22,6 +25,7 @@
 #include "runtime/memory_plan.h"
 #include "cli/bench_util.h"
 #include "cli/commands.h"
+#include "render/atlas_etc2.h"
 #include "render/prepared_mesh.h"
 #include "stream/city.h"
 
@@ -46,15 +50,16 @@ struct Kind {
 
 struct Package {
   stream::City city;
-  Kind blocks, impostors;
-  Kind cell_impostors;  // one entry per cell with impostors: its layers' sum
+  Kind blocks, impostors, impostors_etc2;
+  Kind cell_impostors, cell_impostors_etc2;  // one entry per cell with impostors: its layers' sum
   uint64_t bytes = 0;
-  runtime::MemoryPlan plan;  // at the default descriptor
+  runtime::MemoryPlan plan, plan_etc2;  // at the default descriptor, and with ETC2 atlases
 };
 
-// Decodes and stages one mesh; returns its thread CPU ms (the least of `rounds`).
+// Decodes and stages one mesh (`etc2`: and encodes its image's ETC2 atlas
+// levels); returns its thread CPU ms (the least of `rounds`).
 template <typename Decode>
-double timeMesh(Decode&& decode, geo::MeshData& scratch, render::StagingArena& arena, int rounds) {
+double timeMesh(Decode&& decode, geo::MeshData& scratch, render::StagingArena& arena, int rounds, bool etc2 = false) {
   double best = 1e300;
   for (int r = 0; r < rounds; ++r) {
     std::string err;
@@ -63,6 +68,8 @@ double timeMesh(Decode&& decode, geo::MeshData& scratch, render::StagingArena& a
     core::Status st = decode(scratch, err);
     render::PreparedMesh m;
     if (st == core::Status::Ok && !scratch.empty() && !render::prepareMesh(scratch, arena, m, err))
+      st = core::Status::Internal;
+    if (st == core::Status::Ok && etc2 && m.rgba && !render::encodeAtlasEtc2(m, arena, err))
       st = core::Status::Internal;
     const double ms = threadCpuMs() - t0;
     if (st != core::Status::Ok) throw core::Error(st, err);
@@ -101,7 +108,9 @@ int runDecode(const DecodeOpts& o) {
     d.struct_size = sizeof d;
     d = blvd_runtime_desc_defaults(&d);
     p->plan = runtime::planMemory(d, p->city);
-    arena_size = std::max(arena_size, p->plan.staging_arena_bytes);
+    d.impostor_texture = BLVD_TEXTURE_ETC2;
+    p->plan_etc2 = runtime::planMemory(d, p->city);
+    arena_size = std::max(arena_size, p->plan_etc2.staging_arena_bytes);
     pkgs.push_back(std::move(p));
   }
   // One arena as the loader carves it (a whole cell's meshes fit), reset per mesh.
@@ -133,15 +142,19 @@ int runDecode(const DecodeOpts& o) {
     for (const auto& p : pkgs) {
       if (c >= p->city.cellTables().impostors.size()) continue;
       const graph::CellImpostors& ci = p->city.cellTables().impostors[c];
-      double cell_ms = 0;
+      double cell_ms = 0, cell_etc2_ms = 0;
       for (const auto* list : {&ci.layered, &ci.single})
         for (const graph::ImpostorLayer& layer : *list) {
-          p->impostors.ms.push_back(timeMesh(
-              [&](geo::MeshData& m, std::string& e) { return p->city.decodeImpostor(layer, m, e); }, scratch,
-              arena, o.rounds));
+          auto decode = [&](geo::MeshData& m, std::string& e) { return p->city.decodeImpostor(layer, m, e); };
+          p->impostors.ms.push_back(timeMesh(decode, scratch, arena, o.rounds));
+          p->impostors_etc2.ms.push_back(timeMesh(decode, scratch, arena, o.rounds, true));
           cell_ms += p->impostors.ms.back();
+          cell_etc2_ms += p->impostors_etc2.ms.back();
         }
-      if (!ci.layered.empty() || !ci.single.empty()) p->cell_impostors.ms.push_back(cell_ms);
+      if (!ci.layered.empty() || !ci.single.empty()) {
+        p->cell_impostors.ms.push_back(cell_ms);
+        p->cell_impostors_etc2.ms.push_back(cell_etc2_ms);
+      }
     }
   nlohmann::json out = nlohmann::json::array();
   double first_total = 0;
@@ -149,7 +162,9 @@ int runDecode(const DecodeOpts& o) {
     const Package& p = *pkgs[i];
     nlohmann::json j = {{"package", o.packages[i]}, {"bytes", p.bytes}, {"blocks", summary(p.blocks)},
                         {"impostors", summary(p.impostors)}, {"cell_impostors", summary(p.cell_impostors)},
-                        {"memory", memoryJson(p.plan)}};
+                        {"impostors_etc2", summary(p.impostors_etc2)},
+                        {"cell_impostors_etc2", summary(p.cell_impostors_etc2)},
+                        {"memory", memoryJson(p.plan)}, {"memory_etc2", memoryJson(p.plan_etc2)}};
     const double total = j["blocks"]["ms_total"].get<double>() + j["impostors"]["ms_total"].get<double>();
     if (i == 0) first_total = total;
     j["ms_total"] = total;

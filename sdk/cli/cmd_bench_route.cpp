@@ -206,6 +206,7 @@ void RouteBench::open() {
   desc.package_path = o_.package.c_str();
   desc.width = uint32_t(w_);
   desc.height = uint32_t(h_);
+  desc.impostor_texture = o_.impostor_texture == "etc2" ? BLVD_TEXTURE_ETC2 : BLVD_TEXTURE_RGBA8;
   blvd_runtime* rt = nullptr;
   check(blvd_runtime_create(&desc, &rt), nullptr, "create runtime");
   rt_.reset(rt);
@@ -324,6 +325,7 @@ nlohmann::json RouteBench::summary() const {
   size_t n_scored = 0;
   for (size_t i = 0; i < poses_.size(); ++i) n_scored += scored[i] = baked(samples_[kBlvd][i].cell);
   j["far_scored_poses"] = n_scored;
+  j["impostor_texture"] = o_.impostor_texture;
   for (size_t m = 0; m < kNumModes; ++m)
     j["modes"][kModes[m].key] = modeSummary(samples_[m], scored, m == 0, uint64_t(w_) * uint64_t(h_));
   const double full50 = j["modes"]["full"]["frame_ms_p50"], blvd50 = j["modes"]["blvd"]["frame_ms_p50"];

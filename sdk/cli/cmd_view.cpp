@@ -21,6 +21,7 @@ namespace {
 struct ViewOpts {
   std::string package, out, size = "800x480", backend = "auto", path, mode = "blvd";
   std::string items;  // one pose: also write its object-id buffer as a PNG
+  std::string impostor_texture = "rgba8";  // blvd_runtime_desc.impostor_texture
   double lat = NAN, lon = NAN, heading = 0, pitch = 0, fov = 45, step = 8;
   uint64_t seed = 1;
   int repeat = 1;
@@ -106,6 +107,7 @@ int run(const ViewOpts& o) {
   desc.height = static_cast<uint32_t>(h);
   desc.fov_y_deg = static_cast<float>(o.fov);
   desc.backend = parseBackendName(o.backend);
+  desc.impostor_texture = o.impostor_texture == "etc2" ? BLVD_TEXTURE_ETC2 : BLVD_TEXTURE_RGBA8;
   if (!parseMode(o.mode, desc.mode, desc.radius_m))
     throw core::Error(core::Status::InvalidArg, "--mode must be full, local, radius:R, single, layered or blvd");
   blvd_runtime* rt = nullptr;
@@ -239,6 +241,9 @@ void addView(CLI::App& app, Runner& runner) {
   cmd->add_option("--step", o->step, "metres between frames of a drive")->capture_default_str()->check(CLI::Range(0.5, 500.0));
   cmd->add_option("-o,--output", o->out, "PNG to write (or folder, with --path)")->required();
   cmd->add_option("--items", o->items, "one pose: also write its object ids as a PNG (RGB = block + 1, or 0x800000 | layer + 1)");
+  cmd->add_option("--impostor-texture", o->impostor_texture, "how cell slots hold impostor images: rgba8 or etc2")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"rgba8", "etc2"}));
   cmd->add_flag("--with-full", o->with_full, "a drive also writes each pose's full-model frame; index.html flips between them");
   cmd->callback([o, &runner] { runner = [o] { return run(*o); }; });
 }

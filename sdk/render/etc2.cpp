@@ -12,6 +12,10 @@ namespace {
 // §21.1, table 68: the intensity modifiers {a, b}; pixel index 0 adds a, 1 adds
 // b, 2 subtracts a, 3 subtracts b.
 constexpr int kModifiers[8][2] = {{2, 8}, {5, 17}, {9, 29}, {13, 42}, {18, 60}, {24, 80}, {33, 106}, {47, 183}};
+// The same by column, and the offsets (× 3) halfway between a and b.
+constexpr int kA[8] = {2, 5, 9, 13, 18, 24, 33, 47};
+constexpr int kB[8] = {8, 17, 29, 42, 60, 80, 106, 183};
+constexpr int kThresholds[8] = {30, 66, 114, 165, 234, 312, 417, 690};
 // §21.1, table 71: the T and H modes' distances.
 constexpr int kDistances[8] = {3, 6, 11, 16, 23, 32, 41, 64};
 
@@ -113,6 +117,11 @@ struct Block {
   int px[16][3];  // pixel (x, y) at y * 4 + x
 };
 
+// The pixels (y * 4 + x) of each half: [flip][half][i]; no flip splits left
+// from right, flip top from bottom.
+constexpr uint8_t kHalf[2][2][8] = {{{0, 1, 4, 5, 8, 9, 12, 13}, {2, 3, 6, 7, 10, 11, 14, 15}},
+                                    {{0, 1, 2, 3, 4, 5, 6, 7}, {8, 9, 10, 11, 12, 13, 14, 15}}};
+
 int64_t sse(const Block& src, const uint8_t* decoded) {
   int64_t e = 0;
   for (int i = 0; i < 16; ++i)
@@ -123,49 +132,57 @@ int64_t sse(const Block& src, const uint8_t* decoded) {
   return e;
 }
 
-bool inHalf(bool flip, int half, int x, int y) { return (flip ? (y >= 2) : (x >= 2)) == (half == 1); }
-
 // The half's best table and each pixel's index for an 8-bit base colour:
 // index bits into `b`, the table into *table; returns the squared error. A
 // pixel takes the modifier nearest its mean offset from the base (the one that
-// minimises the error before clamping), whose error is then counted exactly.
+// minimises the error before clamping). Tables are compared by that error,
+// Σ (m − d_k)² = s − 2·m·d + 3·m² with d = Σ d_k and s = Σ d_k² of the
+// pixel's offsets d_k from the base, which clamping can only lower; the
+// chosen table's error is then counted exactly, clamped as a decoder does.
 int64_t fitHalf(const Block& src, bool flip, int half, const int base[3], uint64_t& b, int* table) {
-  int64_t best = INT64_MAX;
-  uint64_t best_bits = 0;
-  const int base_sum = base[0] + base[1] + base[2];
-  for (int t = 0; t < 8; ++t) {
-    const int a = kModifiers[t][0], bb = kModifiers[t][1];
-    int64_t err = 0;
-    uint64_t idx = 0;
-    for (int y = 0; y < 4; ++y)
-      for (int x = 0; x < 4; ++x) {
-        if (!inHalf(flip, half, x, y)) continue;
-        const int* p = src.px[y * 4 + x];
-        const int d3 = p[0] + p[1] + p[2] - base_sum;  // 3 × the mean offset
-        // Nearest of +a, +b, −a, −b to d3 / 3: thresholds halfway between them.
-        uint32_t pi;
-        if (d3 >= 0) pi = 2 * d3 >= 3 * (a + bb) ? 1 : 0;
-        else pi = -2 * d3 >= 3 * (a + bb) ? 3 : 2;
-        const int m = modifier(t, pi);
-        for (int k = 0; k < 3; ++k) {
-          const int e = clamp255(base[k] + m) - p[k];
-          err += e * e;
-        }
-        const int n = x * 4 + y;
-        idx |= uint64_t(pi >> 1) << (16 + n) | uint64_t(pi & 1) << n;
-      }
-    if (err < best) best = err, best_bits = idx, *table = t;
+  const uint8_t* pixels = kHalf[flip][half];
+  int d[8], s[8];
+  for (int i = 0; i < 8; ++i) {
+    const int* p = src.px[pixels[i]];
+    const int d0 = p[0] - base[0], d1 = p[1] - base[1], d2 = p[2] - base[2];
+    d[i] = d0 + d1 + d2;
+    s[i] = d0 * d0 + d1 * d1 + d2 * d2;
   }
-  b |= best_bits;
-  return best;
+  int ad[8];
+  for (int i = 0; i < 8; ++i) ad[i] = d[i] < 0 ? -d[i] : d[i];
+  // Every table at once (the inner loop vectorizes); 8 pixels of at most
+  // 3 × 255² + 3 × 183² each: int holds the sum.
+  int table_err[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  for (int i = 0; i < 8; ++i)
+    for (int t = 0; t < 8; ++t) {
+      const int m = 2 * ad[i] >= kThresholds[t] ? kB[t] : kA[t];  // nearest of ±a, ±b to d / 3
+      table_err[t] += s[i] + m * (3 * m - 2 * ad[i]);
+    }
+  int best = INT32_MAX, best_t = 0;
+  for (int t = 0; t < 8; ++t)
+    if (table_err[t] < best) best = table_err[t], best_t = t;
+  const int a = kModifiers[best_t][0], bb = kModifiers[best_t][1], threshold = 3 * (a + bb);
+  int64_t err = 0;
+  for (int i = 0; i < 8; ++i) {
+    const uint32_t pi = (2 * (d[i] < 0 ? -d[i] : d[i]) >= threshold ? 1u : 0u) | (d[i] < 0 ? 2u : 0u);
+    const int m = modifier(best_t, pi);
+    const int* p = src.px[pixels[i]];
+    for (int k = 0; k < 3; ++k) {
+      const int e = clamp255(base[k] + m) - p[k];
+      err += e * e;
+    }
+    const int n = (pixels[i] & 3) * 4 + (pixels[i] >> 2);  // the index bit of pixel (x, y) is 4x + y
+    b |= uint64_t(pi >> 1) << (16 + n) | uint64_t(pi & 1) << n;
+  }
+  *table = best_t;
+  return err;
 }
 
 void halfMean(const Block& src, bool flip, int half, double mean[3]) {
-  mean[0] = mean[1] = mean[2] = 0;
-  for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x)
-      if (inHalf(flip, half, x, y))
-        for (int k = 0; k < 3; ++k) mean[k] += src.px[y * 4 + x][k] / 8.0;
+  int sum[3] = {0, 0, 0};
+  for (uint8_t i : kHalf[flip][half])
+    for (int k = 0; k < 3; ++k) sum[k] += src.px[i][k];
+  for (int k = 0; k < 3; ++k) mean[k] = sum[k] / 8.0;
 }
 
 int quantize(double v, int levels) { return std::clamp(int(v * (levels - 1) / 255.0 + 0.5), 0, levels - 1); }
@@ -240,16 +257,23 @@ uint64_t encodePlanar(const Block& src) {
   return b;
 }
 
+constexpr int64_t kPlanarSkipError = 16 * 3 * 2 * 2;
+
 uint64_t encodeBlock(const Block& src) {
   uint64_t best = 0;
   int64_t best_err = INT64_MAX;
-  for (int flip = 0; flip < 2; ++flip)
-    for (int differential = 0; differential < 2; ++differential) {
-      uint64_t b = 0;
-      int64_t e = 0;
-      if (encodeEtc1(src, flip, differential, &b, &e) && e < best_err) best_err = e, best = b;
-    }
-  // The planar block's error as the decoder makes it.
+  // Differential bases have a bit more than individual ones: the individual
+  // mode is tried where the halves are too far apart for differential.
+  for (int flip = 0; flip < 2; ++flip) {
+    uint64_t b = 0;
+    int64_t e = 0;
+    if (!encodeEtc1(src, flip, true, &b, &e) && !encodeEtc1(src, flip, false, &b, &e)) continue;
+    if (e < best_err) best_err = e, best = b;
+  }
+  // A block ETC1 holds within 2 levels a channel on average keeps it: a plane
+  // seldom does better there. Else the planar block's error as the decoder
+  // makes it.
+  if (best_err <= kPlanarSkipError) return best;
   uint8_t decoded[64], bytes[8];
   const uint64_t planar = encodePlanar(src);
   store64(planar, bytes);
@@ -299,7 +323,11 @@ void decodeEtc2(const uint8_t* data, int w, int h, uint8_t* rgba) {
 }
 
 void encodeEtc2(const uint8_t* rgba, int w, int h, size_t stride, uint8_t* out) {
-  const int bw = (w + 3) / 4, bh = (h + 3) / 4;
+  encodeEtc2(rgba, w, h, stride, out, w, h);
+}
+
+void encodeEtc2(const uint8_t* rgba, int w, int h, size_t stride, uint8_t* out, int out_w, int out_h) {
+  const int bw = (out_w + 3) / 4, bh = (out_h + 3) / 4;
   Block src;
   for (int by = 0; by < bh; ++by)
     for (int bx = 0; bx < bw; ++bx) {

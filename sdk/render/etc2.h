@@ -4,11 +4,14 @@
 // ("ETC2 compressed texture image formats", RGB8): individual, differential,
 // T, H and planar modes.
 //
-// The encoder writes the individual, differential (both flips, every modifier
-// table, each pixel its best modifier) and planar modes (least-squares plane),
-// and keeps the block with the least squared error; it never writes T or H
-// blocks, which a decoder must still read. Debian packages no ETC2 encoder
-// (docs/decisions/0014 has the alternatives and the figures).
+// The encoder writes the differential mode (both flips, every modifier table,
+// each pixel its best modifier; the individual mode where the halves are too
+// far apart for it) and the planar mode (least-squares plane) where ETC1 is
+// off by more than 2 levels a channel on average, and keeps the block with the
+// least squared error (tables compared by their error before clamping, two
+// sums a pixel for all eight at once). It never writes T or H blocks, which a
+// decoder must still read. Debian packages no ETC2 encoder
+// (docs/decisions/0014 has the alternatives, 0039 the speed).
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -25,6 +28,9 @@ size_t etc2Bytes(int w, int h);
 // the format stores them. Pixels past the image's edge repeat its last row and
 // column.
 void encodeEtc2(const uint8_t* rgba, int w, int h, size_t stride, uint8_t* out);
+// The same into etc2Bytes(out_w, out_h) bytes for an out_w × out_h area at
+// least w × h: pixels past the image repeat its last row and column.
+void encodeEtc2(const uint8_t* rgba, int w, int h, size_t stride, uint8_t* out, int out_w, int out_h);
 
 // Decodes one block into 16 RGBA8 pixels (alpha 255), rows of 4.
 void decodeEtc2Block(const uint8_t* block, uint8_t out[64]);

@@ -22,6 +22,9 @@ bool GlApi::load(Context& ctx, std::string& missing) {
   DepthRange = reinterpret_cast<decltype(DepthRange)>(ctx.getProcAddress("glDepthRange"));
   GetTexLevelParameteriv =
       reinterpret_cast<decltype(GetTexLevelParameteriv)>(ctx.getProcAddress("glGetTexLevelParameteriv"));
+  TexStorage2D = reinterpret_cast<PFNGLTEXSTORAGE2DPROC>(ctx.getProcAddress("glTexStorage2D"));
+  CompressedTexSubImage2D =
+      reinterpret_cast<PFNGLCOMPRESSEDTEXSUBIMAGE2DPROC>(ctx.getProcAddress("glCompressedTexSubImage2D"));
   return missing.empty();
 }
 

@@ -109,6 +109,10 @@ struct GlApi {
   // Optional: desktop GL and GLES 3.1 have it, GLES 3.0 does not (what the
   // driver allocated for each texture level: Renderer::measuredSlabBytes).
   void(GL_APIENTRYP GetTexLevelParameteriv)(GLenum target, GLint level, GLenum pname, GLint* params) = nullptr;
+  // Optional: an ETC2 slab atlas's (GLES 3.0 and GL 4.3 have both; the
+  // renderer checks the version, since EGL may name what a context lacks).
+  PFNGLTEXSTORAGE2DPROC TexStorage2D = nullptr;
+  PFNGLCOMPRESSEDTEXSUBIMAGE2DPROC CompressedTexSubImage2D = nullptr;
 
   // Loads every entry point through ctx.getProcAddress (ctx must be current).
   // False when any is missing; `missing` then lists them, e.g.

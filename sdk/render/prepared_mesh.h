@@ -53,6 +53,9 @@ struct PreparedMesh {
   const uint8_t* rgba = nullptr;
   int texture_width = 0, texture_height = 0;
   int mip_levels = 0;
+  // The image's place as an ETC2 atlas holds it, every level (atlas_etc2.h),
+  // or null: encoded on the preparing thread for a slab whose atlas is ETC2.
+  const uint8_t* etc2 = nullptr;
   // Where a slab's atlas holds the image (slab_atlas.h: the loader's
   // packSlabAtlas); -1 when not placed (an upload() of its own needs none).
   int atlas_x = -1, atlas_y = -1;

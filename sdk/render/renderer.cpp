@@ -18,7 +18,9 @@
 #include <cstring>
 #include <deque>
 
+#include "render/atlas_etc2.h"
 #include "render/context.h"
+#include "render/etc2.h"
 #include "render/frustum.h"
 #include "render/gl_api.h"
 #include "render/gl_state.h"
@@ -58,6 +60,17 @@ void padLevel(const GlApi& gl, int level, const uint8_t* texels, int x0, int y0,
     for (int x = w; x < x_end; ++x)
       gl.TexSubImage2D(GL_TEXTURE_2D, level, x0 + x, y0 + y, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE,
                        last_row + uint64_t(w - 1) * 4);
+  }
+}
+
+// The slab's atlas bound for an upload; in a host's context, with nothing of
+// the host's unpack state (a bound unpack buffer, a row length) redirecting it.
+void bindAtlasForUpload(const GlApi& gl, GLuint texture, bool shared) {
+  gl.ActiveTexture(GL_TEXTURE0);
+  gl.BindTexture(GL_TEXTURE_2D, texture);
+  if (shared) {
+    gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    gl.PixelStorei(GL_UNPACK_ROW_LENGTH, 0);
   }
 }
 
@@ -317,6 +330,7 @@ bool Renderer::init(const RendererDesc& desc) {
     error_ = "GL " + gl_version_ + " is too old: need OpenGL ES 3.0 or OpenGL 3.3";
     return false;
   }
+  etc2_ = (gles_ || major > 4 || (major == 4 && minor >= 3)) && gl.TexStorage2D && gl.CompressedTexSubImage2D;
 
   ScopedGlState guard(gl, shared_);
   impl_->bg_program =
@@ -513,7 +527,9 @@ bool Renderer::reserve(Slab& slab, const PreparedMesh& p, SlabUpload& up) {
   up.voff = voff;
   up.ioff = ioff;
   up.texture = p.rgba ? slab.atlas : 0;
-  up.total = vbytes + ibytes + (p.rgba ? atlasUploadBytes(p) : 0);
+  const bool etc2 = slab.desc.atlas_format == AtlasFormat::Etc2;
+  const uint64_t texels = etc2 ? atlasEtc2Bytes(p.texture_width, p.texture_height) : atlasUploadBytes(p);
+  up.total = vbytes + ibytes + (p.rgba ? texels : 0);
   up.resets = slab.resets;
   slab.vertex_used = voff + vbytes;
   slab.index_used = ioff + ibytes;
@@ -524,9 +540,11 @@ bool Renderer::reserve(Slab& slab, const PreparedMesh& p, SlabUpload& up) {
 // of every image placed since the last reset.
 bool Renderer::placeImage(Slab& slab, const PreparedMesh& p) {
   if (!slab.atlas) return fail("slab has no atlas for a textured mesh");
-  const Slab::Place at{p.atlas_x, p.atlas_y, atlasRound(p.texture_width), atlasRound(p.texture_height)};
-  if (at.x < 0 || at.y < 0 || at.x % kAtlasAlign || at.y % kAtlasAlign)
+  const int align = atlasAlign(slab.desc.atlas_format);
+  const Slab::Place at{p.atlas_x, p.atlas_y, atlasRound(p.texture_width, align), atlasRound(p.texture_height, align)};
+  if (at.x < 0 || at.y < 0 || at.x % align || at.y % align)
     return fail("atlas place of the image is not on the atlas grid");
+  if (slab.desc.atlas_format == AtlasFormat::Etc2 && !p.etc2) return fail("an ETC2 atlas needs the image's ETC2 levels");
   if (at.x + at.w > slab.desc.atlas_width || at.y + at.h > slab.desc.atlas_height)
     return fail("slab full: the image's place is outside the atlas");
   for (const Slab::Place& o : slab.places)
@@ -534,7 +552,7 @@ bool Renderer::placeImage(Slab& slab, const PreparedMesh& p) {
       return fail("atlas place of the image overlaps another image");
   if (slab.places.size() >= slab.desc.meshes) return fail("slab full: mesh count exceeds its size");
   slab.places.push_back(at);
-  slab.texture_used += atlasBytes(at.w, at.h);  // the place's texels, every level
+  slab.texture_used += atlasBytes(at.w, at.h, slab.desc.atlas_format);  // the place's texels, every level
   return true;
 }
 
@@ -625,35 +643,8 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
       copyBuffer(slab.ibo, up.ioff, p.indices, vbytes, ibytes);
     }
     if (p.rgba && allowance > 0 && up.copied < up.total) {
-      // The atlas's levels in order, whole rows at a time, each from the
-      // image's level into its place's corner (uv_scale and uv_offset map it).
-      gl.ActiveTexture(GL_TEXTURE0);
-      gl.BindTexture(GL_TEXTURE_2D, up.texture);
-      if (shared_) {
-        // A host's bound unpack buffer or row length would redirect the copy.
-        gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
-        gl.PixelStorei(GL_UNPACK_ROW_LENGTH, 0);
-      }
-      gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
-      uint64_t level_begin = vbytes + ibytes;
-      const int x0 = p.atlas_x, y0 = p.atlas_y, cw = atlasRound(p.texture_width), ch = atlasRound(p.texture_height);
-      for (int l = 0; l < kAtlasLevels && allowance > 0; ++l) {
-        int w = 0, h = 0;
-        const uint8_t* texels = atlasSource(p, l, w, h);
-        const uint64_t row = uint64_t(w) * 4, size = row * uint64_t(h);
-        if (up.copied < level_begin + size) {
-          const int y = static_cast<int>((up.copied - level_begin) / row);
-          const int rows = static_cast<int>(std::clamp<uint64_t>(allowance / row, 1, uint64_t(h - y)));
-          gl.TexSubImage2D(GL_TEXTURE_2D, l, x0 >> l, (y0 >> l) + y, w, rows, GL_RGBA, GL_UNSIGNED_BYTE,
-                           texels + row * uint64_t(y));
-          const uint64_t n = row * uint64_t(rows);
-          up.copied += n;
-          allowance -= std::min(allowance, n);
-          if (y + rows < h) break;  // the level is not done: the allowance is
-          padLevel(gl, l, texels, x0 >> l, y0 >> l, w, h, std::max(1, cw >> l), std::max(1, ch >> l));
-        }
-        level_begin += size;
-      }
+      if (slab.desc.atlas_format == AtlasFormat::Etc2) copyEtc2Levels(up, p, vbytes + ibytes, allowance);
+      else copyRgbaLevels(up, p, vbytes + ibytes, allowance);
     }
   }
   if (up.copied < up.total) {
@@ -663,6 +654,59 @@ MeshHandle Renderer::continueSlabUpload(SlabUpload& up, uint64_t max_bytes, bool
   const MeshHandle handle = place(p, up.slab, &up);
   up.slab = 0;
   return handle;
+}
+
+// The atlas's levels in order, whole rows at a time, each from the image's
+// level into its place's corner (uv_scale and uv_offset map it), then the
+// place's edge padded.
+void Renderer::copyRgbaLevels(SlabUpload& up, const PreparedMesh& p, uint64_t begin, uint64_t& allowance) {
+  const GlApi& gl = *gl_;
+  bindAtlasForUpload(gl, up.texture, shared_);
+  gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  uint64_t level_begin = begin;
+  const int x0 = p.atlas_x, y0 = p.atlas_y, cw = atlasRound(p.texture_width), ch = atlasRound(p.texture_height);
+  for (int l = 0; l < kAtlasLevels && allowance > 0; ++l) {
+    int w = 0, h = 0;
+    const uint8_t* texels = atlasSource(p, l, w, h);
+    const uint64_t row = uint64_t(w) * 4, size = row * uint64_t(h);
+    if (up.copied < level_begin + size) {
+      const int y = static_cast<int>((up.copied - level_begin) / row);
+      const int rows = static_cast<int>(std::clamp<uint64_t>(allowance / row, 1, uint64_t(h - y)));
+      gl.TexSubImage2D(GL_TEXTURE_2D, l, x0 >> l, (y0 >> l) + y, w, rows, GL_RGBA, GL_UNSIGNED_BYTE,
+                       texels + row * uint64_t(y));
+      const uint64_t n = row * uint64_t(rows);
+      up.copied += n;
+      allowance -= std::min(allowance, n);
+      if (y + rows < h) break;  // the level is not done: the allowance is
+      padLevel(gl, l, texels, x0 >> l, y0 >> l, w, h, std::max(1, cw >> l), std::max(1, ch >> l));
+    }
+    level_begin += size;
+  }
+}
+
+// The same for an ETC2 atlas: the place's blocks, every level, whole rows of
+// blocks at a time (the preparing thread encoded the padding with them).
+void Renderer::copyEtc2Levels(SlabUpload& up, const PreparedMesh& p, uint64_t begin, uint64_t& allowance) {
+  const GlApi& gl = *gl_;
+  bindAtlasForUpload(gl, up.texture, shared_);
+  uint64_t level_begin = begin;
+  for (int l = 0; l < kAtlasLevels && allowance > 0; ++l) {
+    int w = 0, h = 0;
+    const uint8_t* blocks = atlasEtc2Level(p, l, w, h);
+    const uint64_t row = uint64_t(w / 4) * kEtc2BlockBytes, size = row * uint64_t(h / 4);
+    if (up.copied < level_begin + size) {
+      const int y = static_cast<int>((up.copied - level_begin) / row);
+      const int rows = static_cast<int>(std::clamp<uint64_t>(allowance / row, 1, uint64_t(h / 4 - y)));
+      gl.CompressedTexSubImage2D(GL_TEXTURE_2D, l, p.atlas_x >> l, (p.atlas_y >> l) + 4 * y, w, 4 * rows,
+                                 GL_COMPRESSED_RGB8_ETC2, static_cast<GLsizei>(row * uint64_t(rows)),
+                                 blocks + row * uint64_t(y));
+      const uint64_t n = row * uint64_t(rows);
+      up.copied += n;
+      allowance -= std::min(allowance, n);
+      if (y + rows < h / 4) break;
+    }
+    level_begin += size;
+  }
 }
 
 bool Renderer::reserveMeshes(uint32_t more) {
@@ -787,7 +831,9 @@ MeshHandle Renderer::place(const PreparedMesh& p, uint32_t slab_id, const SlabUp
   return MeshHandle{(s.generation << kIndexBits) | (index + 1)};
 }
 
-uint64_t slabGpuBytes(const SlabDesc& d) { return d.vertex_bytes + d.index_bytes + atlasBytes(d.atlas_width, d.atlas_height); }
+uint64_t slabGpuBytes(const SlabDesc& d) {
+  return d.vertex_bytes + d.index_bytes + atlasBytes(d.atlas_width, d.atlas_height, d.atlas_format);
+}
 
 SlabHandle Renderer::createSlab(const SlabDesc& d) {
   Impl& m = *impl_;
@@ -801,12 +847,17 @@ SlabHandle Renderer::createSlab(const SlabDesc& d) {
     fail("slab larger than 2 GiB");
     return {};
   }
+  const int align = atlasAlign(d.atlas_format);
   if ((d.atlas_width || d.atlas_height) &&
       (d.atlas_width <= 0 || d.atlas_height <= 0 || d.atlas_width > 16384 || d.atlas_height > 16384 ||
-       d.atlas_width % kAtlasAlign || d.atlas_height % kAtlasAlign)) {
+       d.atlas_width % align || d.atlas_height % align)) {
     char msg[96];
-    std::snprintf(msg, sizeof msg, "slab atlas size out of range (1..16384, a multiple of %d)", kAtlasAlign);
+    std::snprintf(msg, sizeof msg, "slab atlas size out of range (1..16384, a multiple of %d)", align);
     fail(msg);
+    return {};
+  }
+  if (d.atlas_width && d.atlas_format == AtlasFormat::Etc2 && !etc2_) {
+    fail(("an ETC2 slab atlas needs OpenGL ES 3.0 or OpenGL 4.3 (GL_VERSION " + gl_version_ + ")").c_str());
     return {};
   }
   if (!ctx_.makeCurrent()) {
@@ -835,9 +886,12 @@ SlabHandle Renderer::createSlab(const SlabDesc& d) {
     gl.GenTextures(1, &s.atlas);
     gl.ActiveTexture(GL_TEXTURE0);
     gl.BindTexture(GL_TEXTURE_2D, s.atlas);
-    for (int level = 0; level < kAtlasLevels; ++level)
-      gl.TexImage2D(GL_TEXTURE_2D, level, GL_RGBA8, d.atlas_width >> level, d.atlas_height >> level, 0, GL_RGBA,
-                    GL_UNSIGNED_BYTE, nullptr);
+    if (d.atlas_format == AtlasFormat::Etc2)
+      gl.TexStorage2D(GL_TEXTURE_2D, kAtlasLevels, GL_COMPRESSED_RGB8_ETC2, d.atlas_width, d.atlas_height);
+    else
+      for (int level = 0; level < kAtlasLevels; ++level)
+        gl.TexImage2D(GL_TEXTURE_2D, level, GL_RGBA8, d.atlas_width >> level, d.atlas_height >> level, 0, GL_RGBA,
+                      GL_UNSIGNED_BYTE, nullptr);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, kAtlasLevels - 1);
     setTextureSampling(gl);
     gl.BindTexture(GL_TEXTURE_2D, 0);
@@ -886,7 +940,8 @@ uint64_t Renderer::measuredSlabBytes(bool& textures_known) {
       gl.GetTexLevelParameteriv(GL_TEXTURE_2D, level, kTextureWidth, &w);
       gl.GetTexLevelParameteriv(GL_TEXTURE_2D, level, kTextureHeight, &h);
       if (w <= 0 || h <= 0) break;
-      bytes += uint64_t(w) * uint64_t(h) * 4;
+      bytes += s.desc.atlas_format == AtlasFormat::Etc2 ? uint64_t((w + 3) / 4) * uint64_t((h + 3) / 4) * 8
+                                                        : uint64_t(w) * uint64_t(h) * 4;
     }
   }
   gl.BindBuffer(GL_ARRAY_BUFFER, 0);

@@ -65,7 +65,8 @@ struct SlabDesc {
   uint64_t vertex_bytes = 0;
   uint64_t index_bytes = 0;  // 4-byte aligned placements; budget 3 bytes per mesh for it
   uint32_t meshes = 0;
-  int atlas_width = 0, atlas_height = 0;  // multiples of kAtlasAlign; 0: no texture
+  int atlas_width = 0, atlas_height = 0;  // multiples of atlasAlign(atlas_format); 0: no texture
+  AtlasFormat atlas_format = AtlasFormat::Rgba8;  // Etc2: images need PreparedMesh::etc2 (atlas_etc2.h)
 };
 struct SlabHandle {
   uint32_t id = 0;  // index + 1; 0 is invalid
@@ -244,6 +245,9 @@ class Renderer {
   const char* glRenderer() const { return gl_renderer_.c_str(); }
   const char* glVersion() const { return gl_version_.c_str(); }
   bool isGles() const { return gles_; }
+  // Whether a slab's atlas may be AtlasFormat::Etc2: OpenGL ES 3.0 (whose
+  // every device decodes ETC2) or OpenGL 4.3, with glTexStorage2D.
+  bool supportsEtc2() const { return etc2_; }
   uint32_t meshCount() const { return live_meshes_; }
   uint64_t meshBytes() const { return mesh_bytes_; }  // vertex + index bytes in GL buffers
   const std::string& lastError() const { return error_; }
@@ -269,6 +273,10 @@ class Renderer {
   // count into `up`. False with lastError() set when it has none.
   bool reserve(Slab& slab, const PreparedMesh& mesh, SlabUpload& up);
   bool placeImage(Slab& slab, const PreparedMesh& mesh);
+  // An image's atlas levels into its place, from byte `begin` of the upload
+  // on, within `allowance` bytes (less what they copy).
+  void copyRgbaLevels(SlabUpload& up, const PreparedMesh& mesh, uint64_t begin, uint64_t& allowance);
+  void copyEtc2Levels(SlabUpload& up, const PreparedMesh& mesh, uint64_t begin, uint64_t& allowance);
   bool init(const RendererDesc& desc);
   bool fail(const char* what);
 
@@ -278,6 +286,7 @@ class Renderer {
   Look look_;
   std::string gl_renderer_, gl_version_, error_;
   bool gles_ = true;
+  bool etc2_ = false;
   bool shared_ = false;
   bool out_of_memory_ = false;  // the last createSlab failed with GL_OUT_OF_MEMORY
   bool context_lost_ = false;

@@ -12,6 +12,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include "render/atlas_etc2.h"
 #include "runtime/frame_clock.h"
 #include "runtime/prefetch_share.h"
 #include "core/status.h"
@@ -470,7 +471,8 @@ bool CellLoader::decodeCell(Staging& s) {
   }
   uint32_t layered = 0, single = 0;
   city_.cellLayers(s.cell, s.layers.data(), static_cast<uint32_t>(s.layers.size()), &layered, &single);
-  if (layered + single > 0 && s.atlas.pack(s.layers.data(), layered + single, atlas_width_) < 0)
+  if (layered + single > 0 &&
+      s.atlas.pack(s.layers.data(), layered + single, atlas_width_, render::atlasAlign(atlas_format_)) < 0)
     return fail("an impostor image is wider than the slot's atlas");
   for (uint32_t j = 0; j < layered + single; ++j) {
     const stream::LayerInfo& l = s.layers[j];
@@ -484,6 +486,10 @@ bool CellLoader::decodeCell(Staging& s) {
     const uint32_t staged = s.mesh_count;
     if (!stage(in_single ? MeshKind::Single : MeshKind::Layered, in_single ? j - layered : j, 0)) return true;
     if (s.mesh_count > staged && !placeImage(s, s.meshes[staged].mesh, j)) return true;
+    if (s.mesh_count > staged && s.meshes[staged].mesh.rgba && atlas_format_ == render::AtlasFormat::Etc2) {
+      if (!render::encodeAtlasEtc2(s.meshes[staged].mesh, s.arena, err)) return fail(err);
+      account(s);
+    }
     measured(s, true, units, threadCpuNs() - cpu0);
   }
   std::lock_guard<std::mutex> lock(mu_);

@@ -98,6 +98,12 @@ class CellLoader {
              uint64_t cpu_mask = 0, double share = 0);
   ~CellLoader();
   CellLoader(const CellLoader&) = delete;
+
+  // The slots' impostor atlas as the memory plan carved it (before any
+  // request): its width and format. An ETC2 atlas gets each image's ETC2
+  // levels encoded with it (the arena must hold them: cellNeed counts them).
+  // Without a call: the header's width, RGBA8.
+  void setAtlas(int width, render::AtlasFormat format) { atlas_width_ = width, atlas_format_ = format; }
   CellLoader& operator=(const CellLoader&) = delete;
 
   // Queues `cell` into a free staging slot, tagged `target`. False when every
@@ -188,6 +194,7 @@ class CellLoader {
   const stream::City& city_;
   Allocator alloc_;
   int atlas_width_ = 0;  // the slots' impostor atlas (impostorAtlasWidth)
+  render::AtlasFormat atlas_format_ = render::AtlasFormat::Rgba8;
   Staging slots_[kStagingSlots];
   uint64_t order_[kStagingSlots] = {};  // request sequence, to finish oldest first
   uint64_t seq_ = 0;

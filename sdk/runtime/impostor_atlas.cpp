@@ -4,21 +4,23 @@
 
 namespace blvd::runtime {
 
-int impostorAtlasWidth(const package::PackageHeader& header) {
-  if (header.impostor_atlas_width) return header.impostor_atlas_width;  // 3.3
+int impostorAtlasWidth(const package::PackageHeader& header, render::AtlasFormat format) {
+  const int align = render::atlasAlign(format);
+  if (header.impostor_atlas_width) return render::atlasRound(header.impostor_atlas_width, align);  // 3.3
   if (header.max_impostor_texture_width == 0) return 0;
-  return render::atlasWidth(header.max_impostor_texture_width, header.max_cell_impostor_texture_bytes / 4);
+  return render::atlasWidth(header.max_impostor_texture_width, header.max_cell_impostor_texture_bytes / 4, align);
 }
 
 // Each image rounded up to the atlas grid adds at most a grid step to each side.
-int impostorAtlasHeightBound(const package::PackageHeader& header, int width) {
+int impostorAtlasHeightBound(const package::PackageHeader& header, int width, render::AtlasFormat format) {
   if (width <= 0) return 0;
-  if (header.impostor_atlas_height) return header.impostor_atlas_height;  // 3.3: the bake packed every cell
-  const uint64_t step = render::kAtlasAlign;
+  if (header.impostor_atlas_height && format == render::AtlasFormat::Rgba8)
+    return header.impostor_atlas_height;  // 3.3: the bake packed every cell
+  const uint64_t step = uint64_t(render::atlasAlign(format));
   const uint64_t rounded = header.max_cell_impostor_texture_bytes / 4 +
                            uint64_t(header.max_cell_impostor_layers) *
                                (step * (header.max_impostor_texture_width + header.max_impostor_texture_height) + step * step);
-  return render::atlasHeightBound(rounded, header.max_impostor_texture_height, width);
+  return render::atlasHeightBound(rounded, header.max_impostor_texture_height, width, int(step));
 }
 
 void ImpostorAtlas::resize(size_t layers) {
@@ -29,10 +31,10 @@ void ImpostorAtlas::resize(size_t layers) {
   order.resize(layers);
 }
 
-int ImpostorAtlas::pack(const stream::LayerInfo* layers, uint32_t n, int width) {
+int ImpostorAtlas::pack(const stream::LayerInfo* layers, uint32_t n, int width, int align) {
   if (n > w.size()) return -1;
   for (uint32_t i = 0; i < n; ++i) w[i] = layers[i].texture_width, h[i] = layers[i].texture_height;
-  return render::packSlabAtlas(w.data(), h.data(), n, width, x.data(), y.data(), order.data());
+  return render::packSlabAtlas(w.data(), h.data(), n, width, x.data(), y.data(), order.data(), align);
 }
 
 }  // namespace blvd::runtime

@@ -6,17 +6,21 @@
 #include <vector>
 
 #include "package/format.h"
+#include "render/slab_atlas.h"
 #include "stream/city.h"
 
 namespace blvd::runtime {
 
 // The atlas width of a package's cell slots: the header's (3.3), or from its
-// widest image and most texels a cell.
-int impostorAtlasWidth(const package::PackageHeader& header);
+// widest image and most texels a cell; rounded up to `format`'s grid.
+int impostorAtlasWidth(const package::PackageHeader& header,
+                       render::AtlasFormat format = render::AtlasFormat::Rgba8);
 
-// The atlas height the header gives (3.3) or its maxima bound (for tables that
-// come over the link a page at a time, where the plan cannot pack every cell).
-int impostorAtlasHeightBound(const package::PackageHeader& header, int width);
+// The atlas height the header gives (3.3, packed on the RGBA8 grid) or its
+// maxima bound (for tables that come over the link a page at a time, where the
+// plan cannot pack every cell; always for an ETC2 atlas's coarser grid).
+int impostorAtlasHeightBound(const package::PackageHeader& header, int width,
+                             render::AtlasFormat format = render::AtlasFormat::Rgba8);
 
 // Scratch for packing one cell's layers, sized once (create time) for the
 // package's most layers a cell.
@@ -26,7 +30,7 @@ struct ImpostorAtlas {
   void resize(size_t layers);
   // Places layers[0..n)'s images: x[i], y[i]. The height they take, or -1
   // when an image is wider than `width` or n is past the size.
-  int pack(const stream::LayerInfo* layers, uint32_t n, int width);
+  int pack(const stream::LayerInfo* layers, uint32_t n, int width, int align = render::kAtlasAlign);
 };
 
 }  // namespace blvd::runtime

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "render/atlas_etc2.h"
 #include "runtime/cell_loader.h"
 #include "core/status.h"
 #include "track/tracker.h"
@@ -15,10 +16,10 @@ namespace {
 // alignment a slab placement may add.
 uint64_t indexBytes(uint64_t v, uint64_t t) { return t * 3 * (v < 0xFFFF ? 2 : 4) + 3; }
 
-void addMesh(CellNeed& n, uint64_t v, uint64_t t, int tw, int th) {
+void addMesh(CellNeed& n, uint64_t v, uint64_t t, int tw, int th, bool etc2 = false) {
   n.vertex_bytes += v * render::kVertexBytes;
   n.index_bytes += indexBytes(v, t);
-  n.staging_bytes += render::preparedBytes(v, t * 3, tw, th);
+  n.staging_bytes += render::preparedBytes(v, t * 3, tw, th) + (etc2 ? render::atlasEtc2Bytes(tw, th) + 16 : 0);
   ++n.meshes;
   if (tw > 0) ++n.textures;
 }
@@ -26,7 +27,8 @@ void addMesh(CellNeed& n, uint64_t v, uint64_t t, int tw, int th) {
 }  // namespace
 
 CellNeed cellNeed(const stream::City& city, uint32_t cell, int atlas_width, stream::LayerInfo* layers,
-                  ImpostorAtlas& atlas) {
+                  ImpostorAtlas& atlas, render::AtlasFormat format) {
+  const bool etc2 = format == render::AtlasFormat::Etc2;
   CellNeed n;
   for (const uint32_t b : city.streets().localBlocks(cell)) {
     const graph::BlockRecord r = city.block(b);
@@ -37,11 +39,11 @@ CellNeed cellNeed(const stream::City& city, uint32_t cell, int atlas_width, stre
   city.cellLayers(cell, layers, city.maxCellLayers(), &layered, &single);
   for (uint32_t i = 0; i < layered + single; ++i) {
     const stream::LayerInfo& l = layers[i];
-    addMesh(n, l.vertices, l.triangles, l.texture_width, l.texture_height);
+    addMesh(n, l.vertices, l.triangles, l.texture_width, l.texture_height, etc2);
     n.texture_width = std::max(n.texture_width, l.texture_width);
     n.texture_height = std::max(n.texture_height, l.texture_height);
   }
-  if (n.textures) n.atlas_height = atlas.pack(layers, layered + single, atlas_width);
+  if (n.textures) n.atlas_height = atlas.pack(layers, layered + single, atlas_width, render::atlasAlign(format));
   return n;
 }
 
@@ -50,7 +52,9 @@ CellNeed cellNeed(const stream::City& city, uint32_t cell, int atlas_width, stre
 // all). A sum of the header's maxima bounds the most any one cell needs;
 // textures' mip chains at most 4/3 of their level 0 plus, per layer, a row
 // and a column of rounding (8 × (w + h) + 128 bytes); 64 bytes of alignment
-// per mesh. A cell past the header is refused by the loader's checks.
+// per mesh; an ETC2 atlas's levels at most 2/3 of a byte a texel of their
+// place (32 × (w + h) + 1024 texels of rounding a layer). A cell past the
+// header is refused by the loader's checks.
 static void planFromHeader(const stream::City& city, MemoryPlan& p) {
   const package::PackageHeader& h = city.header();
   const uint64_t v = uint64_t(h.max_cell_local_vertices) + h.max_cell_impostor_vertices;
@@ -60,9 +64,15 @@ static void planFromHeader(const stream::City& city, MemoryPlan& p) {
   p.slab.vertex_bytes = v * render::kVertexBytes;
   p.slab.index_bytes = t * 3 * 4 + 3ull * meshes;
   p.slab.meshes = meshes;
-  if (h.max_cell_impostor_layers) p.slab.atlas_height = impostorAtlasHeightBound(h, p.slab.atlas_width);
+  if (h.max_cell_impostor_layers)
+    p.slab.atlas_height = impostorAtlasHeightBound(h, p.slab.atlas_width, p.slab.atlas_format);
   p.staging_arena_bytes = p.slab.vertex_bytes + t * 3 * 4 + h.max_cell_impostor_texture_bytes * 4 / 3 +
                           h.max_cell_impostor_layers * rounding + 64ull * meshes;
+  if (p.slab.atlas_format == render::AtlasFormat::Etc2) {
+    const uint64_t place_rounding = 32ull * (h.max_impostor_texture_width + h.max_impostor_texture_height) + 1024;
+    p.staging_arena_bytes +=
+        (h.max_cell_impostor_texture_bytes / 4 + h.max_cell_impostor_layers * place_rounding) * 2 / 3 + 16ull * meshes;
+  }
   p.largest_cell = graph::kNone;
 }
 
@@ -73,7 +83,9 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   p.resident_cells = desc.max_resident_cells;
   const int tw = city.header().max_impostor_texture_width, th = city.header().max_impostor_texture_height;
   p.max_local_blocks = city.header().max_cell_local_blocks;
-  p.slab.atlas_width = impostorAtlasWidth(city.header());
+  p.slab.atlas_format =
+      desc.impostor_texture == BLVD_TEXTURE_ETC2 ? render::AtlasFormat::Etc2 : render::AtlasFormat::Rgba8;
+  p.slab.atlas_width = impostorAtlasWidth(city.header(), p.slab.atlas_format);
   uint64_t most = 0;
   // The header's maxima size scratch arrays and slab textures: a package whose
   // tables exceed them is corrupt, not a reason to write past an array.
@@ -87,7 +99,7 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   for (uint32_t c = 0; !city.tablesOverLink() && c < city.streets().cellCount(); ++c) {
     if (city.streets().localBlocks(c).size() > p.max_local_blocks)
       corrupt("cell " + std::to_string(c) + " has more local blocks than the header says");
-    const CellNeed n = cellNeed(city, c, p.slab.atlas_width, layers.data(), atlas);
+    const CellNeed n = cellNeed(city, c, p.slab.atlas_width, layers.data(), atlas, p.slab.atlas_format);
     if (n.texture_width > tw || n.texture_height > th || n.atlas_height < 0)
       corrupt("cell " + std::to_string(c) + " has an impostor texture larger than the header says");
     p.slab.vertex_bytes = std::max(p.slab.vertex_bytes, n.vertex_bytes);
@@ -103,8 +115,10 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   p.slab.index_bytes = std::max<uint64_t>(p.slab.index_bytes, 8);
   p.slab.meshes = std::max(p.slab.meshes, 1u);
   // A 3.3 header names the atlas the bake packed every cell into: the same
-  // slots whether the tables are read whole or over the link a page at a time.
-  if (city.header().impostor_atlas_height && !city.tablesOverLink()) {
+  // slots whether the tables are read whole or over the link a page at a time
+  // (on the RGBA8 grid; an ETC2 atlas is as high as its cells pack).
+  if (city.header().impostor_atlas_height && !city.tablesOverLink() &&
+      p.slab.atlas_format == render::AtlasFormat::Rgba8) {
     if (p.slab.atlas_height > city.header().impostor_atlas_height)
       corrupt("a cell's impostor images take more of the atlas than the header says");
     p.slab.atlas_height = city.header().impostor_atlas_height;

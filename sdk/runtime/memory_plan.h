@@ -8,7 +8,8 @@
 //         atlas height): the current cell's local blocks and its impostors,
 //         whose images share one atlas texture (render/slab_atlas.h), so a
 //         slot's texels follow the bake's texel budget a cell, not the
-//         number of layers or runs times the largest image.
+//         number of layers or runs times the largest image. The atlas is
+//         RGBA8 or, with blvd_runtime_desc.impostor_texture, ETC2.
 //   CPU   staging: kStagingSlots arenas the loader thread decodes a cell into
 //         (the render thread copies them to a slab), each for the largest cell;
 //         tables: the package's graph, cell and block tables the runtime holds;
@@ -37,8 +38,9 @@ struct CellNeed {
   int atlas_height = 0;  // the impostor images packed into an atlas `atlas_width` wide (-1: one is wider)
 };
 // `layers` and `atlas`: scratch of at least city.maxCellLayers() entries.
+// An ETC2 atlas packs on its grid, and staging holds each image's ETC2 levels.
 CellNeed cellNeed(const stream::City& city, uint32_t cell, int atlas_width, stream::LayerInfo* layers,
-                  ImpostorAtlas& atlas);
+                  ImpostorAtlas& atlas, render::AtlasFormat format = render::AtlasFormat::Rgba8);
 
 struct MemoryPlan {
   uint32_t resident_cells = 0;

@@ -36,6 +36,7 @@ Runtime::Runtime(const blvd_runtime_desc& desc) : desc_(desc) {
                                          desc.executor, desc.prefetch_priority == BLVD_PREFETCH_LOW,
                                          desc.prefetch_priority == BLVD_PREFETCH_IDLE, desc.prefetch_cpu_mask,
                                          desc.prefetch_share);
+  loader_->setAtlas(plan_.slab.atlas_width, plan_.slab.atlas_format);
   clock_ = FrameClocks::acquire();  // none left: this runtime's frames are not waited for
 
   ctx_ = render::createContext(static_cast<render::Backend>(desc.backend), err);

@@ -7,11 +7,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "render/atlas_etc2.h"
 #include "render/context.h"
 #include "render/gl_api.h"
 #include "render/prepared_mesh.h"
@@ -190,8 +192,10 @@ Camera viewCamera() {
   return cam;
 }
 
-std::vector<uint8_t> draw(Renderer& r, const std::vector<MeshHandle>& list) {
-  const Camera cam = viewCamera();
+// The frame of `list` seen from `back` metres behind the view camera.
+std::vector<uint8_t> draw(Renderer& r, const std::vector<MeshHandle>& list, double back = 0) {
+  Camera cam = viewCamera();
+  cam.eye_enu.y = back;
   EXPECT_TRUE(r.render(cam, list.data(), list.size(), nullptr)) << r.lastError();
   std::vector<uint8_t> px(size_t(kW) * kH * 4);
   EXPECT_TRUE(r.readPixels(px.data()));
@@ -564,15 +568,7 @@ TEST(SlabAtlas, AnImageDrawsTheSameBesideAnother) {
   EXPECT_EQ(r->slabUsage(two).textures, 2u);
   EXPECT_EQ(r->slabUsage(two).texture_bytes, atlasBytes(152, 136) + atlasBytes(208, 120));
   for (double back : {0.0, -300.0, -700.0}) {  // 260 to 960 m: finer to coarser than the atlas's last level
-    Camera cam = viewCamera();
-    cam.eye_enu.y = back;
-    std::vector<uint8_t> fa(size_t(kW) * kH * 4), fb(fa.size()), empty(fa.size());
-    ASSERT_TRUE(r->render(cam, nullptr, 0, nullptr)) << r->lastError();
-    ASSERT_TRUE(r->readPixels(empty.data()));
-    ASSERT_TRUE(r->render(cam, &a, 1, nullptr)) << r->lastError();
-    ASSERT_TRUE(r->readPixels(fa.data()));
-    ASSERT_TRUE(r->render(cam, &b, 1, nullptr)) << r->lastError();
-    ASSERT_TRUE(r->readPixels(fb.data()));
+    const std::vector<uint8_t> empty = draw(*r, {}, back), fa = draw(*r, {a}, back), fb = draw(*r, {b}, back);
     int wall_px = 0, magenta = 0, worst = 0;
     for (size_t i = 0; i < fb.size(); i += 4) {
       wall_px += std::memcmp(&fa[i], &empty[i], 3) != 0;
@@ -612,6 +608,85 @@ TEST(SlabAtlas, ABadPlaceIsRefused) {
   m.atlas_x = 256, m.atlas_y = 128;
   EXPECT_NE(r->uploadToSlab(slab, m).id, 0u) << r->lastError();
   EXPECT_EQ(r->slabUsage(slab).textures, 2u);
+}
+
+// An ETC2 atlas (places on a 32-texel grid, each level's blocks encoded on
+// the preparing thread) draws the wall within the codec's error of the RGBA8
+// atlas, uploaded in small steps as whole; a magenta neighbour never bleeds
+// in; the slot holds an eighth of the texel bytes.
+TEST(SlabAtlas, AnEtc2AtlasDrawsAsTheRgba8OneWithinTheCodecsError) {
+  Rig rig;
+  ASSERT_NE(rig.renderer, nullptr) << rig.why;
+  Renderer* r = rig.renderer.get();
+  ASSERT_TRUE(r->supportsEtc2()) << "GL " << r->glVersion() << " has no ETC2";
+  const geo::MeshData pink = farWall(150, 130, [](int, int, uint8_t* t) { t[0] = 255, t[1] = 0, t[2] = 255, t[3] = 255; });
+  geo::MeshData wall = farWall(203, 117, [](int x, int y, uint8_t* t) {
+    t[0] = uint8_t(60 + 2 * x % 90), t[1] = uint8_t(60 + y), t[2] = 70, t[3] = 255;
+  });
+  const float u0 = 4.f / 203, u1 = 1 - u0, v0 = 4.f / 117, v1 = 1 - v0;
+  wall.texcoords = {u0, v0, u1, v0, u1, v1, u0, v1};
+  std::vector<uint8_t> block(2 * (preparedBytes(4, 6, 150, 130) + atlasEtc2Bytes(150, 130)) +
+                             3 * (preparedBytes(4, 6, 203, 117) + atlasEtc2Bytes(203, 117)));
+  StagingArena arena{block.data(), block.size(), 0};
+  PreparedMesh pp, plain, packed;
+  std::string err;
+  ASSERT_TRUE(prepareMesh(pink, arena, pp, err)) << err;
+  ASSERT_TRUE(prepareMesh(wall, arena, plain, err)) << err;
+  ASSERT_TRUE(prepareMesh(wall, arena, packed, err)) << err;
+  ASSERT_TRUE(encodeAtlasEtc2(pp, arena, err)) << err;
+  ASSERT_TRUE(encodeAtlasEtc2(packed, arena, err)) << err;
+  const int w[2] = {150, 203}, h[2] = {130, 117};
+  int x[2], y[2];
+  uint32_t order[2];
+  SlabDesc d;
+  d.vertex_bytes = 3 * pp.vertexBytes();
+  d.index_bytes = 3 * pp.indexBytes() + 12;
+  d.meshes = 3;
+  d.atlas_width = 384;
+  d.atlas_format = AtlasFormat::Etc2;
+  d.atlas_height = packSlabAtlas(w, h, 2, d.atlas_width, x, y, order, kEtc2AtlasAlign);
+  ASSERT_EQ(d.atlas_height, 160);
+  pp.atlas_x = x[0], pp.atlas_y = y[0];
+  packed.atlas_x = x[1], packed.atlas_y = y[1];
+  ASSERT_EQ(packed.atlas_x, 160);  // right after the (taller) pink image's place
+  SlabDesc rgba = d;
+  rgba.atlas_format = AtlasFormat::Rgba8;
+  plain.atlas_x = plain.atlas_y = 0;
+  EXPECT_EQ(slabGpuBytes(d) - d.vertex_bytes - d.index_bytes,
+            (slabGpuBytes(rgba) - rgba.vertex_bytes - rgba.index_bytes) / 8);
+  const SlabHandle one = r->createSlab(rgba), two = r->createSlab(d);
+  ASSERT_NE(two.id, 0u) << r->lastError();
+  const MeshHandle a = r->uploadToSlab(one, plain);
+  ASSERT_NE(r->uploadToSlab(two, pp).id, 0u) << r->lastError();
+  SlabUpload up;
+  ASSERT_TRUE(r->beginSlabUpload(two, packed, up)) << r->lastError();
+  int steps = 0;
+  const MeshHandle b = finishInSteps(*r, up, 512, steps);  // at least 4096 bytes a step
+  ASSERT_NE(a.id, 0u) << r->lastError();
+  ASSERT_NE(b.id, 0u) << r->lastError();
+  EXPECT_GE(steps, int(atlasEtc2Bytes(203, 117) / 4096));
+  EXPECT_EQ(r->slabUsage(two).texture_bytes,
+            atlasBytes(160, 160, AtlasFormat::Etc2) + atlasBytes(224, 128, AtlasFormat::Etc2));
+  // An image without its ETC2 levels has no place in an ETC2 atlas.
+  PreparedMesh bare = plain;
+  bare.atlas_x = 0, bare.atlas_y = 160 - 32;
+  EXPECT_EQ(r->uploadToSlab(two, bare).id, 0u);
+  EXPECT_NE(r->lastError().find("ETC2"), std::string::npos) << r->lastError();
+  for (double back : {0.0, -300.0, -700.0}) {
+    const std::vector<uint8_t> empty = draw(*r, {}, back), fa = draw(*r, {a}, back), fb = draw(*r, {b}, back);
+    int wall_px = 0, magenta = 0;
+    double se = 0;
+    for (size_t i = 0; i < fb.size(); i += 4) {
+      if (std::memcmp(&fa[i], &empty[i], 3) == 0) continue;
+      ++wall_px;
+      magenta += fb[i] > 150 && fb[i + 1] < 100 && fb[i + 2] > 150;
+      for (int k = 0; k < 3; ++k) se += (double(fa[i + k]) - fb[i + k]) * (double(fa[i + k]) - fb[i + k]);
+    }
+    ASSERT_GT(wall_px, 0) << "the wall is not in the frame " << back << " m back";
+    EXPECT_EQ(magenta, 0) << back << " m back";
+    const double psnr = 10 * std::log10(255.0 * 255.0 / std::max(1e-9, se / (3.0 * wall_px)));
+    EXPECT_GE(psnr, 30.0) << back << " m back";
+  }
 }
 
 }  // namespace
