@@ -83,14 +83,19 @@ def decode(j):
     def cell(p, k):
         c = p.get("cell_impostors")
         return num(c[k], 2) if c and c.get("meshes") else "–"
-    def slot(p):
-        m = p.get("memory")
+    def slot(p, k="memory"):
+        m = p.get(k)
         return num(m["slab_bytes"] / 1048576, 1) if m else "–"
+    def etc2(p):  # a cell's impostors decoded and encoded as ETC2 atlas levels (decision 0039)
+        c = p.get("cell_impostors_etc2")
+        return num(c["ms_p50"], 2) if c and c.get("meshes") else "–"
     rows = [[os.path.basename(p["package"]), f"{p['bytes']:,}", num(p["bytes_vs_first"]),
              num(p["blocks"]["ms_total"], 0), num(p["impostors"]["ms_total"], 0), cell(p, "ms_p50"),
-             cell(p, "ms_max"), num(p["ms_total"], 0), num(p["ms_total_vs_first"]), slot(p)] for p in j]
+             cell(p, "ms_max"), num(p["ms_total"], 0), num(p["ms_total_vs_first"]), slot(p), etc2(p),
+             slot(p, "memory_etc2")] for p in j]
     return table(["package", "bytes", "÷ first", "block decode ms", "impostor decode ms",
-                  "a cell's impostors ms p50", "max", "total ms", "÷ first", "GPU MiB a cell slot"], rows)
+                  "a cell's impostors ms p50", "max", "total ms", "÷ first", "GPU MiB a cell slot",
+                  "ETC2: a cell's impostors ms p50", "ETC2: GPU MiB a cell slot"], rows)
 
 
 def track(j):

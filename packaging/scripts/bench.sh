@@ -33,11 +33,16 @@ monaco() {
     --impostor both --impostor-route auto:200 --seed 1 > "$out/bake-route.txt"
   "$blvd" pack info --json "$out/osrm.blvd" > "$out/bake-route.json"
   run route "$blvd" bench route "$out/osrm.blvd" --route auto:200 --seed 1 --json "$out/route.json"
+  run route.etc2 "$blvd" bench route "$out/osrm.blvd" --route auto:200 --seed 1 --impostor-texture etc2 \
+    --json "$out/route.etc2.json"
   run budget "$blvd" bench budget "$out/osrm.blvd" --route auto:120 --seed 1 --json "$out/budget.json"
   run bake.demo /usr/bin/time -f "%e s" -o "$out/bake-demo.time" \
     "$blvd" bake --quiet "$osm/monaco-geofabrik-2026.osm.pbf" -o "$out/demo.blvd" > "$out/bake-demo.txt"
   "$blvd" pack info --json "$out/demo.blvd" > "$out/bake-demo.json"
   run route.demo "$blvd" bench route "$out/demo.blvd" --route auto:12 --seed 7 --step 12 --json "$out/route.demo.json"
+  run route.demo.etc2 "$blvd" bench route "$out/demo.blvd" --route auto:12 --seed 7 --step 12 \
+    --impostor-texture etc2 --json "$out/route.demo.etc2.json"
+  run decode.demo "$blvd" bench decode "$out/demo.blvd" --json "$out/decode.demo.json"
   # The former bake defaults (decision 0015), and the same in WebP.
   "$blvd" bake --quiet "$osm/monaco-osrm-2016.osm.pbf" -o "$out/osrm-jpeg1x.blvd" --impostor both \
     --impostor-route auto:200 --seed 1 --texture-codec jpeg --cell-texels 163840 --run-length 100 --max-runs 4
@@ -65,6 +70,9 @@ sf() {
     --impostor both --impostor-route auto:100 --seed 1 > "$out/bake-sf.txt"
   "$blvd" pack info --json "$out/sf.blvd" > "$out/bake-sf.json"
   run route.sf "$blvd" bench route "$out/sf.blvd" --route auto:100 --seed 1 --json "$out/route.sf.json"
+  run route.sf.etc2 "$blvd" bench route "$out/sf.blvd" --route auto:100 --seed 1 --impostor-texture etc2 \
+    --json "$out/route.sf.etc2.json"
+  run decode.sf "$blvd" bench decode "$out/sf.blvd" --json "$out/decode.sf.json"
   run budget.sf "$blvd" bench budget "$out/sf.blvd" --route auto:100 --seed 1 --json "$out/budget.sf.json"
   "$blvd" bake --quiet "$osm/sf-downtown-2023.osm.pbf" -o "$out/sf4.blvd" --impostor both --impostor-route auto:40 \
     --seed 7 --tile 2x2

@@ -25,12 +25,9 @@ void raise(T& field, uint64_t v, const char* name) {
   field = std::max(field, fit<T>(v, name));
 }
 
-// The atlas a cell slot holds its impostor images in (render/slab_atlas.h):
-// its width from the maxima above, its height the most any cell's layers
-// (layered then single, the order the runtime's loader packs them in) take.
-void fillAtlasSize(const graph::CellTables& tables, package::PackageHeader& h) {
-  if (h.max_impostor_texture_width == 0) return;
-  const int width = render::atlasWidth(h.max_impostor_texture_width, h.max_cell_impostor_texture_bytes / 4);
+// The most height any cell's layers (layered then single, the order the
+// runtime's loader packs them in) take in an atlas `width` wide on `align`.
+int packedHeight(const graph::CellTables& tables, int width, int align) {
   std::vector<int> w, ht, x, y;
   std::vector<uint32_t> order;
   int height = 0;
@@ -39,12 +36,26 @@ void fillAtlasSize(const graph::CellTables& tables, package::PackageHeader& h) {
     for (const auto* list : {&ci.layered, &ci.single})
       for (const graph::ImpostorLayer& l : *list) w.push_back(l.texture_width), ht.push_back(l.texture_height);
     x.resize(w.size()), y.resize(w.size()), order.resize(w.size());
-    const int used = render::packSlabAtlas(w.data(), ht.data(), uint32_t(w.size()), width, x.data(), y.data(), order.data());
+    const int used = render::packSlabAtlas(w.data(), ht.data(), uint32_t(w.size()), width, x.data(), y.data(),
+                                           order.data(), align);
     if (used < 0) throw core::Error(core::Status::Internal, "impostor atlas: a layer is wider than the atlas");
     height = std::max(height, used);
   }
+  return height;
+}
+
+// The atlas a cell slot holds its impostor images in (render/slab_atlas.h):
+// its width from the maxima above, its height what the cells' layers take,
+// on the RGBA8 atlas's grid and on the ETC2 one's (5.1).
+void fillAtlasSize(const graph::CellTables& tables, package::PackageHeader& h) {
+  if (h.max_impostor_texture_width == 0) return;
+  const int width = render::atlasWidth(h.max_impostor_texture_width, h.max_cell_impostor_texture_bytes / 4);
   h.impostor_atlas_width = fit<uint16_t>(uint64_t(width), "impostor_atlas_width");
-  h.impostor_atlas_height = fit<uint16_t>(uint64_t(height), "impostor_atlas_height");
+  h.impostor_atlas_height =
+      fit<uint16_t>(uint64_t(packedHeight(tables, width, render::kAtlasAlign)), "impostor_atlas_height");
+  const int etc2_width = render::atlasRound(width, render::kEtc2AtlasAlign);
+  h.impostor_atlas_etc2_height = fit<uint16_t>(
+      uint64_t(packedHeight(tables, etc2_width, render::kEtc2AtlasAlign)), "impostor_atlas_etc2_height");
 }
 
 }  // namespace

@@ -213,6 +213,7 @@ core::Status parseHeader(const uint8_t* data, size_t size, uint64_t file_size,
   ph.max_impostor_texture_height = get<uint16_t>(data + h::kMaxImpostorTextureHeight);
   ph.impostor_atlas_width = get<uint16_t>(data + h::kImpostorAtlasWidth);
   ph.impostor_atlas_height = get<uint16_t>(data + h::kImpostorAtlasHeight);
+  ph.impostor_atlas_etc2_height = get<uint16_t>(data + h::kImpostorAtlasEtc2Height);
   ph.max_blob_contents_bytes = get<uint32_t>(data + h::kMaxBlobContents);
 
   if (out.file_size != file_size)
@@ -269,6 +270,7 @@ std::vector<PoolSizingField> poolSizing(const PackageHeader& h) {
       {"max_impostor_texture_height", h.max_impostor_texture_height},
       {"impostor_atlas_width", h.impostor_atlas_width},
       {"impostor_atlas_height", h.impostor_atlas_height},
+      {"impostor_atlas_etc2_height", h.impostor_atlas_etc2_height},
   };
 }
 

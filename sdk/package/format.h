@@ -36,7 +36,7 @@ inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
 // contents size, the header's largest contents); 5.0: Draco streams hold no
 // POSITION-typed attribute (docs/package-format.md).
 inline constexpr uint16_t kVersionMajor = 5;  // a reader opens only its own major
-inline constexpr uint16_t kVersionMinor = 0;  // minors add, never change (see spec)
+inline constexpr uint16_t kVersionMinor = 1;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
 inline constexpr uint32_t kSectionSpatialIndex = fourcc('S', 'I', 'D', 'X');  // graph spatial index
@@ -98,6 +98,9 @@ struct PackageHeader {
   // 3.3: the atlas a cell slot holds its impostor images in, packed by
   // render/slab_atlas.h, that every cell's fit (0 before 3.3, or no impostors).
   uint16_t impostor_atlas_width = 0, impostor_atlas_height = 0;
+  // 5.1: the same cells packed on an ETC2 atlas's 32-texel grid, as wide as
+  // impostor_atlas_width rounded up to 32 (render/slab_atlas.h); 0 before.
+  uint16_t impostor_atlas_etc2_height = 0;
   // 4.0: the largest blob's contents (after decompression), bytes. The
   // writer fills it from its blobs, whatever setHeader() was given.
   uint32_t max_blob_contents_bytes = 0;

@@ -78,7 +78,8 @@ constexpr size_t kMaxImpostorTextureHeight = 206;  // u16
 constexpr size_t kImpostorAtlasWidth = 208;        // u16, 3.3
 constexpr size_t kImpostorAtlasHeight = 210;       // u16, 3.3
 constexpr size_t kMaxBlobContents = 212;           // u32, 4.0
-constexpr size_t kReservedTail = 216; // zero up to header_size
+constexpr size_t kImpostorAtlasEtc2Height = 216;   // u16, 5.1
+constexpr size_t kReservedTail = 218; // zero up to header_size
 }  // namespace hdr
 
 namespace dir {  // one 32-byte directory entry

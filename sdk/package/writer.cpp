@@ -204,6 +204,7 @@ PackageWriter::Layout PackageWriter::layout() const {
   put<uint16_t>(hp + h::kMaxImpostorTextureHeight, header_.max_impostor_texture_height);
   put<uint16_t>(hp + h::kImpostorAtlasWidth, header_.impostor_atlas_width);
   put<uint16_t>(hp + h::kImpostorAtlasHeight, header_.impostor_atlas_height);
+  put<uint16_t>(hp + h::kImpostorAtlasEtc2Height, header_.impostor_atlas_etc2_height);
   uint64_t largest = 0;
   for (const Blob& b : blobs_) largest = std::max(largest, b.contents_size);
   put<uint32_t>(hp + h::kMaxBlobContents, static_cast<uint32_t>(largest));

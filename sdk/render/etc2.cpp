@@ -257,8 +257,6 @@ uint64_t encodePlanar(const Block& src) {
   return b;
 }
 
-constexpr int64_t kPlanarSkipError = 16 * 3 * 2 * 2;
-
 uint64_t encodeBlock(const Block& src) {
   uint64_t best = 0;
   int64_t best_err = INT64_MAX;
@@ -270,10 +268,8 @@ uint64_t encodeBlock(const Block& src) {
     if (!encodeEtc1(src, flip, true, &b, &e) && !encodeEtc1(src, flip, false, &b, &e)) continue;
     if (e < best_err) best_err = e, best = b;
   }
-  // A block ETC1 holds within 2 levels a channel on average keeps it: a plane
-  // seldom does better there. Else the planar block's error as the decoder
-  // makes it.
-  if (best_err <= kPlanarSkipError) return best;
+  // The planar block's error as the decoder makes it (its 6/7/6-bit colours
+  // hold a flat block closer than ETC1's bases and modifiers often do).
   uint8_t decoded[64], bytes[8];
   const uint64_t planar = encodePlanar(src);
   store64(planar, bytes);
@@ -326,9 +322,24 @@ void encodeEtc2(const uint8_t* rgba, int w, int h, size_t stride, uint8_t* out) 
   encodeEtc2(rgba, w, h, stride, out, w, h);
 }
 
+constexpr int kFlatCache = 64;
+
+bool flat(const Block& b) {
+  for (int i = 1; i < 16; ++i)
+    if (b.px[i][0] != b.px[0][0] || b.px[i][1] != b.px[0][1] || b.px[i][2] != b.px[0][2]) return false;
+  return true;
+}
+
 void encodeEtc2(const uint8_t* rgba, int w, int h, size_t stride, uint8_t* out, int out_w, int out_h) {
   const int bw = (out_w + 3) / 4, bh = (out_h + 3) / 4;
   Block src;
+  // Most of an impostor image is blocks of one colour (a facade, the margin
+  // round what a layer shows, a place's padding): the last one's code serves
+  // the next of the same colour, as encodeBlock would make it again (the
+  // codes of the last 64 colours, by a hash of the colour).
+  int flat_colour[kFlatCache];
+  uint64_t flat_code[kFlatCache] = {};
+  std::fill(flat_colour, flat_colour + kFlatCache, -1);
   for (int by = 0; by < bh; ++by)
     for (int bx = 0; bx < bw; ++bx) {
       for (int y = 0; y < 4; ++y)
@@ -337,7 +348,16 @@ void encodeEtc2(const uint8_t* rgba, int w, int h, size_t stride, uint8_t* out, 
           const uint8_t* p = rgba + size_t(sy) * stride + size_t(sx) * 4;
           for (int k = 0; k < 3; ++k) src.px[y * 4 + x][k] = p[k];
         }
-      store64(encodeBlock(src), out + (size_t(by) * bw + bx) * kEtc2BlockBytes);
+      uint64_t code = 0;
+      if (!flat(src)) {
+        code = encodeBlock(src);
+      } else {
+        const int colour = src.px[0][0] << 16 | src.px[0][1] << 8 | src.px[0][2];
+        const int slot = (colour * 2654435761u) >> 26;  // kFlatCache = 64 slots by colour
+        if (colour != flat_colour[slot]) flat_colour[slot] = colour, flat_code[slot] = encodeBlock(src);
+        code = flat_code[slot];
+      }
+      store64(code, out + (size_t(by) * bw + bx) * kEtc2BlockBytes);
     }
 }
 

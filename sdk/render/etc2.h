@@ -6,11 +6,11 @@
 //
 // The encoder writes the differential mode (both flips, every modifier table,
 // each pixel its best modifier; the individual mode where the halves are too
-// far apart for it) and the planar mode (least-squares plane) where ETC1 is
-// off by more than 2 levels a channel on average, and keeps the block with the
-// least squared error (tables compared by their error before clamping, two
-// sums a pixel for all eight at once). It never writes T or H blocks, which a
-// decoder must still read. Debian packages no ETC2 encoder
+// far apart for it) and the planar mode (least-squares plane), and keeps the
+// block with the least squared error (tables compared by their error before
+// clamping, two sums a pixel for all eight at once); a block of one colour
+// takes the code of the last such block of that colour. It never writes T or
+// H blocks, which a decoder must still read. Debian packages no ETC2 encoder
 // (docs/decisions/0014 has the alternatives, 0039 the speed).
 #pragma once
 #include <cstddef>

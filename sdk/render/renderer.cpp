@@ -685,8 +685,12 @@ void Renderer::copyRgbaLevels(SlabUpload& up, const PreparedMesh& p, uint64_t be
 }
 
 // The same for an ETC2 atlas: the place's blocks, every level, whole rows of
-// blocks at a time (the preparing thread encoded the padding with them).
+// blocks at a time (the preparing thread encoded the padding with them). The
+// allowance is charged the RGBA8 bytes the blocks stand for (8 a block byte):
+// a driver without ETC2 in hardware (Mesa's llvmpipe) decodes them in the call,
+// and a chunk must not hold 8 times the texels of an RGBA8 one.
 void Renderer::copyEtc2Levels(SlabUpload& up, const PreparedMesh& p, uint64_t begin, uint64_t& allowance) {
+  constexpr uint64_t kCharge = 8;
   const GlApi& gl = *gl_;
   bindAtlasForUpload(gl, up.texture, shared_);
   uint64_t level_begin = begin;
@@ -696,13 +700,13 @@ void Renderer::copyEtc2Levels(SlabUpload& up, const PreparedMesh& p, uint64_t be
     const uint64_t row = uint64_t(w / 4) * kEtc2BlockBytes, size = row * uint64_t(h / 4);
     if (up.copied < level_begin + size) {
       const int y = static_cast<int>((up.copied - level_begin) / row);
-      const int rows = static_cast<int>(std::clamp<uint64_t>(allowance / row, 1, uint64_t(h / 4 - y)));
+      const int rows = static_cast<int>(std::clamp<uint64_t>(allowance / (row * kCharge), 1, uint64_t(h / 4 - y)));
       gl.CompressedTexSubImage2D(GL_TEXTURE_2D, l, p.atlas_x >> l, (p.atlas_y >> l) + 4 * y, w, 4 * rows,
                                  GL_COMPRESSED_RGB8_ETC2, static_cast<GLsizei>(row * uint64_t(rows)),
                                  blocks + row * uint64_t(y));
       const uint64_t n = row * uint64_t(rows);
       up.copied += n;
-      allowance -= std::min(allowance, n);
+      allowance -= std::min(allowance, n * kCharge);
       if (y + rows < h / 4) break;
     }
     level_begin += size;

@@ -16,6 +16,8 @@ int impostorAtlasHeightBound(const package::PackageHeader& header, int width, re
   if (width <= 0) return 0;
   if (header.impostor_atlas_height && format == render::AtlasFormat::Rgba8)
     return header.impostor_atlas_height;  // 3.3: the bake packed every cell
+  if (header.impostor_atlas_etc2_height && format == render::AtlasFormat::Etc2)
+    return header.impostor_atlas_etc2_height;  // 5.1: the same on the ETC2 grid
   const uint64_t step = uint64_t(render::atlasAlign(format));
   const uint64_t rounded = header.max_cell_impostor_texture_bytes / 4 +
                            uint64_t(header.max_cell_impostor_layers) *

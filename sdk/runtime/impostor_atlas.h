@@ -16,9 +16,9 @@ namespace blvd::runtime {
 int impostorAtlasWidth(const package::PackageHeader& header,
                        render::AtlasFormat format = render::AtlasFormat::Rgba8);
 
-// The atlas height the header gives (3.3, packed on the RGBA8 grid) or its
-// maxima bound (for tables that come over the link a page at a time, where the
-// plan cannot pack every cell; always for an ETC2 atlas's coarser grid).
+// The atlas height the header gives (3.3 on the RGBA8 grid, 5.1 on the ETC2
+// one) or its maxima bound (for tables that come over the link a page at a
+// time, where the plan cannot pack every cell; older headers).
 int impostorAtlasHeightBound(const package::PackageHeader& header, int width,
                              render::AtlasFormat format = render::AtlasFormat::Rgba8);
 

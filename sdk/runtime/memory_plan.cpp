@@ -114,14 +114,14 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   p.slab.vertex_bytes = std::max<uint64_t>(p.slab.vertex_bytes, render::kVertexBytes);
   p.slab.index_bytes = std::max<uint64_t>(p.slab.index_bytes, 8);
   p.slab.meshes = std::max(p.slab.meshes, 1u);
-  // A 3.3 header names the atlas the bake packed every cell into: the same
-  // slots whether the tables are read whole or over the link a page at a time
-  // (on the RGBA8 grid; an ETC2 atlas is as high as its cells pack).
-  if (city.header().impostor_atlas_height && !city.tablesOverLink() &&
-      p.slab.atlas_format == render::AtlasFormat::Rgba8) {
-    if (p.slab.atlas_height > city.header().impostor_atlas_height)
-      corrupt("a cell's impostor images take more of the atlas than the header says");
-    p.slab.atlas_height = city.header().impostor_atlas_height;
+  // A 3.3 header names the atlas the bake packed every cell into (5.1: on
+  // the ETC2 grid too): the same slots whether the tables are read whole or
+  // over the link a page at a time.
+  const bool etc2 = p.slab.atlas_format == render::AtlasFormat::Etc2;
+  const uint16_t packed = etc2 ? city.header().impostor_atlas_etc2_height : city.header().impostor_atlas_height;
+  if (packed && !city.tablesOverLink()) {
+    if (p.slab.atlas_height > packed) corrupt("a cell's impostor images take more of the atlas than the header says");
+    p.slab.atlas_height = packed;
   }
   if (p.slab.atlas_height == 0) p.slab.atlas_width = 0;
   p.staging_meshes = p.slab.meshes;

@@ -93,6 +93,7 @@ inline PackageHeader sampleHeader() {
   h.max_impostor_texture_height = 517;
   h.impostor_atlas_width = 560;
   h.impostor_atlas_height = 568;
+  h.impostor_atlas_etc2_height = 608;
   return h;
 }
 

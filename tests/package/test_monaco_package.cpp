@@ -170,8 +170,14 @@ TEST(MonacoPackage, HeaderPoolSizingEqualsABruteForceScan) {
                                            y.data(), order.data());
     ASSERT_GE(used, 0) << "cell " << c;
     e.impostor_atlas_height = std::max<uint16_t>(e.impostor_atlas_height, uint16_t(used));
+    // And on an ETC2 atlas's grid, its width rounded up to it (5.1).
+    const int etc2 = render::packSlabAtlas(cell_w[c].data(), cell_h[c].data(), n,
+                                           render::atlasRound(e.impostor_atlas_width, render::kEtc2AtlasAlign),
+                                           x.data(), y.data(), order.data(), render::kEtc2AtlasAlign);
+    e.impostor_atlas_etc2_height = std::max<uint16_t>(e.impostor_atlas_etc2_height, uint16_t(etc2));
   }
   EXPECT_GT(e.impostor_atlas_height, 0u);
+  EXPECT_GE(e.impostor_atlas_etc2_height, e.impostor_atlas_height);
   const package::PackageHeader& h = city().header();
   const auto got = package::poolSizing(h), want = package::poolSizing(e);
   ASSERT_EQ(got.size(), want.size());

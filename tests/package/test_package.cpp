@@ -101,7 +101,7 @@ TEST(Package, RoundTrip) {
   EXPECT_EQ(h.max_cell_blob_bytes, e.max_cell_blob_bytes);
   EXPECT_EQ(h.source_bytes, e.source_bytes);
   const auto got = poolSizing(h), want = poolSizing(e);
-  ASSERT_EQ(got.size(), 22u);
+  ASSERT_EQ(got.size(), 23u);
   for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].value, want[i].value) << got[i].name;
 
   // Sections: contents, alignment, directory order (user sections, TPCR, BIDX, BDAT).

@@ -86,6 +86,21 @@ std::string whatDiffers(blvd_runtime* a, blvd_runtime* b, const std::vector<uint
   return os.str();
 }
 
+// Draws each pose of `dr` in both runtimes (local first) and fails for the
+// first three whose frames differ; `after` runs after each pose.
+template <typename After>
+void expectSameFrames(blvd_runtime* local, const blvd_runtime_desc& dl, blvd_runtime* remote,
+                      const blvd_runtime_desc& du, const Drive& dr, After&& after) {
+  uint32_t differing = 0;
+  for (size_t i = 0; i < dr.poses.size(); ++i) {
+    const std::vector<uint8_t> fl = wholeFrame(local, dr.poses[i], dl), fu = wholeFrame(remote, dr.poses[i], du);
+    if (fl != fu && differing++ < 3)
+      ADD_FAILURE() << "pose " << i << " (cell " << dr.poses[i].cell << "): " << differingPixels(fl, fu)
+                    << " pixels differ; " << whatDiffers(local, remote, fl, fu, dl);
+    after(i);
+  }
+}
+
 // A runtime on `url` with a 64 MiB cache in `cache`, `route` set or not, its
 // first pose drawn whole.
 struct FirstFrame {
@@ -203,16 +218,10 @@ TEST_F(RemoteDriveTest, ADriveDrawsWhatTheLocalFileDrawsInACacheThatNeverGrowsPa
   ASSERT_EQ(blvd_runtime_create(&dl, &local.rt), BLVD_OK) << blvd_last_error(nullptr);
   ASSERT_EQ(blvd_runtime_create(&du, &remote.rt), BLVD_OK) << blvd_last_error(nullptr);
   for (blvd_runtime* rt : {local.rt, remote.rt}) ASSERT_EQ(blvd_set_route(rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
-  uint32_t differing = 0;
-  for (size_t i = 0; i < dr.poses.size(); ++i) {
-    const std::vector<uint8_t> fl = wholeFrame(local.rt, dr.poses[i], dl), fu = wholeFrame(remote.rt, dr.poses[i], du);
-    if (fl != fu && differing++ < 3)
-      ADD_FAILURE() << "pose " << i << " (cell " << dr.poses[i].cell << "): " << differingPixels(fl, fu)
-                    << " pixels differ; " << whatDiffers(local.rt, remote.rt, fl, fu, dl);
-    const blvd_stats s = stats(remote.rt);
-    ASSERT_LE(s.cache_bytes, cache_bytes) << "pose " << i;
-    ASSERT_LE(diskBytes(cache), cache_bytes + 4096) << "pose " << i;  // the mirror's last block
-  }
+  expectSameFrames(local.rt, dl, remote.rt, du, dr, [&](size_t i) {
+    EXPECT_LE(stats(remote.rt).cache_bytes, cache_bytes) << "pose " << i;
+    EXPECT_LE(diskBytes(cache), cache_bytes + 4096) << "pose " << i;  // the mirror's last block
+  });
   const blvd_stats s = stats(remote.rt);
   EXPECT_EQ(s.load_errors, 0u);
   EXPECT_GT(s.cache_hits, 0u);
@@ -220,6 +229,22 @@ TEST_F(RemoteDriveTest, ADriveDrawsWhatTheLocalFileDrawsInACacheThatNeverGrowsPa
   EXPECT_GT(s.cache_evictions, 0u);
   const uint64_t once = uniqueBlobBytes(dr.cells);
   EXPECT_GT(s.link_bytes - s.link_table_bytes, once);
+}
+
+// ETC2 slot atlases (decision 0039) over the link, where the plan sizes the
+// atlas and the staging from the header's maxima on the 32-texel grid: the
+// frames are those of the local file's ETC2 slots.
+TEST_F(RemoteDriveTest, Etc2SlotsOverTheLinkDrawWhatLocalEtc2SlotsDraw) {
+  const Drive dr = impostorDrive(8, 12.0);
+  const std::string url = nginx_->url("/monaco.blvd"), cache = work_ + "/etc2";
+  blvd_runtime_desc dl = localDesc(), du = urlDesc(url, cache, 64ull << 20);
+  dl.impostor_texture = du.impostor_texture = BLVD_TEXTURE_ETC2;
+  Rt local, remote;
+  ASSERT_EQ(blvd_runtime_create(&dl, &local.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_runtime_create(&du, &remote.rt), BLVD_OK) << blvd_last_error(nullptr);
+  for (blvd_runtime* rt : {local.rt, remote.rt}) ASSERT_EQ(blvd_set_route(rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
+  expectSameFrames(local.rt, dl, remote.rt, du, dr, [](size_t) {});
+  EXPECT_EQ(stats(remote.rt).load_errors, 0u);
 }
 
 TEST_F(RemoteDriveTest, ADriveThroughABadLinkKeepsDrawingAndEndsWithTheSamePosesAndFrames) {

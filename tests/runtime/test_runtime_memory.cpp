@@ -451,6 +451,30 @@ TEST(RuntimeStream, NoHeapAllocationWithBudgetTrackingAndViews) {
   EXPECT_EQ(a.blvd, 0) << "heap allocations on the render thread over " << a.frames << " frames";
 }
 
+// The same with ETC2 slot atlases (decision 0039): the loader encodes into
+// its arena, the render thread only copies blocks.
+TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWithEtc2Slots) {
+  if (!blvd::probe::ThreadMallocCounter::available()) GTEST_SKIP() << "malloc belongs to AddressSanitizer here";
+  const blvd_test::Drive dr = drive(30, 6.0);
+  blvd_runtime_desc d = baseDesc();
+  d.impostor_texture = BLVD_TEXTURE_ETC2;
+  Runtime r;
+  ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
+  ASSERT_EQ(blvd_set_route(r.rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
+  auto frame = [&](const blvd_test::DrivePose& p) {
+    blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f);
+    blvd_render(r.rt, nullptr);
+  };
+  const DriveAllocations a = countAfterWarmUp(r.rt, dr.poses, frame);
+  const blvd_stats s = statsOf(r.rt);
+  EXPECT_GE(s.loads, a.loads_before + 3);
+  EXPECT_EQ(s.load_errors, 0u);
+  EXPECT_EQ(a.blvd, 0) << "heap allocations on the render thread over " << a.frames << " frames";
+  uint64_t cpu = 0, gpu = 0;
+  ASSERT_EQ(blvd_memory_required(&d, nullptr, &cpu, &gpu), BLVD_OK);
+  EXPECT_EQ(s.gpu.capacity_bytes, gpu) << "the GL's slab bytes against the plan's";
+}
+
 TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
   if (!blvd::probe::ThreadMallocCounter::available()) GTEST_SKIP() << "malloc belongs to AddressSanitizer here";
   // glibc's adaptive mmap threshold would move big buffers between mmap and
