@@ -11,14 +11,12 @@
 #include <vector>
 
 #include "old_etc2.h"
+#include "raw_images.h"
 #include "render/etc2.h"
 
 namespace {
 
-struct Image {
-  int w = 0, h = 0;
-  std::vector<uint8_t> rgba;
-};
+using Image = RawImage;
 
 template <typename Encode, typename Decode>
 void run(const std::vector<Image>& images, Encode encode, Decode decode, double& ms, double& se) {
@@ -52,24 +50,13 @@ bool flatBlock(const Image& im, int bx, int by) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<Image> images;
+  const std::vector<Image> images = readRawImages(argc, argv, "etc2_compare");
   double texels = 0, blocks = 0, flat = 0;
-  for (int a = 1; a + 2 < argc; a += 3) {
-    Image im;
-    im.w = std::atoi(argv[a + 1]), im.h = std::atoi(argv[a + 2]);
-    im.rgba.resize(size_t(im.w) * im.h * 4);
-    FILE* f = std::fopen(argv[a], "rb");
-    if (!f || std::fread(im.rgba.data(), 1, im.rgba.size(), f) != im.rgba.size()) {
-      std::fprintf(stderr, "etc2_compare: cannot read %d x %d RGBA8 from %s\n", im.w, im.h, argv[a]);
-      return 2;
-    }
-    std::fclose(f);
+  for (const Image& im : images) {
     for (int by = 0; by + 4 <= im.h; by += 4)
       for (int bx = 0; bx + 4 <= im.w; bx += 4) ++blocks, flat += flatBlock(im, bx, by);
     texels += double(im.w) * im.h;
-    images.push_back(std::move(im));
   }
-  if (images.empty()) return std::fprintf(stderr, "usage: etc2_compare FILE W H [FILE W H ...]\n"), 2;
   double old_ms, old_se, new_ms, new_se;
   auto old_enc = [](const uint8_t* p, int w, int h, size_t s, uint8_t* o) { old_etc2::encodeEtc2(p, w, h, s, o); };
   auto old_dec = [](const uint8_t* d, int w, int h, uint8_t* o) { old_etc2::decodeEtc2(d, w, h, o); };

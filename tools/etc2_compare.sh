@@ -13,7 +13,7 @@ trap 'rm -rf "$work"' EXIT
 git show "$rev:sdk/render/etc2.cpp" | sed 's/namespace blvd::render/namespace old_etc2/; s|"render/etc2.h"|"old_etc2.h"|' \
   > "$work/old_etc2.cpp"
 git show "$rev:sdk/render/etc2.h" | sed 's/namespace blvd::render/namespace old_etc2/' > "$work/old_etc2.h"
-g++ -O2 -std=c++17 -Isdk -I"$work" tools/etc2_compare.cpp "$work/old_etc2.cpp" sdk/render/etc2.cpp -o "$work/compare"
+g++ -O2 -std=c++17 -Isdk -Itools -I"$work" tools/etc2_compare.cpp "$work/old_etc2.cpp" sdk/render/etc2.cpp -o "$work/compare"
 tools/layer_images.py "$pkg" "$work" "${@:3}" > "$work/args"
 # shellcheck disable=SC2046
 "$work/compare" $(cat "$work/args")

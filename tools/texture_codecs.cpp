@@ -11,6 +11,8 @@
 #include <webp/decode.h>
 #include <webp/encode.h>
 
+#include "raw_images.h"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -20,10 +22,7 @@
 
 namespace {
 
-struct Image {
-  int w = 0, h = 0;
-  std::vector<uint8_t> rgba;
-};
+using Image = RawImage;
 
 double cpuMs() {
   timespec ts{};
@@ -128,20 +127,7 @@ void row(const char* codec, const std::string& setting, const std::vector<Image>
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<Image> images;
-  for (int a = 1; a + 2 < argc; a += 3) {
-    Image im;
-    im.w = std::atoi(argv[a + 1]), im.h = std::atoi(argv[a + 2]);
-    im.rgba.resize(size_t(im.w) * im.h * 4);
-    FILE* f = std::fopen(argv[a], "rb");
-    if (!f || std::fread(im.rgba.data(), 1, im.rgba.size(), f) != im.rgba.size()) {
-      std::fprintf(stderr, "texture_codecs: cannot read %d x %d RGBA8 from %s\n", im.w, im.h, argv[a]);
-      return 2;
-    }
-    std::fclose(f);
-    images.push_back(std::move(im));
-  }
-  if (images.empty()) return std::fprintf(stderr, "usage: texture_codecs FILE W H [FILE W H ...]\n"), 2;
+  const std::vector<Image> images = readRawImages(argc, argv, "texture_codecs");
   std::printf("| codec | setting | bytes | bits a texel | PSNR dB | decode CPU ms |\n|---|---|---|---|---|---|\n");
   for (int q : {40, 50, 60, 70, 80})
     row("WebP", "quality " + std::to_string(q), images, [q](const Image& im) { return encodeWebp(im, q); },

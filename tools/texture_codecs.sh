@@ -13,7 +13,7 @@ pkg=${1:?usage: texture_codecs.sh PACKAGE [FIRST_CELL [CELL_STEP [IMAGES]]]}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # shellcheck disable=SC2046
-g++ -O2 -std=c++17 tools/texture_codecs.cpp -o "$work/codecs" $(pkg-config --cflags --libs libavif libwebp)
+g++ -O2 -std=c++17 -Itools tools/texture_codecs.cpp -o "$work/codecs" $(pkg-config --cflags --libs libavif libwebp)
 tools/layer_images.py "$pkg" "$work" "${@:2}" > "$work/args"
 # shellcheck disable=SC2046
 "$work/codecs" $(cat "$work/args")
