@@ -12,10 +12,22 @@ namespace {
 // §21.1, table 68: the intensity modifiers {a, b}; pixel index 0 adds a, 1 adds
 // b, 2 subtracts a, 3 subtracts b.
 constexpr int kModifiers[8][2] = {{2, 8}, {5, 17}, {9, 29}, {13, 42}, {18, 60}, {24, 80}, {33, 106}, {47, 183}};
-// The same by column, and the offsets (× 3) halfway between a and b.
-constexpr int kA[8] = {2, 5, 9, 13, 18, 24, 33, 47};
-constexpr int kB[8] = {8, 17, 29, 42, 60, 80, 106, 183};
-constexpr int kThresholds[8] = {30, 66, 114, 165, 234, 312, 417, 690};
+// Table 68 by column, and each table's offset (× 3, the sum of a pixel's
+// three channel offsets) halfway between a and b: laid out so that one loop
+// over the tables vectorizes.
+struct ModifierColumns {
+  int a[8], b[8], threshold[8];
+};
+constexpr ModifierColumns modifierColumns() {
+  ModifierColumns c{};
+  for (int t = 0; t < 8; ++t) {
+    c.a[t] = kModifiers[t][0];
+    c.b[t] = kModifiers[t][1];
+    c.threshold[t] = 3 * (kModifiers[t][0] + kModifiers[t][1]);
+  }
+  return c;
+}
+constexpr ModifierColumns kColumns = modifierColumns();
 // §21.1, table 71: the T and H modes' distances.
 constexpr int kDistances[8] = {3, 6, 11, 16, 23, 32, 41, 64};
 
@@ -155,16 +167,15 @@ int64_t fitHalf(const Block& src, bool flip, int half, const int base[3], uint64
   int table_err[8] = {0, 0, 0, 0, 0, 0, 0, 0};
   for (int i = 0; i < 8; ++i)
     for (int t = 0; t < 8; ++t) {
-      const int m = 2 * ad[i] >= kThresholds[t] ? kB[t] : kA[t];  // nearest of ±a, ±b to d / 3
+      const int m = 2 * ad[i] >= kColumns.threshold[t] ? kColumns.b[t] : kColumns.a[t];  // nearest of ±a, ±b to d / 3
       table_err[t] += s[i] + m * (3 * m - 2 * ad[i]);
     }
   int best = INT32_MAX, best_t = 0;
   for (int t = 0; t < 8; ++t)
     if (table_err[t] < best) best = table_err[t], best_t = t;
-  const int a = kModifiers[best_t][0], bb = kModifiers[best_t][1], threshold = 3 * (a + bb);
   int64_t err = 0;
   for (int i = 0; i < 8; ++i) {
-    const uint32_t pi = (2 * (d[i] < 0 ? -d[i] : d[i]) >= threshold ? 1u : 0u) | (d[i] < 0 ? 2u : 0u);
+    const uint32_t pi = (2 * ad[i] >= kColumns.threshold[best_t] ? 1u : 0u) | (d[i] < 0 ? 2u : 0u);
     const int m = modifier(best_t, pi);
     const int* p = src.px[pixels[i]];
     for (int k = 0; k < 3; ++k) {

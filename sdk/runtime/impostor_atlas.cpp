@@ -11,13 +11,14 @@ int impostorAtlasWidth(const package::PackageHeader& header, render::AtlasFormat
   return render::atlasWidth(header.max_impostor_texture_width, header.max_cell_impostor_texture_bytes / 4, align);
 }
 
+int packedAtlasHeight(const package::PackageHeader& header, render::AtlasFormat format) {
+  return format == render::AtlasFormat::Etc2 ? header.impostor_atlas_etc2_height : header.impostor_atlas_height;
+}
+
 // Each image rounded up to the atlas grid adds at most a grid step to each side.
 int impostorAtlasHeightBound(const package::PackageHeader& header, int width, render::AtlasFormat format) {
   if (width <= 0) return 0;
-  if (header.impostor_atlas_height && format == render::AtlasFormat::Rgba8)
-    return header.impostor_atlas_height;  // 3.3: the bake packed every cell
-  if (header.impostor_atlas_etc2_height && format == render::AtlasFormat::Etc2)
-    return header.impostor_atlas_etc2_height;  // 5.1: the same on the ETC2 grid
+  if (const int packed = packedAtlasHeight(header, format)) return packed;
   const uint64_t step = uint64_t(render::atlasAlign(format));
   const uint64_t rounded = header.max_cell_impostor_texture_bytes / 4 +
                            uint64_t(header.max_cell_impostor_layers) *

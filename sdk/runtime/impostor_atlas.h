@@ -16,8 +16,11 @@ namespace blvd::runtime {
 int impostorAtlasWidth(const package::PackageHeader& header,
                        render::AtlasFormat format = render::AtlasFormat::Rgba8);
 
-// The atlas height the header gives (3.3 on the RGBA8 grid, 5.1 on the ETC2
-// one) or its maxima bound (for tables that come over the link a page at a
+// The height the bake packed every cell's images into on `format`'s grid
+// (the header's: 3.3 for RGBA8, 5.1 for ETC2), or 0 when the header is older.
+int packedAtlasHeight(const package::PackageHeader& header, render::AtlasFormat format);
+
+// The atlas height the header gives (packedAtlasHeight) or its maxima bound (for tables that come over the link a page at a
 // time, where the plan cannot pack every cell; older headers).
 int impostorAtlasHeightBound(const package::PackageHeader& header, int width,
                              render::AtlasFormat format = render::AtlasFormat::Rgba8);

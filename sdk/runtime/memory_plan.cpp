@@ -19,6 +19,7 @@ uint64_t indexBytes(uint64_t v, uint64_t t) { return t * 3 * (v < 0xFFFF ? 2 : 4
 void addMesh(CellNeed& n, uint64_t v, uint64_t t, int tw, int th, bool etc2 = false) {
   n.vertex_bytes += v * render::kVertexBytes;
   n.index_bytes += indexBytes(v, t);
+  // An ETC2 atlas's levels follow in the arena, 16-byte aligned (StagingArena::take).
   n.staging_bytes += render::preparedBytes(v, t * 3, tw, th) + (etc2 ? render::atlasEtc2Bytes(tw, th) + 16 : 0);
   ++n.meshes;
   if (tw > 0) ++n.textures;
@@ -117,8 +118,7 @@ MemoryPlan planMemory(const blvd_runtime_desc& desc, const stream::City& city) {
   // A 3.3 header names the atlas the bake packed every cell into (5.1: on
   // the ETC2 grid too): the same slots whether the tables are read whole or
   // over the link a page at a time.
-  const bool etc2 = p.slab.atlas_format == render::AtlasFormat::Etc2;
-  const uint16_t packed = etc2 ? city.header().impostor_atlas_etc2_height : city.header().impostor_atlas_height;
+  const int packed = packedAtlasHeight(city.header(), p.slab.atlas_format);
   if (packed && !city.tablesOverLink()) {
     if (p.slab.atlas_height > packed) corrupt("a cell's impostor images take more of the atlas than the header says");
     p.slab.atlas_height = packed;

@@ -523,6 +523,38 @@ TEST(SlabAtlas, ImagesArePackedApartWithinTheBound) {
   EXPECT_EQ(packSlabAtlas(w, h, 2, 160, x, y, order), 16);  // the image without texels takes no place
 }
 
+// The magenta neighbour of the atlas tests, 150 x 130.
+geo::MeshData magentaWall() {
+  return farWall(150, 130, [](int, int, uint8_t* t) { t[0] = 255, t[1] = 0, t[2] = 255, t[3] = 255; });
+}
+
+// As the bake's layer images are: the mesh maps all but a gutter of 4 texels
+// (kAtlasGutter) round its tw x th image.
+void mapInsideGutter(geo::MeshData& wall, int tw, int th) {
+  const float u0 = 4.f / float(tw), u1 = 1 - u0, v0 = 4.f / float(th), v1 = 1 - v0;
+  wall.texcoords = {u0, v0, u1, v0, u1, v1, u0, v1};
+}
+
+// A slab for `meshes` meshes the size of `like` whose atlas, `width` wide on
+// `format`'s grid, holds the magenta image and a 203 x 117 wall: packed
+// (packSlabAtlas), their places written into `pink` and `wall`.
+SlabDesc twoImageSlab(const PreparedMesh& like, uint32_t meshes, int width, AtlasFormat format, PreparedMesh& pink,
+                      PreparedMesh& wall) {
+  const int w[2] = {150, 203}, h[2] = {130, 117};
+  int x[2], y[2];
+  uint32_t order[2];
+  SlabDesc d;
+  d.vertex_bytes = meshes * like.vertexBytes();
+  d.index_bytes = meshes * (like.indexBytes() + 4);
+  d.meshes = meshes;
+  d.atlas_width = width;
+  d.atlas_format = format;
+  d.atlas_height = packSlabAtlas(w, h, 2, d.atlas_width, x, y, order, atlasAlign(format));
+  pink.atlas_x = x[0], pink.atlas_y = y[0];
+  wall.atlas_x = x[1], wall.atlas_y = y[1];
+  return d;
+}
+
 // Two images in one atlas, the second beside a magenta one: each draws as it
 // does alone in an atlas of the same size, and the neighbour never bleeds in,
 // from the finest level to the coarsest the atlas has.
@@ -530,14 +562,11 @@ TEST(SlabAtlas, AnImageDrawsTheSameBesideAnother) {
   Rig rig;
   ASSERT_NE(rig.renderer, nullptr) << rig.why;
   Renderer* r = rig.renderer.get();
-  const geo::MeshData pink = farWall(150, 130, [](int, int, uint8_t* t) { t[0] = 255, t[1] = 0, t[2] = 255, t[3] = 255; });
-  // As the bake's layer images are: a gutter of 4 texels (kAtlasGutter)
-  // around what the mesh maps.
+  const geo::MeshData pink = magentaWall();
   geo::MeshData wall = farWall(203, 117, [](int x, int y, uint8_t* t) {
     t[0] = uint8_t(40 + (x * 7) % 60), t[1] = uint8_t(60 + (y * 5) % 80), t[2] = 70, t[3] = 255;
   });
-  const float u0 = 4.f / 203, u1 = 1 - u0, v0 = 4.f / 117, v1 = 1 - v0;
-  wall.texcoords = {u0, v0, u1, v0, u1, v1, u0, v1};
+  mapInsideGutter(wall, 203, 117);
   std::vector<uint8_t> block(preparedBytes(4, 6, 150, 130) + 2 * preparedBytes(4, 6, 203, 117));
   StagingArena arena{block.data(), block.size(), 0};
   PreparedMesh pp, alone, beside;
@@ -545,18 +574,8 @@ TEST(SlabAtlas, AnImageDrawsTheSameBesideAnother) {
   ASSERT_TRUE(prepareMesh(pink, arena, pp, err)) << err;
   ASSERT_TRUE(prepareMesh(wall, arena, alone, err)) << err;
   ASSERT_TRUE(prepareMesh(wall, arena, beside, err)) << err;
-  const int w[2] = {150, 203}, h[2] = {130, 117};
-  int x[2], y[2];
-  uint32_t order[2];
-  SlabDesc d;
-  d.vertex_bytes = 2 * pp.vertexBytes();
-  d.index_bytes = 2 * pp.indexBytes() + 8;
-  d.meshes = 2;
-  d.atlas_width = 360;
-  d.atlas_height = packSlabAtlas(w, h, 2, d.atlas_width, x, y, order);
+  const SlabDesc d = twoImageSlab(pp, 2, 360, AtlasFormat::Rgba8, pp, beside);
   ASSERT_EQ(d.atlas_height, 136);
-  pp.atlas_x = x[0], pp.atlas_y = y[0];
-  beside.atlas_x = x[1], beside.atlas_y = y[1];
   ASSERT_EQ(beside.atlas_x, 152);  // right after the (taller) pink image's place
   alone.atlas_x = alone.atlas_y = 0;
   const SlabHandle one = r->createSlab(d), two = r->createSlab(d);
@@ -619,12 +638,11 @@ TEST(SlabAtlas, AnEtc2AtlasDrawsAsTheRgba8OneWithinTheCodecsError) {
   ASSERT_NE(rig.renderer, nullptr) << rig.why;
   Renderer* r = rig.renderer.get();
   ASSERT_TRUE(r->supportsEtc2()) << "GL " << r->glVersion() << " has no ETC2";
-  const geo::MeshData pink = farWall(150, 130, [](int, int, uint8_t* t) { t[0] = 255, t[1] = 0, t[2] = 255, t[3] = 255; });
+  const geo::MeshData pink = magentaWall();
   geo::MeshData wall = farWall(203, 117, [](int x, int y, uint8_t* t) {
     t[0] = uint8_t(60 + 2 * x % 90), t[1] = uint8_t(60 + y), t[2] = 70, t[3] = 255;
   });
-  const float u0 = 4.f / 203, u1 = 1 - u0, v0 = 4.f / 117, v1 = 1 - v0;
-  wall.texcoords = {u0, v0, u1, v0, u1, v1, u0, v1};
+  mapInsideGutter(wall, 203, 117);
   std::vector<uint8_t> block(2 * (preparedBytes(4, 6, 150, 130) + atlasEtc2Bytes(150, 130)) +
                              3 * (preparedBytes(4, 6, 203, 117) + atlasEtc2Bytes(203, 117)));
   StagingArena arena{block.data(), block.size(), 0};
@@ -635,19 +653,8 @@ TEST(SlabAtlas, AnEtc2AtlasDrawsAsTheRgba8OneWithinTheCodecsError) {
   ASSERT_TRUE(prepareMesh(wall, arena, packed, err)) << err;
   ASSERT_TRUE(encodeAtlasEtc2(pp, arena, err)) << err;
   ASSERT_TRUE(encodeAtlasEtc2(packed, arena, err)) << err;
-  const int w[2] = {150, 203}, h[2] = {130, 117};
-  int x[2], y[2];
-  uint32_t order[2];
-  SlabDesc d;
-  d.vertex_bytes = 3 * pp.vertexBytes();
-  d.index_bytes = 3 * pp.indexBytes() + 12;
-  d.meshes = 3;
-  d.atlas_width = 384;
-  d.atlas_format = AtlasFormat::Etc2;
-  d.atlas_height = packSlabAtlas(w, h, 2, d.atlas_width, x, y, order, kEtc2AtlasAlign);
+  const SlabDesc d = twoImageSlab(pp, 3, 384, AtlasFormat::Etc2, pp, packed);
   ASSERT_EQ(d.atlas_height, 160);
-  pp.atlas_x = x[0], pp.atlas_y = y[0];
-  packed.atlas_x = x[1], packed.atlas_y = y[1];
   ASSERT_EQ(packed.atlas_x, 160);  // right after the (taller) pink image's place
   SlabDesc rgba = d;
   rgba.atlas_format = AtlasFormat::Rgba8;

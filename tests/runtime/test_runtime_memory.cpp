@@ -374,6 +374,12 @@ struct DriveAllocations {
   uint64_t loads_before = 0;
   size_t frames = 0;
 };
+// One frame at a pose the host sets (the frame does not wait for its cell).
+void frameAt(blvd_runtime* rt, const blvd_test::DrivePose& p) {
+  blvd_set_pose_local(rt, p.x, p.y, float(p.heading_deg), 0.f);
+  blvd_render(rt, nullptr);
+}
+
 template <typename Frame>
 DriveAllocations countAfterWarmUp(blvd_runtime* rt, const std::vector<blvd_test::DrivePose>& poses, Frame&& frame) {
   const size_t warm = poses.size() / 3;
@@ -461,10 +467,7 @@ TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWithEtc2Slots) {
   Runtime r;
   ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
   ASSERT_EQ(blvd_set_route(r.rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
-  auto frame = [&](const blvd_test::DrivePose& p) {
-    blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f);
-    blvd_render(r.rt, nullptr);
-  };
+  auto frame = [&](const blvd_test::DrivePose& p) { frameAt(r.rt, p); };
   const DriveAllocations a = countAfterWarmUp(r.rt, dr.poses, frame);
   const blvd_stats s = statsOf(r.rt);
   EXPECT_GE(s.loads, a.loads_before + 3);
@@ -487,10 +490,7 @@ TEST(RuntimeStream, NoHeapAllocationOnTheRenderThreadWhileCellsStream) {
   Runtime r;
   ASSERT_EQ(blvd_runtime_create(&d, &r.rt), BLVD_OK) << blvd_last_error(nullptr);
   ASSERT_EQ(blvd_set_route(r.rt, dr.cells.data(), dr.cells.size()), BLVD_OK);
-  auto frame = [&](const blvd_test::DrivePose& p) {
-    blvd_set_pose_local(r.rt, p.x, p.y, float(p.heading_deg), 0.f);
-    blvd_render(r.rt, nullptr);
-  };
+  auto frame = [&](const blvd_test::DrivePose& p) { frameAt(r.rt, p); };
   const DriveAllocations a = countAfterWarmUp(r.rt, dr.poses, frame);
   // Reported, not asserted: the driver's allocations are its own business
   // (llvmpipe mallocs scene bins each frame).
