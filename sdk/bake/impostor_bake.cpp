@@ -231,6 +231,29 @@ AtlasLayout layoutAtlas(std::vector<CaptureShot>& shots, const CapturePlanOption
   }
 }
 
+// Where capture `pin`, placed at (x0, y0) in an atlas of `atlas_w` x
+// `atlas_h` texels, sees a point, as a texcoord: the projective texture
+// matrix of the depth mesh's vertices (S97 §4.2: a vertex is an image point
+// at a depth), so the package need not store their uv (decision 0041). It
+// inverts PinholeCamera::ray: u = (x0 + (sx + 1) w / 2) / W with sx = (d ·
+// right) / (z tan_half_x), z = d · forward, d = p - eye; v likewise, down.
+package::TexcoordProjection::Shot projectionOf(const PinholeCamera& pin, int x0, int y0, int atlas_w, int atlas_h) {
+  const double W = atlas_w, H = atlas_h, w = pin.width, h = pin.height;
+  const glm::dvec3 rows[3] = {
+      pin.forward * ((x0 + 0.5 * w) / W) + pin.right * (w / (2.0 * pin.tan_half_x * W)),
+      pin.forward * ((y0 + 0.5 * h) / H) - pin.up * (h / (2.0 * pin.tan_half_y * H)),
+      pin.forward,
+  };
+  package::TexcoordProjection::Shot shot;
+  for (int k = 0; k < 3; ++k) {
+    for (int c = 0; c < 3; ++c) shot.matrix[4 * k + c] = static_cast<float>(rows[k][c]);
+    shot.matrix[4 * k + 3] = static_cast<float>(-glm::dot(rows[k], pin.eye));
+  }
+  const float rect[4] = {float(x0 / W), float(y0 / H), float((x0 + w) / W), float((y0 + h) / H)};
+  std::copy_n(rect, 4, shot.rect);
+  return shot;
+}
+
 // A layer's captures made into one textured depth mesh blob `glb` (S97 §4.2):
 // each capture's depth mesh, its texture coordinates moved into the atlas,
 // and the atlas as the texture, less the triangles the capture saw edge-on
@@ -246,6 +269,7 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
   atlas.rgba.assign(size_t(layout.width) * layout.height * 4, 0);
   atlas.mask.assign(size_t(layout.width) * layout.height, 0);
   geo::MeshData mesh;
+  package::TexcoordProjection projection;
   rec.density = 1.0;
   for (size_t k = 0; k < shots.size(); ++k) {
     CaptureImage img;
@@ -271,6 +295,9 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
       part.texcoords[t] = float((x0 + part.texcoords[t] * img.width) / atlas.width);
       part.texcoords[t + 1] = float((y0 + part.texcoords[t + 1] * img.height) / atlas.height);
     }
+    projection.vertex_shot.insert(projection.vertex_shot.end(), part.vertexCount(),
+                                  static_cast<uint8_t>(projection.shots.size()));
+    projection.shots.push_back(projectionOf(pin, x0, y0, atlas.width, atlas.height));
     mesh.append(part);
     rec.density = std::min(rec.density, shots[k].density);
     ++rec.shot;
@@ -285,6 +312,7 @@ bool captureLayer(CaptureRig& rig, std::vector<CaptureShot>& shots, const std::v
   glb_opt.codec = opt.mesh_codec;
   glb_opt.position_bits = opt.mesh_position_bits;
   glb_opt.texcoord_bits = opt.mesh_texcoord_bits;
+  if (projection.shots.size() <= 256) glb_opt.projection = &projection;  // else the uv are stored
   package::GlbMeshCounts counts;
   glb = package::encodeGlb(mesh, glb_opt, &counts);
   if (counts.triangles == 0) {

@@ -1,5 +1,7 @@
 #include "package/blob_codec.h"
 
+#include "package/blob_dictionary.h"
+
 #include <zstd.h>
 
 #include <memory>
@@ -21,6 +23,40 @@ ZSTD_DCtx* threadContext() {
   thread_local std::unique_ptr<ZSTD_DCtx, DctxFree> ctx;
   if (!ctx) ctx.reset(ZSTD_createDCtx());
   return ctx.get();
+}
+
+struct DdictFree {
+  void operator()(ZSTD_DDict* d) const { ZSTD_freeDDict(d); }
+};
+
+// The built-in dictionary, digested once for every thread (a DDict is
+// read-only once made); null when its allocation failed.
+const ZSTD_DDict* dictionary() {
+  static const std::unique_ptr<ZSTD_DDict, DdictFree> d = [] {
+    const BlobDictionary raw = glbDictionary();
+    // Bytes without the dictionary magic are raw content (ZSTD_dct_auto).
+    return std::unique_ptr<ZSTD_DDict, DdictFree>(ZSTD_createDDict(raw.data, raw.size));
+  }();
+  return d.get();
+}
+
+// `contents` as one frame at `level`, with the built-in dictionary or not.
+std::vector<uint8_t> frame(const std::vector<uint8_t>& contents, int level, bool with_dictionary) {
+  struct CctxFree {
+    void operator()(ZSTD_CCtx* c) const { ZSTD_freeCCtx(c); }
+  };
+  std::unique_ptr<ZSTD_CCtx, CctxFree> ctx(ZSTD_createCCtx());
+  if (!ctx) throw std::bad_alloc();
+  const BlobDictionary d = glbDictionary();
+  std::vector<uint8_t> z(ZSTD_compressBound(contents.size()));
+  const size_t n = with_dictionary ? ZSTD_compress_usingDict(ctx.get(), z.data(), z.size(), contents.data(),
+                                                             contents.size(), d.data, d.size, level)
+                                   : ZSTD_compressCCtx(ctx.get(), z.data(), z.size(), contents.data(),
+                                                       contents.size(), level);
+  if (ZSTD_isError(n)) throw core::Error(core::Status::Internal, std::string("zstd: ") + ZSTD_getErrorName(n));
+  z.resize(n);
+  z.shrink_to_fit();
+  return z;
 }
 
 core::Status bad(const BlobInfo& info, uint32_t index, const std::string& name, const std::string& why,
@@ -46,15 +82,12 @@ StoredBlob packBlob(std::vector<uint8_t> contents, int level) {
   StoredBlob out;
   out.contents_size = contents.size();
   if (level > 0 && !contents.empty()) {
-    std::vector<uint8_t> z(ZSTD_compressBound(contents.size()));
-    const size_t n = ZSTD_compress(z.data(), z.size(), contents.data(), contents.size(), level);
-    if (ZSTD_isError(n))
-      throw core::Error(core::Status::Internal, std::string("zstd: ") + ZSTD_getErrorName(n));
-    if (n < contents.size()) {
-      z.resize(n);
-      z.shrink_to_fit();
+    std::vector<uint8_t> plain = frame(contents, level, false), dict = frame(contents, level, true);
+    const bool use_dict = dict.size() < plain.size();
+    std::vector<uint8_t>& z = use_dict ? dict : plain;
+    if (z.size() < contents.size()) {
       out.bytes = std::move(z);
-      out.flags = kBlobZstd;
+      out.flags = use_dict ? kBlobZstd | kBlobZstdDict : kBlobZstd;
       return out;
     }
   }
@@ -86,7 +119,13 @@ core::Status unpackBlob(const BlobInfo& info, uint32_t index, const uint8_t* sto
     err = name + ": blob " + std::to_string(index) + ": out of memory for its " + std::to_string(want) + " bytes";
     return core::Status::NoMem;
   }
-  const size_t n = ZSTD_decompressDCtx(ctx, into.data(), want, stored, static_cast<size_t>(info.size));
+  const ZSTD_DDict* dict = (info.flags & kBlobZstdDict) ? dictionary() : nullptr;
+  if ((info.flags & kBlobZstdDict) && !dict) {
+    err = name + ": blob " + std::to_string(index) + ": out of memory for the zstd dictionary";
+    return core::Status::NoMem;
+  }
+  const size_t n = dict ? ZSTD_decompress_usingDDict(ctx, into.data(), want, stored, static_cast<size_t>(info.size), dict)
+                        : ZSTD_decompressDCtx(ctx, into.data(), want, stored, static_cast<size_t>(info.size));
   if (ZSTD_isError(n)) return bad(info, index, name, std::string("zstd frame: ") + ZSTD_getErrorName(n), err);
   if (n != want)
     return bad(info, index, name,

@@ -374,7 +374,7 @@ core::Status parseBlobIndex(const uint8_t* data, size_t size, const SectionInfo&
                               " lies outside section " + tagToString(blob_data.tag) + " [" +
                               std::to_string(blob_data.offset) + ", " +
                               std::to_string(blob_data.offset + blob_data.size) + ")" + entry_at);
-    if ((bi.flags & ~kBlobZstd) != 0)
+    if (!validBlobFlags(bi.flags))
       return corrupt(err, at(name, blob_where, bi.offset) + "unknown flags " + std::to_string(bi.flags) + entry_at);
     if ((bi.flags & kBlobZstd) == 0 && bi.contents_size != bi.size)
       return corrupt(err, at(name, blob_where, bi.offset) + "stored as is, but its contents are " +

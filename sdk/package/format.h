@@ -34,9 +34,10 @@ inline constexpr char kMagic[8] = {'B', 'L', 'V', 'D', 'P', 'K', 'G', '\0'};
 // cell they serve; 3.2: TPCR, a CRC per table page; 3.3: the impostor atlas's
 // size in the header; 4.0: blobs stored as zstd frames (BIDX flags and
 // contents size, the header's largest contents); 5.0: Draco streams hold no
-// POSITION-typed attribute (docs/package-format.md).
-inline constexpr uint16_t kVersionMajor = 5;  // a reader opens only its own major
-inline constexpr uint16_t kVersionMinor = 1;  // minors add, never change (see spec)
+// POSITION-typed attribute; 6.0: blob frames with the built-in dictionary,
+// impostor uv projected from the positions (docs/package-format.md).
+inline constexpr uint16_t kVersionMajor = 6;  // a reader opens only its own major
+inline constexpr uint16_t kVersionMinor = 0;  // minors add, never change (see spec)
 
 inline constexpr uint32_t kSectionGraph = fourcc('G', 'R', 'P', 'H');         // street graph
 inline constexpr uint32_t kSectionSpatialIndex = fourcc('S', 'I', 'D', 'X');  // graph spatial index
@@ -59,8 +60,14 @@ inline constexpr size_t kDirEntrySize = 32;    // one directory entry
 inline constexpr size_t kBlobIndexPrefix = 8;  // BIDX: u32 count, u32 entry size
 inline constexpr size_t kBlobEntrySize = 32;   // 4.0 BIDX entry; later minors may grow it
 inline constexpr size_t kAlignment = 8;        // every section and blob starts 8-aligned
-// BIDX flags: the blob's bytes are one zstd frame of its contents (4.0).
+// BIDX flags: the blob's bytes are one zstd frame of its contents (4.0),
+// made with the built-in dictionary (6.0, blob_dictionary.h; only with
+// kBlobZstd).
 inline constexpr uint32_t kBlobZstd = 1u;
+inline constexpr uint32_t kBlobZstdDict = 2u;
+inline constexpr bool validBlobFlags(uint32_t flags) {
+  return (flags & ~(kBlobZstd | kBlobZstdDict)) == 0 && ((flags & kBlobZstdDict) == 0 || (flags & kBlobZstd) != 0);
+}
 // No blob's contents may exceed this (a reader refuses the package): a
 // corrupt contents size must not make a reader allocate gigabytes.
 inline constexpr uint64_t kMaxBlobContentsBytes = uint64_t{1} << 28;
@@ -128,7 +135,7 @@ struct BlobInfo {
   uint64_t offset = 0;
   uint64_t size = 0;           // bytes in the file (what a range request fetches)
   uint32_t crc = 0;            // CRC32C of those bytes
-  uint32_t flags = 0;          // kBlobZstd or 0
+  uint32_t flags = 0;          // kBlobZstd, with kBlobZstdDict, or 0
   uint64_t contents_size = 0;  // bytes of the GLB (or heights) they hold: `size` when not compressed
 };
 
@@ -173,7 +180,7 @@ core::Status parseDirectory(const uint8_t* data, size_t size, const HeaderLayout
 
 // `data`/`size` are the BIDX section's bytes (located by `index`); every blob
 // must be 8-aligned and inside `blob_data` (the BDAT entry), carry no flag
-// but kBlobZstd, and hold at most `max_contents` bytes of contents (the
+// but kBlobZstd and kBlobZstdDict (the latter only with the former), and hold at most `max_contents` bytes of contents (the
 // header's max_blob_contents_bytes). Does not check the BIDX section's own
 // CRC (verify does that).
 core::Status parseBlobIndex(const uint8_t* data, size_t size, const SectionInfo& index,

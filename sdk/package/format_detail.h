@@ -95,7 +95,7 @@ namespace blob {  // one 32-byte BIDX entry (4.0), after the 8-byte prefix
 constexpr size_t kOffset = 0;     // u64
 constexpr size_t kSize = 8;       // u64, bytes in the file
 constexpr size_t kCrc = 16;       // u32, of those bytes
-constexpr size_t kFlags = 20;     // u32, kBlobZstd or 0
+constexpr size_t kFlags = 20;     // u32, kBlobZstd (with kBlobZstdDict) or 0
 constexpr size_t kContents = 24;  // u64, bytes of contents
 }  // namespace blob
 

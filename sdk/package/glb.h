@@ -35,8 +35,30 @@ enum class GlbCodec { Plain, Draco, Meshopt };
 const char* glbCodecName(GlbCodec c);
 bool parseGlbCodec(const std::string& name, GlbCodec& out);
 
+// Texture coordinates that a decoder computes from the positions instead of
+// reading them (BLVD_projected_texcoords, package format 6.0). A depth mesh's
+// vertex is an image point of its capture at a depth (Sillion 97 §4.2), so
+// its uv is where that capture's camera sees it: u = (row 0 · p) / (row 2 ·
+// p), v = (row 1 · p) / (row 2 · p) with p = (x, y, z, 1), clamped to the
+// capture's place in the atlas. A layer holds several captures: each vertex
+// names its own (`vertex_shot`, stored as a Draco attribute `_SHOT` when
+// there is more than one). Decision 0041.
+struct TexcoordProjection {
+  struct Shot {
+    float matrix[12] = {};  // rows u, v, w of a 3x4 projection (row-major)
+    float rect[4] = {};     // u0, v0, u1, v1: the capture's place in the atlas
+  };
+  std::vector<Shot> shots;           // 1 to 256
+  std::vector<uint8_t> vertex_shot;  // one per vertex, < shots.size()
+};
+
 struct GlbOptions {
   GlbCodec codec = GlbCodec::Draco;
+  // With the Draco codec and one level: TEXCOORD_0 is not stored, the decoder
+  // projects the positions (TexcoordProjection). The mesh still carries its
+  // texcoords; the encoder checks the projection gives them (within
+  // kProjectedTexcoordTolerance) before it drops them. Other codecs ignore it.
+  const TexcoordProjection* projection = nullptr;
   int position_bits = 16;     // Draco quantization, 1..30; 0 = keep float32 (lossless)
   int normal_bits = 10;       // 1..30; 0 = keep float32 (Meshopt: octahedral bits, at most 16)
   int color_bits = 8;         // only for float colours; our uint8 colours are lossless in Draco
@@ -47,6 +69,9 @@ struct GlbOptions {
   // 2^-19 of its largest coordinate: 4 mm at 2 km from the package origin.
   int meshopt_position_bits = 20;
 };
+
+// How far (in uv) a stored texcoord may be from its projection.
+inline constexpr float kProjectedTexcoordTolerance = 1.0f / 4096.0f;
 
 // What decodeGlb()/decodeGlbLevel() will return for one encoded mesh, known
 // at encode time so a package can record it (runtime pools are sized from

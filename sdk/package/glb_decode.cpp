@@ -80,6 +80,7 @@ struct Primitive {
   std::vector<float> colors;     // linear rgba or empty
   std::vector<float> texcoords;  // uv or empty
   std::vector<uint32_t> indices; // triangle list
+  std::vector<float> shots;      // BLVD_projected_texcoords: each vertex's shot, or empty
 };
 
 struct Mat4 {
@@ -275,7 +276,7 @@ class Decoder {
       // Texture and material extensions do not change geometry, which is
       // all this decoder returns.
       const bool harmless = name == "KHR_draco_mesh_compression" || name == "KHR_mesh_quantization" ||
-                            name == "EXT_meshopt_compression" ||
+                            name == "EXT_meshopt_compression" || name == kProjectedTexcoords ||
                             name.rfind("KHR_materials_", 0) == 0 || name.rfind("KHR_texture_", 0) == 0 ||
                             name.rfind("EXT_texture_", 0) == 0;
       if (!harmless) fail("extensionsRequired: " + name + " is not supported", Status::Unsupported);
@@ -566,18 +567,23 @@ class Decoder {
     const auto nrm = attr("NORMAL");
     const auto col = attr("COLOR_0");
     const auto tex = attr("TEXCOORD_0");
+    const auto shot = attr(kShotAttribute);
     std::optional<size_t> idx;
     if (prim.contains("indices")) idx = index(prim, "indices", where, n_acc, "accessors");
 
     const json* draco = nullptr;
+    const json* projected = nullptr;
     if (auto ext = prim.find("extensions"); ext != prim.end() && ext->is_object()) {
       auto d = ext->find("KHR_draco_mesh_compression");
       if (d != ext->end()) draco = &object(*d, where + ".extensions.KHR_draco_mesh_compression");
+      auto pt = ext->find(kProjectedTexcoords);
+      if (pt != ext->end()) projected = &object(*pt, where + ".extensions." + kProjectedTexcoords);
     }
+    if (projected && tex) fail(where + ": TEXCOORD_0 and " + kProjectedTexcoords + " both");
     size_t vertex_count = 0;
     if (draco) {
       if (mode != kModeTriangles) fail(where + ": Draco primitive with mode " + std::to_string(mode) + " (only TRIANGLES)");
-      loadDraco(*draco, where, *attrs, idx, pos, nrm, col, tex, p);
+      loadDraco(*draco, where, *attrs, idx, {pos, nrm, col, tex, shot}, p);
       vertex_count = p.positions.size() / 3;
     } else {
       p.positions = readFloats(*pos, 3, "POSITION");
@@ -598,6 +604,10 @@ class Decoder {
         p.texcoords = readFloats(*tex, 2, "TEXCOORD_0");
         sameCount(p.texcoords, 2, "TEXCOORD_0");
       }
+      if (shot) {
+        p.shots = readFloats(*shot, 1, kShotAttribute);
+        sameCount(p.shots, 1, kShotAttribute);
+      }
       std::vector<uint32_t> raw;
       if (idx) {
         raw = readIndices(*idx);
@@ -609,6 +619,7 @@ class Decoder {
     }
     for (size_t i = 0; i < p.positions.size(); ++i)
       if (!std::isfinite(p.positions[i])) fail(where + ": POSITION element " + std::to_string(i / 3) + " is not finite");
+    if (projected) projectTexcoords(*projected, where, p);
     for (size_t i = 0; i < p.texcoords.size(); ++i)
       if (!std::isfinite(p.texcoords[i])) fail(where + ": TEXCOORD_0 element " + std::to_string(i / 2) + " is not finite");
     for (size_t i = 0; i < p.indices.size(); ++i)
@@ -644,9 +655,41 @@ class Decoder {
     return tri;
   }
 
+  // The accessors of a primitive's attributes, where it has them.
+  struct Attributes {
+    std::optional<size_t> pos, nrm, col, tex, shot;
+  };
+
+  // BLVD_projected_texcoords (glb.h, TexcoordProjection): each vertex's uv
+  // from its position and its shot's projection, in the primitive's own
+  // frame (before node transforms, as the bake wrote them).
+  void projectTexcoords(const json& ext, const std::string& where, Primitive& p) {
+    const std::string pwhere = where + ".extensions." + kProjectedTexcoords;
+    const uint64_t shots = unsignedMember(ext, "count", pwhere);
+    if (shots < 1 || shots > 256) fail(pwhere + ".count: " + std::to_string(shots) + " shots (1 to 256)");
+    const View view = bufferView(index(ext, "bufferView", pwhere, count("bufferViews"), "bufferViews"));
+    if (view.bytes.size != shots * kProjectionShotBytes)
+      fail(pwhere + ": bufferView holds " + std::to_string(view.bytes.size) + " bytes, " + std::to_string(shots) +
+           " shots take " + std::to_string(shots * kProjectionShotBytes));
+    const size_t n = p.positions.size() / 3;
+    if (shots > 1 && p.shots.size() != n) fail(pwhere + ": " + std::to_string(shots) + " shots but no _SHOT attribute");
+    p.texcoords.resize(n * 2);
+    for (size_t v = 0; v < n; ++v) {
+      const float s = p.shots.empty() ? 0.0f : p.shots[v];
+      if (!(s >= 0.0f && s < float(shots) && s == std::floor(s)))
+        fail(pwhere + ": vertex " + std::to_string(v) + " names shot " +
+             (s >= 0.0f && s == std::floor(s) && s < 1e9f ? std::to_string(uint64_t(s)) : std::to_string(s)) + " of " +
+             std::to_string(shots));
+      float f[16];
+      std::memcpy(f, view.bytes.data + size_t(s) * kProjectionShotBytes, sizeof f);
+      if (!projectTexcoord(f, f + 12, &p.positions[3 * v], &p.texcoords[2 * v]))
+        fail(pwhere + ": vertex " + std::to_string(v) + " is not in front of shot " + std::to_string(size_t(s)));
+    }
+    p.shots.clear();
+  }
+
   void loadDraco(const json& ext, const std::string& where, const json& attrs, std::optional<size_t> idx,
-                 std::optional<size_t> pos, std::optional<size_t> nrm, std::optional<size_t> col,
-                 std::optional<size_t> tex, Primitive& p) {
+                 const Attributes& a, Primitive& p) {
     const std::string dwhere = where + ".extensions.KHR_draco_mesh_compression";
     const View view = bufferView(index(ext, "bufferView", dwhere, count("bufferViews"), "bufferViews"));
     auto dattrs = ext.find("attributes");
@@ -707,10 +750,11 @@ class Decoder {
         for (size_t k = 3; k < v.size(); k += 4) v[k] = 1.0f;
       return v;
     };
-    p.positions = load("POSITION", pos, 3);
-    p.normals = load("NORMAL", nrm, 3);
-    p.colors = load("COLOR_0", col, 4);
-    p.texcoords = load("TEXCOORD_0", tex, 2);
+    p.positions = load("POSITION", a.pos, 3);
+    p.normals = load("NORMAL", a.nrm, 3);
+    p.colors = load("COLOR_0", a.col, 4);
+    p.texcoords = load("TEXCOORD_0", a.tex, 2);
+    p.shots = load(kShotAttribute, a.shot, 1);
     p.indices.resize(faces * 3);
     for (uint32_t f = 0; f < faces; ++f) {
       const draco::Mesh::Face& face = mesh->face(draco::FaceIndex(f));

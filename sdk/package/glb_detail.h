@@ -35,6 +35,29 @@ inline uint8_t unitToByte(float v) {
   return static_cast<uint8_t>(std::lround(v * 255));
 }
 
+// BLVD_projected_texcoords (glb.h, TexcoordProjection): the uv at which
+// `matrix` (rows u, v, w of a 3x4, row-major) projects position `p`, clamped
+// to `rect` (u0, v0, u1, v1). False when the point is not in front of the
+// camera (w <= 0) or the result is not finite. In double: the matrix's
+// translations are kilometres, its uv a 512th of a unit.
+inline bool projectTexcoord(const float matrix[12], const float rect[4], const float p[3], float uv[2]) {
+  double r[3];
+  for (int k = 0; k < 3; ++k)
+    r[k] = double(matrix[4 * k]) * p[0] + double(matrix[4 * k + 1]) * p[1] + double(matrix[4 * k + 2]) * p[2] +
+           double(matrix[4 * k + 3]);
+  if (!(r[2] > 0.0)) return false;
+  for (int k = 0; k < 2; ++k) {
+    const double t = r[k] / r[2];
+    if (!std::isfinite(t)) return false;
+    uv[k] = static_cast<float>(std::fmin(std::fmax(t, double(rect[k])), double(rect[k + 2])));
+  }
+  return true;
+}
+
+inline constexpr const char* kProjectedTexcoords = "BLVD_projected_texcoords";
+inline constexpr const char* kShotAttribute = "_SHOT";
+inline constexpr size_t kProjectionShotBytes = 64;  // 16 float32: matrix then rect
+
 // The GLB container: header and chunks (JSON first, required; then an
 // optional BIN; other chunks are ignored).
 struct Chunks {

@@ -87,6 +87,29 @@ void validateMesh(const geo::MeshData& m, const GlbOptions& opt, const std::stri
     bad("compression_level must be 0..10, is " + std::to_string(opt.compression_level));
 }
 
+// A projection that does not give the mesh's own texcoords would move the
+// texture: refused before the texcoords are dropped.
+void validateProjection(const geo::MeshData& m, const TexcoordProjection& proj) {
+  auto bad = [&](const std::string& why) {
+    throw core::Error(Status::InvalidArg, "encodeGlb: texcoord projection: " + why);
+  };
+  if (proj.shots.empty() || proj.shots.size() > 256) bad(std::to_string(proj.shots.size()) + " shots (1 to 256)");
+  if (m.texcoords.empty()) bad("the mesh has no texcoords to project");
+  if (proj.vertex_shot.size() != m.vertexCount())
+    bad(std::to_string(proj.vertex_shot.size()) + " vertex shots for " + std::to_string(m.vertexCount()) + " vertices");
+  for (size_t v = 0; v < m.vertexCount(); ++v) {
+    const uint8_t k = proj.vertex_shot[v];
+    if (k >= proj.shots.size()) bad("vertex " + std::to_string(v) + " names shot " + std::to_string(k));
+    float uv[2] = {0.0f, 0.0f};
+    const bool ok = projectTexcoord(proj.shots[k].matrix, proj.shots[k].rect, &m.positions[3 * v], uv);
+    if (!ok || std::fabs(uv[0] - m.texcoords[2 * v]) > kProjectedTexcoordTolerance ||
+        std::fabs(uv[1] - m.texcoords[2 * v + 1]) > kProjectedTexcoordTolerance)
+      bad("vertex " + std::to_string(v) + " projects to (" + std::to_string(uv[0]) + ", " + std::to_string(uv[1]) +
+          "), its texcoord is (" + std::to_string(m.texcoords[2 * v]) + ", " + std::to_string(m.texcoords[2 * v + 1]) +
+          ")");
+  }
+}
+
 std::vector<uint8_t> assembleGlb(const json& doc, const std::vector<uint8_t>& bin) {
   std::string text = doc.dump();
   while (text.size() % 4) text.push_back(' ');  // JSON chunk pads with spaces (spec)
@@ -292,8 +315,12 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
     lin = linearColors(mesh);
     col_id = addAttribute(draco::GeometryAttribute::COLOR, 4, draco::DT_UINT8, true, 4, lin.data());
   }
-  if (!mesh.texcoords.empty())
+  const TexcoordProjection* proj = opt.projection;
+  std::optional<uint32_t> shot_id;
+  if (!mesh.texcoords.empty() && !proj)
     tex_id = addAttribute(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT32, false, 8, mesh.texcoords.data());
+  if (proj && proj->shots.size() > 1)  // an integer attribute: Draco quantizes only floats
+    shot_id = addAttribute(draco::GeometryAttribute::GENERIC, 1, draco::DT_UINT8, false, 1, proj->vertex_shot.data());
   dm.SetNumFaces(mesh.triangleCount());
   for (size_t f = 0; f < mesh.triangleCount(); ++f) {
     draco::Mesh::Face face;
@@ -360,9 +387,20 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
     draco_attrs["TEXCOORD_0"] = *tex_id;
     accessors.push_back({{"componentType", kFloat}, {"count", points}, {"type", "VEC2"}});
   }
+  if (shot_id) {
+    attributes[kShotAttribute] = accessors.size();
+    draco_attrs[kShotAttribute] = *shot_id;
+    accessors.push_back({{"componentType", kUnsignedByte}, {"count", points}, {"type", "SCALAR"}});
+  }
   counts = decodedCounts(mesh, points, back->num_faces());
+  json ext = {{"KHR_draco_mesh_compression", {{"bufferView", view}, {"attributes", draco_attrs}}}};
+  if (proj) {
+    static_assert(sizeof(TexcoordProjection::Shot) == kProjectionShotBytes, "16 floats a shot");
+    const size_t shots = parts.addView(proj->shots.data(), proj->shots.size() * kProjectionShotBytes, std::nullopt);
+    ext[kProjectedTexcoords] = {{"bufferView", shots}, {"count", proj->shots.size()}};
+  }
   return {{"attributes", attributes}, {"indices", iacc}, {"material", 0}, {"mode", kModeTriangles},
-          {"extensions", {{"KHR_draco_mesh_compression", {{"bufferView", view}, {"attributes", draco_attrs}}}}}};
+          {"extensions", ext}};
 }
 
 // EXT_meshopt_compression over KHR_mesh_quantization types, as the
@@ -521,6 +559,12 @@ std::vector<uint8_t> encodeGlbLevels(const std::vector<geo::MeshData>& levels, c
       throw core::Error(Status::InvalidArg, "encodeGlb: " + where + "attributes differ from level 0's");
     if (!m.image.empty()) throw core::Error(Status::InvalidArg, "encodeGlb: " + where + "only level 0 may carry an image");
   }
+  GlbOptions o = opt;
+  if (opt.codec != GlbCodec::Draco) o.projection = nullptr;
+  if (o.projection) {
+    if (levels.size() != 1) throw core::Error(Status::InvalidArg, "encodeGlb: a texcoord projection needs one level");
+    validateProjection(levels[0], *o.projection);
+  }
   if (counts) counts->assign(levels.size(), GlbMeshCounts{});
   json doc = baseDocument();
   if (levels[0].indices.empty()) {
@@ -533,7 +577,7 @@ std::vector<uint8_t> encodeGlbLevels(const std::vector<geo::MeshData>& levels, c
   json meshes = json::array(), nodes = json::array(), used = json::array();
   for (size_t k = 0; k < levels.size(); ++k) {
     GlbMeshCounts c;
-    json prim = opt.codec == GlbCodec::Draco     ? addDracoPrimitive(levels[k], opt, parts, c)
+    json prim = opt.codec == GlbCodec::Draco     ? addDracoPrimitive(levels[k], o, parts, c)
                 : opt.codec == GlbCodec::Meshopt ? addMeshoptPrimitive(levels[k], opt, parts, c)
                                                  : addPlainPrimitive(levels[k], parts, c);
     if (counts) (*counts)[k] = c;
@@ -550,6 +594,7 @@ std::vector<uint8_t> encodeGlbLevels(const std::vector<geo::MeshData>& levels, c
   if (opt.codec == GlbCodec::Draco) required.push_back("KHR_draco_mesh_compression");
   if (opt.codec == GlbCodec::Meshopt) required.push_back("EXT_meshopt_compression");
   if (parts.quantized) required.push_back("KHR_mesh_quantization");
+  if (o.projection) required.push_back(kProjectedTexcoords);
   if (levels[0].image_mime == "image/webp" && !levels[0].image.empty()) required.push_back("EXT_texture_webp");
   used = required;
   if (levels.size() > 1) used.push_back("MSFT_lod");

@@ -75,7 +75,7 @@ std::vector<uint8_t> PackageWriter::blobContents(uint32_t i) const {
 
 uint32_t PackageWriter::addStoredBlob(StoredBlob blob) {
   std::vector<uint8_t>& bytes = blob.bytes;
-  if ((blob.flags & ~kBlobZstd) != 0 || ((blob.flags & kBlobZstd) == 0 && blob.contents_size != bytes.size()) ||
+  if (!validBlobFlags(blob.flags) || ((blob.flags & kBlobZstd) == 0 && blob.contents_size != bytes.size()) ||
       blob.contents_size > kMaxBlobContentsBytes)
     throw core::Error(core::Status::InvalidArg, "package: blob " + std::to_string(blobs_.size()) +
                                                     " has flags " + std::to_string(blob.flags) + " and " +

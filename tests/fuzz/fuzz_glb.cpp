@@ -4,7 +4,7 @@
 // leak or undefined behaviour. A decoded mesh must also encode again.
 //
 // Seeds: set BLVD_FUZZ_SEED_DIR and the target writes a few GLBs of its own
-// (plain, Draco, empty) there before running; add tests/data/gltf as well.
+// (plain, Draco, empty, projected texcoords) there before running; add tests/data/gltf as well.
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -64,6 +64,24 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   meshopt.meshopt_position_bits = 0;
   writeSeed(dir, "seed_bare_meshopt.glb", blvd::package::encodeGlb(bare, meshopt));
   writeSeed(dir, "seed_snorm8_meshopt.glb", blvd::package::encodeGlb(seedMesh(), meshopt));
+  // An impostor layer of two captures whose uv the decoder projects
+  // (BLVD_projected_texcoords): orthographic projections, w = 1.
+  blvd::package::TexcoordProjection proj;
+  proj.shots.resize(2);
+  proj.shots[0] = {{0.1f, 0, 0, 0.2f, 0, 0, -0.1f, 0.3f, 0, 0, 0, 1}, {0, 0, 0.5f, 1}};
+  proj.shots[1] = {{0.05f, 0, 0, 0.4f, 0, 0.1f, 0, 0.1f, 0, 0, 0, 1}, {0.5f, 0, 1, 1}};
+  proj.vertex_shot = {0, 0, 0, 0, 1, 1, 1};
+  blvd::geo::MeshData layer = textured;
+  layer.normals.clear();
+  layer.colors.clear();
+  for (size_t v = 0; v < layer.vertexCount(); ++v) {
+    const float* m = proj.shots[proj.vertex_shot[v]].matrix;
+    const float* p = &layer.positions[3 * v];
+    for (int k = 0; k < 2; ++k) layer.texcoords[2 * v + k] = m[4 * k] * p[0] + m[4 * k + 1] * p[1] + m[4 * k + 2] * p[2] + m[4 * k + 3];
+  }
+  blvd::package::GlbOptions projected;
+  projected.projection = &proj;
+  writeSeed(dir, "seed_projected_draco.glb", blvd::package::encodeGlb(layer, projected));
   return 0;
 }
 

@@ -1,7 +1,8 @@
-// Blobs stored as zstd frames (package format 4.0): the round trip through
-// the writer and both read paths, the choice to store a blob as is when
-// compressing does not pay, and a damaged frame or a BIDX entry that lies
-// about it, each named with the blob and its offset.
+// Blobs stored as zstd frames (package format 4.0), with the built-in
+// dictionary where that is smaller (6.0): the round trip through the writer
+// and both read paths, the choice to store a blob as is when compressing does
+// not pay, and a damaged frame or a BIDX entry that lies about it, each named
+// with the blob and its offset.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -30,6 +31,23 @@ std::vector<uint8_t> noise(size_t n) {
 // not (noise, like a WebP atlas), blob 2 is empty.
 std::vector<std::vector<uint8_t>> contents() { return {pattern(5000, 3), noise(3000), {}}; }
 
+// glTF JSON as an impostor layer's GLB starts, numbers of its own: what the
+// dictionary is made of, not a copy of it.
+std::vector<uint8_t> layerJson() {
+  const std::string j =
+      R"({"accessors":[{"componentType":5123,"count":612,"type":"SCALAR"},{"componentType":5126,"count":287,)"
+      R"("max":[-211.5,9.75,40.25],"min":[-480.125,-1.5,-302.0],"type":"VEC3"},{"componentType":5121,"count":287,)"
+      R"("type":"SCALAR"}],"asset":{"generator":"blvd","version":"2.0"},"bufferViews":[{"buffer":0,"byteLength":1204,)"
+      R"("byteOffset":0},{"buffer":0,"byteLength":128,"byteOffset":1204},{"buffer":0,"byteLength":1876,)"
+      R"("byteOffset":1332}],"buffers":[{"byteLength":3208}],"extensionsRequired":["KHR_draco_mesh_compression",)"
+      R"("BLVD_projected_texcoords","EXT_texture_webp"],"extensionsUsed":["KHR_draco_mesh_compression",)"
+      R"("BLVD_projected_texcoords","EXT_texture_webp","KHR_materials_unlit"],"images":[{"bufferView":2,)"
+      R"("mimeType":"image/webp"}],"materials":[{"doubleSided":false,"extensions":{"KHR_materials_unlit":{}},)"
+      R"("pbrMetallicRoughness":{"baseColorFactor":[1.0,1.0,1.0,1.0],"baseColorTexture":{"index":0},)"
+      R"("metallicFactor":0.0,"roughnessFactor":1.0}}]})";
+  return std::vector<uint8_t>(j.begin(), j.end());
+}
+
 std::vector<uint8_t> packageOf(const std::vector<std::vector<uint8_t>>& blobs, int level) {
   PackageWriter w;
   w.setHeader(sampleHeader());
@@ -52,6 +70,17 @@ TEST(BlobCodec, PackUsesAFrameOnlyWhereItIsSmaller) {
   EXPECT_EQ(c.bytes, pattern(5000, 3));
   EXPECT_THROW(packBlob({}, 23), core::Error);
   EXPECT_THROW(packBlob({}, -1), core::Error);
+}
+
+TEST(BlobCodec, GltfJsonTakesTheDictionary) {
+  const StoredBlob a = packBlob(layerJson(), 19);
+  EXPECT_EQ(a.flags, kBlobZstd | kBlobZstdDict);
+  // Most of it is the dictionary's text: a fraction of a plain frame.
+  EXPECT_LT(a.bytes.size(), layerJson().size() / 4) << a.bytes.size();
+  PackageWriter w;
+  w.setBlobCompression(19);
+  w.addBlob(layerJson());
+  EXPECT_EQ(w.blobContents(0), layerJson());
 }
 
 TEST(BlobCodec, RoundTripThroughTheMappingAndThroughPread) {
@@ -98,13 +127,16 @@ TEST(BlobCodec, StoredBlobsCopyAsTheyAre) {
   EXPECT_THROW(w.addStoredBlob(lie), core::Error);
   lie.flags = 4;
   EXPECT_THROW(w.addStoredBlob(lie), core::Error);
+  lie.flags = kBlobZstdDict;  // the dictionary without a frame
+  EXPECT_THROW(w.addStoredBlob(lie), core::Error);
 }
 
 // Files whose checksums are right but whose BIDX or frame is not.
 class ResealedBlobs : public ::testing::Test {
  protected:
+  virtual std::vector<std::vector<uint8_t>> blobs() const { return contents(); }
   void SetUp() override {
-    bytes = packageOf(contents(), 19);
+    bytes = packageOf(blobs(), 19);
     PackageReader r;
     std::string err;
     ASSERT_EQ(PackageReader::openMemory(bytes.data(), bytes.size(), "z.blvd", r, err), Status::Ok) << err;
@@ -154,11 +186,31 @@ TEST_F(ResealedBlobs, FrameShorterThanBidxSays) {
 }
 
 TEST_F(ResealedBlobs, UnknownFlagIsRefusedAtOpen) {
-  detail::put<uint32_t>(bytes.data() + entry + detail::blob::kFlags, 3);
-  PackageReader r;
+  for (const uint32_t flags : {4u, 5u, kBlobZstdDict}) {
+    detail::put<uint32_t>(bytes.data() + entry + detail::blob::kFlags, flags);
+    PackageReader r;
+    std::string err;
+    EXPECT_EQ(reopen(r, err), Status::Corrupt);
+    EXPECT_TRUE(contains(err, "blob 0 at offset " + std::to_string(info.offset) + ": unknown flags " +
+                                  std::to_string(flags)))
+        << err;
+  }
+}
+
+// Blob 0 a frame made with the dictionary.
+class ResealedDictionaryBlob : public ResealedBlobs {
+ protected:
+  std::vector<std::vector<uint8_t>> blobs() const override { return {layerJson()}; }
+};
+
+TEST_F(ResealedDictionaryBlob, ReadsBackAndNeedsItsFlag) {
+  EXPECT_EQ(info.flags, kBlobZstd | kBlobZstdDict);
   std::string err;
-  EXPECT_EQ(reopen(r, err), Status::Corrupt);
-  EXPECT_TRUE(contains(err, "blob 0 at offset " + std::to_string(info.offset) + ": unknown flags 3")) << err;
+  EXPECT_EQ(contentsOf(err), Status::Ok) << err;
+  // Without the dictionary the frame names one zstd cannot find.
+  detail::put<uint32_t>(bytes.data() + entry + detail::blob::kFlags, kBlobZstd);
+  EXPECT_EQ(contentsOf(err), Status::Corrupt);
+  EXPECT_TRUE(contains(err, "z.blvd: blob 0 at offset " + std::to_string(info.offset) + ": zstd frame")) << err;
 }
 
 TEST_F(ResealedBlobs, FrameSaidToBeItsContents) {
