@@ -125,7 +125,8 @@ inline constexpr size_t kMaxDecodedVertices = size_t{1} << 24;
 // bufferViews are decoded (and filtered) before their accessors read them. Missing normals
 // become flat normals (the primitive's triangles are unwelded); missing
 // colours are white; the material's baseColorFactor multiplies the colours.
-// TEXCOORD_0 is kept when every primitive has it, and then material 0's base
+// TEXCOORD_0 (or the uv BLVD_projected_texcoords projects, TexcoordProjection)
+// is kept when every primitive has it, and then material 0's base
 // colour texture (an image in a bufferView) is returned as `out.image` when
 // its bytes are PNG or JPEG (`image_mime` says which; other images are dropped).
 // Buffers come from the GLB BIN chunk or base64 data: URIs; external files are
