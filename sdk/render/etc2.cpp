@@ -134,16 +134,6 @@ struct Block {
 constexpr uint8_t kHalf[2][2][8] = {{{0, 1, 4, 5, 8, 9, 12, 13}, {2, 3, 6, 7, 10, 11, 14, 15}},
                                     {{0, 1, 2, 3, 4, 5, 6, 7}, {8, 9, 10, 11, 12, 13, 14, 15}}};
 
-int64_t sse(const Block& src, const uint8_t* decoded) {
-  int64_t e = 0;
-  for (int i = 0; i < 16; ++i)
-    for (int k = 0; k < 3; ++k) {
-      const int d = src.px[i][k] - decoded[i * 4 + k];
-      e += d * d;
-    }
-  return e;
-}
-
 // The half's best table and each pixel's index for an 8-bit base colour:
 // index bits into `b`, the table into *table; returns the squared error. A
 // pixel takes the modifier nearest its mean offset from the base (the one that
@@ -231,26 +221,52 @@ bool encodeEtc1(const Block& src, bool flip, bool differential, uint64_t* out, i
 }
 
 // A least-squares plane c = O + x (H - O) / 4 + y (V - O) / 4 per channel,
-// quantized to 6/7/6 bits, with the free bits set so that the block reads as
-// planar (R and G in range, B out of range in the differential reading).
-uint64_t encodePlanar(const Block& src) {
+// quantized to 6/7/6 bits: the corner colours' codes.
+struct Plane {
   int o[3], h[3], v[3];
+};
+
+Plane fitPlane(const Block& src) {
+  Plane q;
   for (int k = 0; k < 3; ++k) {
-    double mean = 0, cx = 0, cy = 0;
+    int sum = 0, sx = 0, sy = 0;  // Σ p, Σ (2x - 3) p, Σ (2y - 3) p: exact
     for (int y = 0; y < 4; ++y)
       for (int x = 0; x < 4; ++x) {
-        const double p = src.px[y * 4 + x][k];
-        mean += p / 16.0;
-        cx += (x - 1.5) * p;
-        cy += (y - 1.5) * p;
+        const int p = src.px[y * 4 + x][k];
+        sum += p;
+        sx += (2 * x - 3) * p;
+        sy += (2 * y - 3) * p;
       }
-    const double bx = cx / 20.0, by = cy / 20.0;  // Σ (x - 1.5)² over the block = 20
+    const double mean = sum / 16.0, bx = sx / 40.0, by = sy / 40.0;  // Σ (x - 1.5)² over the block = 20
     const double a = mean - 1.5 * bx - 1.5 * by;
     const int levels = k == 1 ? 128 : 64;
-    o[k] = quantize(a, levels);
-    h[k] = quantize(a + 4 * bx, levels);
-    v[k] = quantize(a + 4 * by, levels);
+    q.o[k] = quantize(a, levels);
+    q.h[k] = quantize(a + 4 * bx, levels);
+    q.v[k] = quantize(a + 4 * by, levels);
   }
+  return q;
+}
+
+// The plane's squared error as a decoder draws it (decodePlanar), without
+// packing and unpacking the block.
+int64_t planeError(const Block& src, const Plane& q) {
+  int64_t err = 0;
+  for (int k = 0; k < 3; ++k) {
+    const auto extend = k == 1 ? extend7 : extend6;
+    const int o = extend(uint32_t(q.o[k])), h = extend(uint32_t(q.h[k])), v = extend(uint32_t(q.v[k]));
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x) {
+        const int e = clamp255((x * (h - o) + y * (v - o) + 4 * o + 2) >> 2) - src.px[y * 4 + x][k];
+        err += e * e;
+      }
+  }
+  return err;
+}
+
+// The plane's block, with the free bits set so that it reads as planar (R
+// and G in range, B out of range in the differential reading).
+uint64_t packPlanar(const Plane& q) {
+  const int *o = q.o, *h = q.h, *v = q.v;
   uint64_t b = 0;
   b |= uint64_t(o[0]) << 57;
   b |= uint64_t(o[1] >> 6) << 56 | uint64_t(o[1] & 63) << 49;
@@ -279,13 +295,11 @@ uint64_t encodeBlock(const Block& src) {
     if (!encodeEtc1(src, flip, true, &b, &e) && !encodeEtc1(src, flip, false, &b, &e)) continue;
     if (e < best_err) best_err = e, best = b;
   }
+  if (best_err == 0) return best;
   // The planar block's error as the decoder makes it (its 6/7/6-bit colours
   // hold a flat block closer than ETC1's bases and modifiers often do).
-  uint8_t decoded[64], bytes[8];
-  const uint64_t planar = encodePlanar(src);
-  store64(planar, bytes);
-  decodeEtc2Block(bytes, decoded);
-  return sse(src, decoded) < best_err ? planar : best;
+  const Plane plane = fitPlane(src);
+  return planeError(src, plane) < best_err ? packPlanar(plane) : best;
 }
 
 }  // namespace
