@@ -40,19 +40,17 @@ const ZSTD_DDict* dictionary() {
   return d.get();
 }
 
+struct CctxFree {
+  void operator()(ZSTD_CCtx* c) const { ZSTD_freeCCtx(c); }
+};
+
 // `contents` as one frame at `level`, with the built-in dictionary or not.
-std::vector<uint8_t> frame(const std::vector<uint8_t>& contents, int level, bool with_dictionary) {
-  struct CctxFree {
-    void operator()(ZSTD_CCtx* c) const { ZSTD_freeCCtx(c); }
-  };
-  std::unique_ptr<ZSTD_CCtx, CctxFree> ctx(ZSTD_createCCtx());
-  if (!ctx) throw std::bad_alloc();
+std::vector<uint8_t> frame(ZSTD_CCtx* ctx, const std::vector<uint8_t>& contents, int level, bool with_dictionary) {
   const BlobDictionary d = glbDictionary();
   std::vector<uint8_t> z(ZSTD_compressBound(contents.size()));
-  const size_t n = with_dictionary ? ZSTD_compress_usingDict(ctx.get(), z.data(), z.size(), contents.data(),
+  const size_t n = with_dictionary ? ZSTD_compress_usingDict(ctx, z.data(), z.size(), contents.data(),
                                                              contents.size(), d.data, d.size, level)
-                                   : ZSTD_compressCCtx(ctx.get(), z.data(), z.size(), contents.data(),
-                                                       contents.size(), level);
+                                   : ZSTD_compressCCtx(ctx, z.data(), z.size(), contents.data(), contents.size(), level);
   if (ZSTD_isError(n)) throw core::Error(core::Status::Internal, std::string("zstd: ") + ZSTD_getErrorName(n));
   z.resize(n);
   z.shrink_to_fit();
@@ -82,7 +80,9 @@ StoredBlob packBlob(std::vector<uint8_t> contents, int level) {
   StoredBlob out;
   out.contents_size = contents.size();
   if (level > 0 && !contents.empty()) {
-    std::vector<uint8_t> plain = frame(contents, level, false), dict = frame(contents, level, true);
+    std::unique_ptr<ZSTD_CCtx, CctxFree> ctx(ZSTD_createCCtx());
+    if (!ctx) throw std::bad_alloc();
+    std::vector<uint8_t> plain = frame(ctx.get(), contents, level, false), dict = frame(ctx.get(), contents, level, true);
     const bool use_dict = dict.size() < plain.size();
     std::vector<uint8_t>& z = use_dict ? dict : plain;
     if (z.size() < contents.size()) {

@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -273,8 +274,8 @@ class Decoder {
     for (const json& e : *req) {
       if (!e.is_string()) fail("extensionsRequired: expected strings");
       const std::string name = e.get<std::string>();
-      // Texture and material extensions do not change geometry, which is
-      // all this decoder returns.
+      // The geometry extensions this decoder implements, and texture and
+      // material ones, which do not change geometry (all it returns).
       const bool harmless = name == "KHR_draco_mesh_compression" || name == "KHR_mesh_quantization" ||
                             name == "EXT_meshopt_compression" || name == kProjectedTexcoords ||
                             name.rfind("KHR_materials_", 0) == 0 || name.rfind("KHR_texture_", 0) == 0 ||
@@ -676,10 +677,11 @@ class Decoder {
     p.texcoords.resize(n * 2);
     for (size_t v = 0; v < n; ++v) {
       const float s = p.shots.empty() ? 0.0f : p.shots[v];
-      if (!(s >= 0.0f && s < float(shots) && s == std::floor(s)))
-        fail(pwhere + ": vertex " + std::to_string(v) + " names shot " +
-             (s >= 0.0f && s == std::floor(s) && s < 1e9f ? std::to_string(uint64_t(s)) : std::to_string(s)) + " of " +
-             std::to_string(shots));
+      if (!(s >= 0.0f && s < float(shots) && s == std::floor(s))) {
+        char named[32];
+        std::snprintf(named, sizeof named, "%g", double(s));
+        fail(pwhere + ": vertex " + std::to_string(v) + " names shot " + named + " of " + std::to_string(shots));
+      }
       float f[16];
       std::memcpy(f, view.bytes.data + size_t(s) * kProjectionShotBytes, sizeof f);
       if (!projectTexcoord(f, f + 12, &p.positions[3 * v], &p.texcoords[2 * v]))

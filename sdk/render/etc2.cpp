@@ -100,6 +100,10 @@ void decodeH(uint64_t b, uint8_t* out) {
   decodePaint(b, paint, out);
 }
 
+// §21.1's planar mode: a channel at (x, y) from its corner colours O, H, V
+// (extended to 8 bits), before clamping.
+int planarChannel(int o, int h, int v, int x, int y) { return (x * (h - o) + y * (v - o) + 4 * o + 2) >> 2; }
+
 void decodePlanar(uint64_t b, uint8_t* out) {
   const int o[3] = {extend6(bits(b, 62, 57)), extend7(bits(b, 56, 56) << 6 | bits(b, 54, 49)),
                     extend6(bits(b, 48, 48) << 5 | bits(b, 44, 43) << 3 | bits(b, 41, 39))};
@@ -108,7 +112,7 @@ void decodePlanar(uint64_t b, uint8_t* out) {
   for (int y = 0; y < 4; ++y)
     for (int x = 0; x < 4; ++x) {
       int c[3];
-      for (int k = 0; k < 3; ++k) c[k] = (x * (h[k] - o[k]) + y * (v[k] - o[k]) + 4 * o[k] + 2) >> 2;
+      for (int k = 0; k < 3; ++k) c[k] = planarChannel(o[k], h[k], v[k], x, y);
       put(out, x, y, c);
     }
 }
@@ -256,7 +260,7 @@ int64_t planeError(const Block& src, const Plane& q) {
     const int o = extend(uint32_t(q.o[k])), h = extend(uint32_t(q.h[k])), v = extend(uint32_t(q.v[k]));
     for (int y = 0; y < 4; ++y)
       for (int x = 0; x < 4; ++x) {
-        const int e = clamp255((x * (h - o) + y * (v - o) + 4 * o + 2) >> 2) - src.px[y * 4 + x][k];
+        const int e = clamp255(planarChannel(o, h, v, x, y)) - src.px[y * 4 + x][k];
         err += e * e;
       }
   }
