@@ -22,6 +22,11 @@ glm::dvec2 leftOf(glm::dvec2 d) { return {-d.y, d.x}; }
 
 }  // namespace
 
+double streetLift(const graph::HalfEdge& e) {
+  const int rank = (e.road_class <= graph::RoadClass::Secondary ? 1 : 0) + (e.flags & graph::kBridge ? 2 : 0);
+  return kStreetLift + rank * kStreetRankLift;
+}
+
 void appendHalfStreet(const graph::StreetGraph& g, uint32_t h, geo::MeshData& out) {
   const graph::HalfEdge& e = g.halfedges[h];
   if (e.flags & graph::kTunnel) return;
@@ -31,6 +36,7 @@ void appendHalfStreet(const graph::StreetGraph& g, uint32_t h, geo::MeshData& ou
   const glm::dvec2* p = &g.points[e.pts_begin];
   const size_t n = e.pts_count;
   const double half = 0.5 * e.width;
+  const double lift = streetLift(e);
   const auto base = static_cast<uint32_t>(out.vertexCount());
   size_t emitted = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -49,8 +55,8 @@ void appendHalfStreet(const graph::StreetGraph& g, uint32_t h, geo::MeshData& ou
     const double c = std::max(0.5, glm::dot(m, n0));
     // The inner edge reaches 15 cm past the centre line so the two halves of a
     // street overlap instead of leaving pixel cracks where they meet.
-    pushVertex(out, p[i] - m * (0.15 / c), kStreetLift, col);
-    pushVertex(out, p[i] + m * (half / c), kStreetLift, col);
+    pushVertex(out, p[i] - m * (0.15 / c), lift, col);
+    pushVertex(out, p[i] + m * (half / c), lift, col);
     ++emitted;
   }
   for (uint32_t i = 0; i + 1 < emitted; ++i) {

@@ -17,6 +17,16 @@ namespace blvd::bake {
 // Heights above the ground plane (y = 0), metres, so coplanar layers sort.
 constexpr double kGroundLift = 0.03;
 constexpr double kStreetLift = 0.06;
+// Where two streets' ribbons overlap (every junction, a slip road beside its
+// carriageway), the one on top is chosen here, not left to the depth buffer:
+// at one height the two fought, rows of one grey through the other that
+// shimmer as the car moves. Each rank lifts a ribbon this much more: a major
+// road (secondary and up) one, a bridge two. Two centimetres are more than
+// 100 times the depth buffer's step along a grazing ray at the view distance.
+constexpr double kStreetRankLift = 0.02;
+
+// The lift of half-edge e's ribbon: kStreetLift plus its rank's.
+double streetLift(const graph::HalfEdge& e);
 
 struct BlockMeshStats {
   size_t buildings = 0, building_triangles = 0, ground_triangles = 0, street_triangles = 0;
