@@ -283,9 +283,18 @@ json addPlainPrimitive(const geo::MeshData& mesh, Parts& parts, GlbMeshCounts& c
   return {{"attributes", attributes}, {"indices", iacc}, {"material", 0}, {"mode", kModeTriangles}};
 }
 
-json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& parts, GlbMeshCounts& counts) {
+// The unique ids of a Draco mesh's attributes (those present).
+struct DracoIds {
+  uint32_t pos = 0;
+  std::optional<uint32_t> nrm, col, tex, shot;
+};
+
+// `mesh` as a Draco mesh: positions as GENERIC, then normals, linear
+// colours (`lin` keeps their bytes), uv unless projected, and the shot
+// index of a projection with several captures.
+DracoIds dracoMeshOf(const geo::MeshData& mesh, const TexcoordProjection* proj, draco::Mesh& dm,
+                     std::vector<uint8_t>& lin) {
   const size_t n = mesh.vertexCount();
-  draco::Mesh dm;
   dm.set_num_points(static_cast<uint32_t>(n));
   auto addAttribute = [&](draco::GeometryAttribute::Type type, int comps, draco::DataType dt,
                           bool normalized, size_t elem_bytes, const void* src) {
@@ -299,35 +308,33 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
       pa->SetAttributeValue(draco::AttributeValueIndex(static_cast<uint32_t>(i)), p + i * elem_bytes);
     return pa->unique_id();
   };
+  DracoIds ids;
   // Positions as GENERIC, not POSITION: a Draco stream with a POSITION
   // attribute is refused by our decoder (draco_decode.cpp says why). Without
   // one, Draco's edgebreaker must split the mesh on attribute seams
-  // (split_mesh_on_seams below): its per-attribute connectivity is built
-  // around the POSITION attribute.
-  const uint32_t pos_id = addAttribute(draco::GeometryAttribute::GENERIC, 3, draco::DT_FLOAT32,
-                                       false, 12, mesh.positions.data());
-  std::optional<uint32_t> nrm_id, col_id, tex_id;
+  // (split_mesh_on_seams, encodeDraco): its per-attribute connectivity is
+  // built around the POSITION attribute.
+  ids.pos = addAttribute(draco::GeometryAttribute::GENERIC, 3, draco::DT_FLOAT32, false, 12, mesh.positions.data());
   if (!mesh.normals.empty())
-    nrm_id = addAttribute(draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32, false, 12,
-                          mesh.normals.data());
-  std::vector<uint8_t> lin;
+    ids.nrm = addAttribute(draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32, false, 12, mesh.normals.data());
   if (!mesh.colors.empty()) {
     lin = linearColors(mesh);
-    col_id = addAttribute(draco::GeometryAttribute::COLOR, 4, draco::DT_UINT8, true, 4, lin.data());
+    ids.col = addAttribute(draco::GeometryAttribute::COLOR, 4, draco::DT_UINT8, true, 4, lin.data());
   }
-  const TexcoordProjection* proj = opt.projection;
-  std::optional<uint32_t> shot_id;
   if (!mesh.texcoords.empty() && !proj)
-    tex_id = addAttribute(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT32, false, 8, mesh.texcoords.data());
+    ids.tex = addAttribute(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT32, false, 8, mesh.texcoords.data());
   if (proj && proj->shots.size() > 1)  // an integer attribute: Draco quantizes only floats
-    shot_id = addAttribute(draco::GeometryAttribute::GENERIC, 1, draco::DT_UINT8, false, 1, proj->vertex_shot.data());
+    ids.shot = addAttribute(draco::GeometryAttribute::GENERIC, 1, draco::DT_UINT8, false, 1, proj->vertex_shot.data());
   dm.SetNumFaces(mesh.triangleCount());
   for (size_t f = 0; f < mesh.triangleCount(); ++f) {
     draco::Mesh::Face face;
     for (int k = 0; k < 3; ++k) face[k] = draco::PointIndex(mesh.indices[f * 3 + k]);
     dm.SetFace(draco::FaceIndex(static_cast<uint32_t>(f)), face);
   }
+  return ids;
+}
 
+void encodeDraco(draco::Mesh& dm, const GlbOptions& opt, draco::EncoderBuffer& eb) {
   draco::Encoder enc;
   if (opt.position_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::GENERIC, opt.position_bits);
   if (opt.normal_bits > 0) enc.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, opt.normal_bits);
@@ -336,9 +343,33 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
   const int speed = 10 - opt.compression_level;
   enc.SetSpeedOptions(speed, speed);
   enc.options().SetGlobalBool("split_mesh_on_seams", true);
-  draco::EncoderBuffer eb;
   const draco::Status st = enc.EncodeMeshToBuffer(dm, &eb);
   if (!st.ok()) throw core::Error(Status::Internal, std::string("encodeGlb: Draco encoder: ") + st.error_msg());
+}
+
+// The bounds of the positions `back` decoded to (attribute `pos_id`).
+void decodedBounds(const draco::Mesh& back, uint32_t pos_id, std::array<float, 3>& lo, std::array<float, 3>& hi) {
+  const draco::PointAttribute* bpos = back.GetAttributeByUniqueId(pos_id);
+  if (!bpos) throw core::Error(Status::Internal, "encodeGlb: Draco lost the position attribute");
+  lo = hi = {0, 0, 0};
+  for (draco::PointIndex i(0); i < back.num_points(); ++i) {
+    float v[3] = {0, 0, 0};
+    if (!bpos->ConvertValue<float>(bpos->mapped_index(i), 3, v))
+      throw core::Error(Status::Internal, "encodeGlb: Draco's decoded POSITION is not 3 floats");
+    for (int k = 0; k < 3; ++k) {
+      if (i.value() == 0 || v[k] < lo[k]) lo[k] = v[k];
+      if (i.value() == 0 || v[k] > hi[k]) hi[k] = v[k];
+    }
+  }
+}
+
+json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& parts, GlbMeshCounts& counts) {
+  const TexcoordProjection* proj = opt.projection;
+  draco::Mesh dm;
+  std::vector<uint8_t> lin;
+  const DracoIds ids = dracoMeshOf(mesh, proj, dm, lin);
+  draco::EncoderBuffer eb;
+  encodeDraco(dm, opt, eb);
 
   // The accessors must state what a client will decode: Draco may drop
   // degenerate faces and unreferenced points, or split non-manifold vertices,
@@ -350,18 +381,8 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
   if (decodeDracoBuffer(bytes, eb.size(), back, err) != Status::Ok)
     throw core::Error(Status::Internal, "encodeGlb: own Draco output does not decode: " + err);
   const size_t points = back->num_points();
-  const draco::PointAttribute* bpos = back->GetAttributeByUniqueId(pos_id);
-  if (!bpos) throw core::Error(Status::Internal, "encodeGlb: Draco lost the position attribute");
-  std::array<float, 3> lo{0, 0, 0}, hi{0, 0, 0};
-  for (draco::PointIndex i(0); i < back->num_points(); ++i) {
-    float v[3] = {0, 0, 0};
-    if (!bpos->ConvertValue<float>(bpos->mapped_index(i), 3, v))
-      throw core::Error(Status::Internal, "encodeGlb: Draco's decoded POSITION is not 3 floats");
-    for (int k = 0; k < 3; ++k) {
-      if (i.value() == 0 || v[k] < lo[k]) lo[k] = v[k];
-      if (i.value() == 0 || v[k] > hi[k]) hi[k] = v[k];
-    }
-  }
+  std::array<float, 3> lo, hi;
+  decodedBounds(*back, ids.pos, lo, hi);
 
   const size_t view = parts.addView(bytes, eb.size(), std::nullopt);
   json& accessors = parts.accessors;
@@ -369,29 +390,17 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
   const int ictype = componentForIndices(points);
   const size_t iacc = accessors.size();
   accessors.push_back({{"componentType", ictype}, {"count", back->num_faces() * 3}, {"type", "SCALAR"}});
-  attributes["POSITION"] = accessors.size();
-  draco_attrs["POSITION"] = pos_id;
-  accessors.push_back({{"componentType", kFloat}, {"count", points}, {"type", "VEC3"}, {"min", lo}, {"max", hi}});
-  if (nrm_id) {
-    attributes["NORMAL"] = accessors.size();
-    draco_attrs["NORMAL"] = *nrm_id;
-    accessors.push_back({{"componentType", kFloat}, {"count", points}, {"type", "VEC3"}});
-  }
-  if (col_id) {
-    attributes["COLOR_0"] = accessors.size();
-    draco_attrs["COLOR_0"] = *col_id;
-    accessors.push_back({{"componentType", kUnsignedByte}, {"normalized", true}, {"count", points}, {"type", "VEC4"}});
-  }
-  if (tex_id) {
-    attributes["TEXCOORD_0"] = accessors.size();
-    draco_attrs["TEXCOORD_0"] = *tex_id;
-    accessors.push_back({{"componentType", kFloat}, {"count", points}, {"type", "VEC2"}});
-  }
-  if (shot_id) {
-    attributes[kShotAttribute] = accessors.size();
-    draco_attrs[kShotAttribute] = *shot_id;
-    accessors.push_back({{"componentType", kUnsignedByte}, {"count", points}, {"type", "SCALAR"}});
-  }
+  auto accessor = [&](const char* name, uint32_t id, json acc) {
+    attributes[name] = accessors.size();
+    draco_attrs[name] = id;
+    acc["count"] = points;
+    accessors.push_back(std::move(acc));
+  };
+  accessor("POSITION", ids.pos, {{"componentType", kFloat}, {"type", "VEC3"}, {"min", lo}, {"max", hi}});
+  if (ids.nrm) accessor("NORMAL", *ids.nrm, {{"componentType", kFloat}, {"type", "VEC3"}});
+  if (ids.col) accessor("COLOR_0", *ids.col, {{"componentType", kUnsignedByte}, {"normalized", true}, {"type", "VEC4"}});
+  if (ids.tex) accessor("TEXCOORD_0", *ids.tex, {{"componentType", kFloat}, {"type", "VEC2"}});
+  if (ids.shot) accessor(kShotAttribute, *ids.shot, {{"componentType", kUnsignedByte}, {"type", "SCALAR"}});
   counts = decodedCounts(mesh, points, back->num_faces());
   json ext = {{"KHR_draco_mesh_compression", {{"bufferView", view}, {"attributes", draco_attrs}}}};
   if (proj) {
@@ -401,6 +410,98 @@ json addDracoPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts& 
   }
   return {{"attributes", attributes}, {"indices", iacc}, {"material", 0}, {"mode", kModeTriangles},
           {"extensions", ext}};
+}
+
+// One vertex attribute's elements as its meshopt view holds them.
+struct RawAttribute {
+  std::vector<uint8_t> bytes;
+  size_t stride = 12;
+  MeshoptFilter filter = MeshoptFilter::None;
+  int ctype = kFloat;
+};
+
+// POSITION: float32, exponential filter (one exponent per vertex).
+RawAttribute rawPositions(const std::vector<float>& pos, size_t n, const GlbOptions& opt) {
+  RawAttribute r;
+  r.bytes.resize(n * 12);
+  if (opt.meshopt_position_bits > 0) {
+    meshopt_encodeFilterExp(r.bytes.data(), n, 12, opt.meshopt_position_bits, pos.data());
+    r.filter = MeshoptFilter::Exponential;
+  } else {
+    std::memcpy(r.bytes.data(), pos.data(), r.bytes.size());
+  }
+  return r;
+}
+
+// NORMAL: octahedral filter into snorm8 (bits <= 8) or snorm16 (4 or 8
+// bytes per vertex, the 4th component unused), or float32.
+RawAttribute rawNormals(const std::vector<float>& nrm, size_t n, const GlbOptions& opt, Parts& parts) {
+  RawAttribute r;
+  if (opt.normal_bits <= 0) {
+    r.bytes.resize(n * 12);
+    std::memcpy(r.bytes.data(), nrm.data(), r.bytes.size());
+    return r;
+  }
+  const int bits = std::min(opt.normal_bits, 16);
+  r.stride = bits <= 8 ? 4 : 8;
+  r.ctype = bits <= 8 ? kByte : kShort;
+  r.filter = MeshoptFilter::Octahedral;
+  std::vector<float> v4(n * 4, 0.0f);
+  for (size_t v = 0; v < n; ++v) {
+    const float* p = &nrm[v * 3];
+    const float len = std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]);
+    if (len > 0) std::copy(p, p + 3, &v4[v * 4]);
+    else v4[v * 4 + 2] = 1.0f;  // the filter divides by the L1 length
+  }
+  r.bytes.resize(n * r.stride);
+  meshopt_encodeFilterOct(r.bytes.data(), n, r.stride, bits, v4.data());
+  parts.quantized = true;
+  return r;
+}
+
+// TEXCOORD_0: unorm16 when every uv is in [0, 1] (impostor uvs are), else float32.
+RawAttribute rawTexcoords(const std::vector<float>& uv, const GlbOptions& opt, Parts& parts) {
+  RawAttribute r;
+  r.stride = 8;
+  const bool unit =
+      opt.texcoord_bits > 0 && std::all_of(uv.begin(), uv.end(), [](float t) { return t >= 0.0f && t <= 1.0f; });
+  if (!unit) {
+    r.bytes.resize(uv.size() * 4);
+    std::memcpy(r.bytes.data(), uv.data(), r.bytes.size());
+    return r;
+  }
+  r.stride = 4;
+  r.ctype = kUnsignedShort;
+  std::vector<uint16_t> q(uv.size());
+  for (size_t i = 0; i < uv.size(); ++i) q[i] = static_cast<uint16_t>(meshopt_quantizeUnorm(uv[i], 16));
+  r.bytes.resize(q.size() * 2);
+  std::memcpy(r.bytes.data(), q.data(), r.bytes.size());
+  parts.quantized = true;
+  return r;
+}
+
+std::vector<uint8_t> ownMeshoptDecode(const std::vector<uint8_t>& c, size_t count, size_t stride, MeshoptMode mode,
+                                      MeshoptFilter f) {
+  std::vector<uint8_t> back;
+  std::string err;
+  if (decodeMeshoptView(c.data(), c.size(), {mode, f, count, stride}, back, err) != Status::Ok)
+    throw core::Error(Status::Internal, "encodeGlb: own meshopt output does not decode: " + err);
+  return back;
+}
+
+// The index codec keeps the triangles and their winding but may rotate a
+// triangle's corners: `back` (decoded, isize bytes an index) must hold
+// `idx`'s triangles so.
+void checkOwnTriangles(const std::vector<uint8_t>& back, const std::vector<uint32_t>& idx, size_t isize) {
+  for (size_t t = 0; t < idx.size(); t += 3) {
+    uint32_t v[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k) std::memcpy(&v[k], &back[(t + k) * isize], isize);
+    bool same = false;
+    for (int r = 0; r < 3 && !same; ++r)
+      same = v[r] == idx[t] && v[(r + 1) % 3] == idx[t + 1] && v[(r + 2) % 3] == idx[t + 2];
+    if (!same) throw core::Error(Status::Internal, "encodeGlb: own meshopt triangle " + std::to_string(t / 3) +
+                                                       " decodes to other corners");
+  }
 }
 
 // EXT_meshopt_compression over KHR_mesh_quantization types, as the
@@ -422,112 +523,40 @@ json addMeshoptPrimitive(const geo::MeshData& mesh, const GlbOptions& opt, Parts
       meshopt_remapVertexBuffer(out.data(), src.data(), n0, comps * sizeof(src[0]), remap.data());
     return out;
   };
-  auto ownDecode = [](const std::vector<uint8_t>& c, size_t count, size_t stride, MeshoptMode mode, MeshoptFilter f) {
-    std::vector<uint8_t> back;
-    std::string err;
-    if (decodeMeshoptView(c.data(), c.size(), {mode, f, count, stride}, back, err) != Status::Ok)
-      throw core::Error(Status::Internal, "encodeGlb: own meshopt output does not decode: " + err);
-    return back;
-  };
   json& accessors = parts.accessors;
   json attributes = json::object();
   // One vertex attribute: its raw elements compressed into a view, and its accessor.
-  auto attribute = [&](const char* name, const std::vector<uint8_t>& raw, size_t stride, MeshoptFilter f, int ctype,
-                       const char* type) {
-    const std::vector<uint8_t> c = encodeMeshoptAttributes(raw.data(), n, stride);
-    json acc = {{"bufferView", parts.addMeshoptView(c, n, stride, MeshoptMode::Attributes, f, kArrayBuffer)},
-                {"componentType", ctype}, {"count", n}, {"type", type}};
-    if (ctype != kFloat) acc["normalized"] = true;
+  auto attribute = [&](const char* name, const RawAttribute& r, const char* type) {
+    const std::vector<uint8_t> c = encodeMeshoptAttributes(r.bytes.data(), n, r.stride);
+    json acc = {{"bufferView", parts.addMeshoptView(c, n, r.stride, MeshoptMode::Attributes, r.filter, kArrayBuffer)},
+                {"componentType", r.ctype}, {"count", n}, {"type", type}};
+    if (r.ctype != kFloat) acc["normalized"] = true;
     attributes[name] = accessors.size();
     accessors.push_back(acc);
     return c;
   };
-
-  // POSITION: float32, exponential filter (one exponent per vertex).
   {
-    const std::vector<float> pos = reordered(mesh.positions, 3);
-    std::vector<uint8_t> raw(n * 12);
-    MeshoptFilter f = MeshoptFilter::None;
-    if (opt.meshopt_position_bits > 0) {
-      meshopt_encodeFilterExp(raw.data(), n, 12, opt.meshopt_position_bits, pos.data());
-      f = MeshoptFilter::Exponential;
-    } else {
-      std::memcpy(raw.data(), pos.data(), raw.size());
-    }
-    const std::vector<uint8_t> c = attribute("POSITION", raw, 12, f, kFloat, "VEC3");
-    const std::vector<uint8_t> back = ownDecode(c, n, 12, MeshoptMode::Attributes, f);
+    const RawAttribute pos = rawPositions(reordered(mesh.positions, 3), n, opt);
+    const std::vector<uint8_t> back =
+        ownMeshoptDecode(attribute("POSITION", pos, "VEC3"), n, 12, MeshoptMode::Attributes, pos.filter);
     std::array<float, 3> lo, hi;
     minMax(reinterpret_cast<const float*>(back.data()), n, lo, hi);
     accessors.back()["min"] = lo;
     accessors.back()["max"] = hi;
   }
-  // NORMAL: octahedral filter into snorm8 (bits <= 8) or snorm16 (4 or 8
-  // bytes per vertex, the 4th component unused), or float32.
-  if (!mesh.normals.empty()) {
-    const std::vector<float> nrm = reordered(mesh.normals, 3);
-    size_t stride = 12;
-    int ctype = kFloat;
-    MeshoptFilter f = MeshoptFilter::None;
-    std::vector<uint8_t> raw;
-    if (opt.normal_bits > 0) {
-      const int bits = std::min(opt.normal_bits, 16);
-      stride = bits <= 8 ? 4 : 8;
-      ctype = bits <= 8 ? kByte : kShort;
-      f = MeshoptFilter::Octahedral;
-      std::vector<float> v4(n * 4, 0.0f);
-      for (size_t v = 0; v < n; ++v) {
-        const float* p = &nrm[v * 3];
-        const float len = std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]);
-        if (len > 0) std::copy(p, p + 3, &v4[v * 4]);
-        else v4[v * 4 + 2] = 1.0f;  // the filter divides by the L1 length
-      }
-      raw.resize(n * stride);
-      meshopt_encodeFilterOct(raw.data(), n, stride, bits, v4.data());
-      parts.quantized = true;
-    } else {
-      raw.resize(n * 12);
-      std::memcpy(raw.data(), nrm.data(), raw.size());
-    }
-    attribute("NORMAL", raw, stride, f, ctype, "VEC3");
-  }
+  if (!mesh.normals.empty()) attribute("NORMAL", rawNormals(reordered(mesh.normals, 3), n, opt, parts), "VEC3");
   if (!mesh.colors.empty()) {
-    attribute("COLOR_0", reordered(linearColors(mesh), 4), 4, MeshoptFilter::None, kUnsignedByte, "VEC4");
+    RawAttribute col;
+    col.bytes = reordered(linearColors(mesh), 4);
+    col.stride = 4;
+    col.ctype = kUnsignedByte;
+    attribute("COLOR_0", col, "VEC4");
   }
-  // TEXCOORD_0: unorm16 when every uv is in [0, 1] (impostor uvs are), else float32.
-  if (!mesh.texcoords.empty()) {
-    const std::vector<float> uv = reordered(mesh.texcoords, 2);
-    const bool unit = opt.texcoord_bits > 0 &&
-                      std::all_of(uv.begin(), uv.end(), [](float t) { return t >= 0.0f && t <= 1.0f; });
-    std::vector<uint8_t> raw;
-    size_t stride = 8;
-    if (unit) {
-      stride = 4;
-      std::vector<uint16_t> q(uv.size());
-      for (size_t i = 0; i < uv.size(); ++i) q[i] = static_cast<uint16_t>(meshopt_quantizeUnorm(uv[i], 16));
-      raw.resize(q.size() * 2);
-      std::memcpy(raw.data(), q.data(), raw.size());
-      parts.quantized = true;
-    } else {
-      raw.resize(uv.size() * 4);
-      std::memcpy(raw.data(), uv.data(), raw.size());
-    }
-    attribute("TEXCOORD_0", raw, stride, MeshoptFilter::None, unit ? kUnsignedShort : kFloat, "VEC2");
-  }
+  if (!mesh.texcoords.empty()) attribute("TEXCOORD_0", rawTexcoords(reordered(mesh.texcoords, 2), opt, parts), "VEC2");
   const int ictype = componentForIndices(n);
   const size_t isize = ictype == kUnsignedShort ? 2 : 4;
   const std::vector<uint8_t> ic = encodeMeshoptTriangles(idx.data(), ni, n);
-  const std::vector<uint8_t> iback = ownDecode(ic, ni, isize, MeshoptMode::Triangles, MeshoptFilter::None);
-  // The index codec keeps the triangles and their winding but may rotate a
-  // triangle's corners.
-  for (size_t t = 0; t < ni; t += 3) {
-    uint32_t v[3] = {0, 0, 0};
-    for (int k = 0; k < 3; ++k) std::memcpy(&v[k], &iback[(t + k) * isize], isize);
-    bool same = false;
-    for (int r = 0; r < 3 && !same; ++r)
-      same = v[r] == idx[t] && v[(r + 1) % 3] == idx[t + 1] && v[(r + 2) % 3] == idx[t + 2];
-    if (!same) throw core::Error(Status::Internal, "encodeGlb: own meshopt triangle " + std::to_string(t / 3) +
-                                                       " decodes to other corners");
-  }
+  checkOwnTriangles(ownMeshoptDecode(ic, ni, isize, MeshoptMode::Triangles, MeshoptFilter::None), idx, isize);
   const size_t iacc = accessors.size();
   accessors.push_back({{"bufferView", parts.addMeshoptView(ic, ni, isize, MeshoptMode::Triangles, MeshoptFilter::None,
                                                            kElementArrayBuffer)},

@@ -393,6 +393,108 @@ bool CellLoader::placeImage(Staging& s, render::PreparedMesh& m, uint32_t j) {
   return true;
 }
 
+void CellLoader::giveBack(Staging& s) {
+  unaccount(s);
+  s.state = Staging::Free;
+  s.cell = 0xffffffffu;
+  s.abandon = false;
+}
+
+CellLoader::Step CellLoader::failed(Staging& s, const std::string& what, core::Status st) {
+  markFailed(s, what, st);
+  return Step::Done;
+}
+
+bool CellLoader::abandoned(Staging& s) {
+  if (!s.abandon.load(std::memory_order_relaxed)) return false;
+  std::lock_guard<std::mutex> lock(mu_);
+  giveBack(s);
+  return true;
+}
+
+bool CellLoader::stageMesh(Staging& s, MeshKind kind, uint32_t item, uint32_t level, std::string& err) {
+  if (s.scratch.empty()) return true;
+  if (s.mesh_count >= s.mesh_capacity) return !markFailed(s, "more meshes than the plan's largest cell", core::Status::Corrupt);
+  StagedMesh& m = s.meshes[s.mesh_count];
+  if (!render::prepareMesh(s.scratch, s.arena, m.mesh, err))
+    return !markFailed(s, err, render::outOfMemory(err) ? core::Status::NoMem : core::Status::Corrupt);
+  m.kind = kind;
+  m.item = item;
+  m.level = level;
+  ++s.mesh_count;
+  account(s);
+  const uint64_t scratch_bytes = s.scratch.positions.capacity() * 4 + s.scratch.normals.capacity() * 4 +
+                                 s.scratch.colors.capacity() + s.scratch.texcoords.capacity() * 4 +
+                                 s.scratch.indices.capacity() * 4 + s.scratch.image.capacity();
+  raiseTo(decode_high_water_, scratch_bytes);  // jobs may run at once (two threads, or the host's executor)
+  return true;
+}
+
+// The cell's local blocks, every level. One open per block: its blob's CRC
+// and GLB JSON once for all its levels (decision 0008 §13); the open's cost
+// counts with level 0's.
+CellLoader::Step CellLoader::decodeBlocks(Staging& s, std::string& err) {
+  stream::City::BlockBlob& blob = s.blob;
+  for (const uint32_t b : city_.streets().localBlocks(s.cell)) {
+    if (std::find(s.skip, s.skip + s.skip_count, b) != s.skip + s.skip_count) continue;  // the runtime copies it
+    const graph::BlockRecord rec = city_.block(b);
+    for (uint32_t k = 0; k < rec.lod_count; ++k) {
+      const double units = double(rec.triangles[k]) + double(rec.vertices[k]);
+      waitForGap(s, false, units);
+      if (abandoned(s)) return Step::Abandoned;
+      const int64_t cpu0 = threadCpuNs();
+      if (k == 0) {
+        const core::Status st = city_.openBlock(b, blob, err);
+        // A bad blob, or one the file no longer holds, costs its block, not the cell.
+        if (st == core::Status::Corrupt || (st == core::Status::Io && !city_.remote())) {
+          if (s.bad_blocks++ == 0) std::snprintf(s.error, sizeof s.error, "cell %u: block left out: %s", s.cell, err.c_str());
+          break;
+        }
+        if (st != core::Status::Ok) return failed(s, err, st);
+      }
+      const core::Status st = city_.decodeBlockLevel(blob, k, s.scratch, err);
+      if (k + 1 == rec.lod_count) blob.close();
+      if (st != core::Status::Ok) return failed(s, err, st);
+      if (!stageMesh(s, MeshKind::Block, b, k, err)) return Step::Done;
+      measured(s, false, units, threadCpuNs() - cpu0);
+    }
+  }
+  return Step::Next;
+}
+
+// The cell's impostor layers (then its single impostors), each image at its
+// place in the slot's atlas, encoded to ETC2 there when the slots hold that.
+CellLoader::Step CellLoader::decodeImpostors(Staging& s, std::string& err) {
+  uint32_t layered = 0, single = 0;
+  city_.cellLayers(s.cell, s.layers.data(), static_cast<uint32_t>(s.layers.size()), &layered, &single);
+  if (layered + single > 0 &&
+      s.atlas.pack(s.layers.data(), layered + single, atlas_width_, render::atlasAlign(atlas_format_)) < 0)
+    return failed(s, "an impostor image is wider than the slot's atlas", core::Status::Corrupt);
+  for (uint32_t j = 0; j < layered + single; ++j) {
+    const stream::LayerInfo& l = s.layers[j];
+    const bool in_single = j >= layered;
+    const double units = double(l.texture_width) * l.texture_height + l.triangles + l.vertices;
+    waitForGap(s, true, units);
+    if (abandoned(s)) return Step::Abandoned;
+    const int64_t cpu0 = threadCpuNs();
+    const core::Status st = city_.decodeImpostorBlob(l.blob, s.scratch, err, &s.impostor_bytes);
+    if (st != core::Status::Ok) return failed(s, err, st);
+    const uint32_t staged = s.mesh_count;
+    if (!stageMesh(s, in_single ? MeshKind::Single : MeshKind::Layered, in_single ? j - layered : j, 0, err))
+      return Step::Done;
+    if (s.mesh_count > staged) {
+      render::PreparedMesh& m = s.meshes[staged].mesh;
+      if (!placeImage(s, m, j)) return Step::Done;
+      if (m.rgba && atlas_format_ == render::AtlasFormat::Etc2) {
+        if (!render::encodeAtlasEtc2(m, s.arena, err)) return failed(s, err, core::Status::Corrupt);
+        account(s);
+      }
+    }
+    measured(s, true, units, threadCpuNs() - cpu0);
+  }
+  return Step::Next;
+}
+
 bool CellLoader::decodeCell(Staging& s) {
   s.arena.reset();  // the slot was free: release() / give_back() uncounted its bytes
   s.mesh_count = 0;
@@ -402,102 +504,24 @@ bool CellLoader::decodeCell(Staging& s) {
   s.out_of_memory = false;
   s.bad_blocks = 0;
   std::string err;
-  // `st`: a link that is down, offline, or a package replaced on the server
-  // makes the cell unavailable (asked for again later), not a load error.
-  auto fail = [&](const std::string& what, core::Status st = core::Status::Corrupt) { return markFailed(s, what, st); };
-  // An urgent copy took over (promote): give the slot back. Under mu_.
-  auto give_back = [&] {
-    unaccount(s);
-    s.state = Staging::Free;
-    s.cell = 0xffffffffu;
-    s.abandon = false;
-  };
-  auto abandoned = [&] {
-    if (!s.abandon.load(std::memory_order_relaxed)) return false;
-    std::lock_guard<std::mutex> lock(mu_);
-    give_back();
-    return true;
-  };
-  auto stage = [&](MeshKind kind, uint32_t item, uint32_t level) {
-    if (s.scratch.empty()) return true;  // an empty block draws nothing
-    if (s.mesh_count >= s.mesh_capacity) return !fail("more meshes than the plan's largest cell");
-    StagedMesh& m = s.meshes[s.mesh_count];
-    if (!render::prepareMesh(s.scratch, s.arena, m.mesh, err))
-      return !fail(err, render::outOfMemory(err) ? core::Status::NoMem : core::Status::Corrupt);
-    m.kind = kind;
-    m.item = item;
-    m.level = level;
-    ++s.mesh_count;
-    account(s);
-    const uint64_t scratch_bytes = s.scratch.positions.capacity() * 4 + s.scratch.normals.capacity() * 4 +
-                                   s.scratch.colors.capacity() + s.scratch.texcoords.capacity() * 4 +
-                                   s.scratch.indices.capacity() * 4 + s.scratch.image.capacity();
-    raiseTo(decode_high_water_, scratch_bytes);  // jobs may run at once (two threads, or the host's executor)
-    return true;
-  };
-  // One open per block: its blob's CRC and GLB JSON once for all its levels
-  // (decision 0008 §13); the open's cost counts with level 0's.
   // A package on a server: the cell's blobs into the disk cache first,
-  // neighbours in one request.
+  // neighbours in one request. A link that is down, offline, or a package
+  // replaced on the server makes the cell unavailable (asked for again
+  // later), not a load error (markFailed).
   if (remote::RemotePackage* r = city_.remote()) {
     city_.cellBlobs(s.cell, s.skip, s.skip_count, s.blob_ids);
     const core::Status st = r->fetchBlobs(s.blob_ids.data(), s.blob_ids.size(), err);
-    if (st != core::Status::Ok) return fail(err, st);
+    if (st != core::Status::Ok) return markFailed(s, err, st);
   }
-  stream::City::BlockBlob& blob = s.blob;
-  for (const uint32_t b : city_.streets().localBlocks(s.cell)) {
-    if (std::find(s.skip, s.skip + s.skip_count, b) != s.skip + s.skip_count) continue;  // the runtime copies it
-    const graph::BlockRecord rec = city_.block(b);
-    for (uint32_t k = 0; k < rec.lod_count; ++k) {
-      const double units = double(rec.triangles[k]) + double(rec.vertices[k]);
-      waitForGap(s, false, units);
-      if (abandoned()) return false;
-      const int64_t cpu0 = threadCpuNs();
-      if (k == 0) {
-        const core::Status st = city_.openBlock(b, blob, err);
-        // A bad blob, or one the file no longer holds, costs its block, not the cell.
-        if (st == core::Status::Corrupt || (st == core::Status::Io && !city_.remote())) {
-          if (s.bad_blocks++ == 0) std::snprintf(s.error, sizeof s.error, "cell %u: block left out: %s", s.cell, err.c_str());
-          break;
-        }
-        if (st != core::Status::Ok) return fail(err, st);
-      }
-      const core::Status st = city_.decodeBlockLevel(blob, k, s.scratch, err);
-      if (k + 1 == rec.lod_count) blob.close();
-      if (st != core::Status::Ok) return fail(err, st);
-      if (!stage(MeshKind::Block, b, k)) return true;
-      measured(s, false, units, threadCpuNs() - cpu0);
-    }
-  }
-  uint32_t layered = 0, single = 0;
-  city_.cellLayers(s.cell, s.layers.data(), static_cast<uint32_t>(s.layers.size()), &layered, &single);
-  if (layered + single > 0 &&
-      s.atlas.pack(s.layers.data(), layered + single, atlas_width_, render::atlasAlign(atlas_format_)) < 0)
-    return fail("an impostor image is wider than the slot's atlas");
-  for (uint32_t j = 0; j < layered + single; ++j) {
-    const stream::LayerInfo& l = s.layers[j];
-    const bool in_single = j >= layered;
-    const double units = double(l.texture_width) * l.texture_height + l.triangles + l.vertices;
-    waitForGap(s, true, units);
-    if (abandoned()) return false;
-    const int64_t cpu0 = threadCpuNs();
-    const core::Status st = city_.decodeImpostorBlob(l.blob, s.scratch, err, &s.impostor_bytes);
-    if (st != core::Status::Ok) return fail(err, st);
-    const uint32_t staged = s.mesh_count;
-    if (!stage(in_single ? MeshKind::Single : MeshKind::Layered, in_single ? j - layered : j, 0)) return true;
-    if (s.mesh_count > staged && !placeImage(s, s.meshes[staged].mesh, j)) return true;
-    if (s.mesh_count > staged && s.meshes[staged].mesh.rgba && atlas_format_ == render::AtlasFormat::Etc2) {
-      if (!render::encodeAtlasEtc2(s.meshes[staged].mesh, s.arena, err)) return fail(err);
-      account(s);
-    }
-    measured(s, true, units, threadCpuNs() - cpu0);
-  }
+  Step step = decodeBlocks(s, err);
+  if (step == Step::Next) step = decodeImpostors(s, err);
+  if (step != Step::Next) return step == Step::Done;
   std::lock_guard<std::mutex> lock(mu_);
   // promote() may have started the urgent copy after the last mesh's check:
   // the copy delivers the cell, this one is not a load (both would be
   // counted, and the runtime would discard the second).
   if (s.abandon.load(std::memory_order_relaxed)) {
-    give_back();
+    giveBack(s);
     return false;
   }
   s.state = Staging::Ready;

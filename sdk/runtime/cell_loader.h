@@ -173,6 +173,18 @@ class CellLoader {
   // False when the job was abandoned (its slot is then free again).
   bool decode(Staging& s);
   bool decodeCell(Staging& s);  // decode() without its catch
+  // What a stage of decodeCell left: go on, the slot is final (Ready or
+  // Failed: decodeCell returns true), or the job was abandoned (false).
+  enum class Step { Next, Done, Abandoned };
+  Step decodeBlocks(Staging& s, std::string& err);
+  Step decodeImpostors(Staging& s, std::string& err);
+  Step failed(Staging& s, const std::string& what, core::Status st);  // markFailed, then Done
+  // The mesh in s.scratch into the slot's arena (an empty one draws nothing);
+  // false when that failed the cell.
+  bool stageMesh(Staging& s, MeshKind kind, uint32_t item, uint32_t level, std::string& err);
+  // An urgent copy took over (promote): true, and the slot is free again.
+  bool abandoned(Staging& s);
+  void giveBack(Staging& s);  // under mu_
   bool markFailed(Staging& s, const std::string& what, core::Status st);  // Failed (unavailable when the link's)
   bool placeImage(Staging& s, render::PreparedMesh& m, uint32_t layer);
   // Background jobs: waits for a gap between frames to fit a unit of `units`

@@ -133,12 +133,11 @@ CellPoint MapMatcher::project(uint32_t h, double e, double n) const {
   return best;
 }
 
-void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
-  const uint32_t K = d_.max_candidates;
-  const double r = std::clamp(d_.search_sigmas * obs.sigma_m, d_.search_min_m, d_.search_max_m);
+// The nearest segment of every half-edge (one per twin pair) within r of
+// (px, py) into seen_; the half-edges found, in order, into touched_.
+size_t MapMatcher::nearestSegments(double px, double py, double r) {
   seen_.clear();
   size_t touched = 0;
-  const double px = obs.e, py = obs.n;
   g_.forSegmentsNear(px, py, r, [&](const graph::SegmentGrid::Entry& en) {
     const glm::dvec2 a = g_.point(en.point), b = g_.point(en.point + 1);
     const double dx = b.x - a.x, dy = b.y - a.y;
@@ -158,8 +157,33 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
     else if (dist >= s->dist) return;
     *s = Seen{static_cast<float>(dist), en.point, static_cast<float>(t)};
   });
+  return touched;
+}
 
-  // Emission log-likelihoods; keep the K best (sorted, ties to the lower cell id).
+// Candidate `c` for cell h with emission log-likelihood log_e into the
+// column's K best (sorted, ties to the lower cell id). Which listed segment it
+// came from is stashed in arc_m and lateral_m until placeCandidates.
+void MapMatcher::keepCandidate(Column& col, uint32_t& count, uint32_t h, double log_e, uint32_t listed, bool reversed,
+                               double heading) {
+  const uint32_t K = d_.max_candidates;
+  if (count == K && !(log_e > col.cand[K - 1].log_e || (log_e == col.cand[K - 1].log_e && h < col.cand[K - 1].p.cell)))
+    return;
+  uint32_t pos = count < K ? count++ : K - 1;
+  while (pos > 0 && (col.cand[pos - 1].log_e < log_e || (col.cand[pos - 1].log_e == log_e && col.cand[pos - 1].p.cell > h))) {
+    col.cand[pos] = col.cand[pos - 1];
+    --pos;
+  }
+  Candidate& c = col.cand[pos];
+  c.log_e = log_e;
+  c.p.cell = h;
+  c.p.heading_rad = heading;
+  c.p.arc_m = listed;
+  c.p.lateral_m = reversed ? -1 : 1;
+}
+
+// Emission log-likelihoods of both directions of each touched half-edge
+// (one-way streets only the way they run); the K best kept in col.
+uint32_t MapMatcher::scoreCandidates(const MatchObservation& obs, size_t touched, Column& col) {
   const double se = std::sqrt(obs.sigma_m * obs.sigma_m + d_.road_sigma_m * d_.road_sigma_m);
   const double inv_2se2 = 0.5 / (se * se);
   const double sa = std::max(0.5, obs.sigma_m);
@@ -167,23 +191,8 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
   const bool use_heading = obs.heading_sigma_rad > 0;
   const double sh = obs.heading_sigma_rad * obs.heading_sigma_rad + (d_.heading_sigma_deg * kDeg) * (d_.heading_sigma_deg * kDeg);
   const double kappa = use_heading ? 1.0 / sh : 0.0;
+  auto headingTerm = [&](double hd) { return use_heading ? kappa * (std::cos(hd - obs.heading_rad) - 1) : 0.0; };
   uint32_t count = 0;
-  auto insert = [&](uint32_t h, double log_e, uint32_t listed, bool reversed, double heading) {
-    if (count == K && !(log_e > col.cand[K - 1].log_e || (log_e == col.cand[K - 1].log_e && h < col.cand[K - 1].p.cell)))
-      return;
-    uint32_t pos = count < K ? count++ : K - 1;
-    while (pos > 0 && (col.cand[pos - 1].log_e < log_e || (col.cand[pos - 1].log_e == log_e && col.cand[pos - 1].p.cell > h))) {
-      col.cand[pos] = col.cand[pos - 1];
-      --pos;
-    }
-    Candidate& c = col.cand[pos];
-    c.log_e = log_e;
-    c.p.cell = h;
-    c.p.heading_rad = heading;
-    // Stash which listed segment it came from; arc and lateral are filled below.
-    c.p.arc_m = listed;
-    c.p.lateral_m = reversed ? -1 : 1;
-  };
   for (size_t k = 0; k < touched; ++k) {
     const uint32_t h = touched_[k];
     const Seen& s = *seen_.find(h);
@@ -200,19 +209,24 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
     if ((t <= 0.0f && s.point == he.pts_begin) || (t >= 1.0f && s.point + 2 == he.pts_begin + he.pts_count)) {
       const glm::dvec2 d = b - a;
       const double len = glm::length(d);
-      if (len > 1e-9) overshoot = std::min(dist, std::fabs(((px - (t <= 0 ? a.x : b.x)) * d.x + (py - (t <= 0 ? a.y : b.y)) * d.y) / len));
+      if (len > 1e-9)
+        overshoot = std::min(dist, std::fabs(((obs.e - (t <= 0 ? a.x : b.x)) * d.x + (obs.n - (t <= 0 ? a.y : b.y)) * d.y) / len));
     }
     const double lateral2 = dist * dist - overshoot * overshoot;
     const double base = -lateral2 * inv_2se2 - overshoot * overshoot * inv_2sa2;
-    if (!(he.flags & graph::kReverseOfOneway))
-      insert(h, base + (use_heading ? kappa * (std::cos(hd - obs.heading_rad) - 1) : 0), h, false, hd);
+    if (!(he.flags & graph::kReverseOfOneway)) keepCandidate(col, count, h, base + headingTerm(hd), h, false, hd);
     const uint32_t tw = he.twin;
     if (tw < g_.cellCount() && !(g_.halfedge(tw).flags & graph::kReverseOfOneway)) {
       const double ht = hd >= kPi ? hd - kPi : hd + kPi;
-      insert(tw, base + (use_heading ? kappa * (std::cos(ht - obs.heading_rad) - 1) : 0), h, true, ht);
+      keepCandidate(col, count, tw, base + headingTerm(ht), h, true, ht);
     }
   }
-  // Arc length and lateral offset for the K kept.
+  return count;
+}
+
+// Arc length, lateral offset and foot point of the first `count` candidates,
+// from the segment each came from (keepCandidate's stash).
+void MapMatcher::placeCandidates(const MatchObservation& obs, Column& col, uint32_t count) {
   for (uint32_t j = 0; j < count; ++j) {
     Candidate& c = col.cand[j];
     const uint32_t listed = static_cast<uint32_t>(c.p.arc_m);
@@ -230,13 +244,22 @@ void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
     const glm::dvec2 a = g_.point(seg), b = g_.point(seg + 1);
     const glm::dvec2 q = a + (b - a) * static_cast<double>(s.t);
     const double len = glm::length(b - a);
-    const double lat = len > 1e-9 ? ((px - q.x) * (b.y - a.y) - (py - q.y) * (b.x - a.x)) / len : 0.0;
+    const double lat = len > 1e-9 ? ((obs.e - q.x) * (b.y - a.y) - (obs.n - q.y) * (b.x - a.x)) / len : 0.0;
     c.p.arc_m = reversed ? std::max(0.0, total - along) : along;
     c.p.lateral_m = reversed ? -lat : lat;
     c.p.dist_m = s.dist;
     c.p.e = q.x;
     c.p.n = q.y;
   }
+}
+
+void MapMatcher::findCandidates(const MatchObservation& obs, Column& col) {
+  const double r = std::clamp(d_.search_sigmas * obs.sigma_m, d_.search_min_m, d_.search_max_m);
+  const size_t touched = nearestSegments(obs.e, obs.n, r);
+  const uint32_t count = scoreCandidates(obs, touched, col);
+  placeCandidates(obs, col, count);
+  // The raw fix's distance from each candidate: evidence independent from
+  // step to step (MatchObservation::fix_e).
   if (obs.fix_sigma_m > 0) {
     const double sf2 = obs.fix_sigma_m * obs.fix_sigma_m + d_.road_sigma_m * d_.road_sigma_m;
     for (uint32_t j = 0; j < count; ++j) {

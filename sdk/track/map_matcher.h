@@ -167,6 +167,11 @@ class MapMatcher {
   };
 
   void findCandidates(const MatchObservation& obs, Column& col);
+  size_t nearestSegments(double px, double py, double r);
+  uint32_t scoreCandidates(const MatchObservation& obs, size_t touched, Column& col);
+  void keepCandidate(Column& col, uint32_t& count, uint32_t h, double log_e, uint32_t listed, bool reversed,
+                     double heading);
+  void placeCandidates(const MatchObservation& obs, Column& col, uint32_t count);
   // Route distances from candidate `from` of the previous column to every
   // candidate of `to` (out[j], < 0 when unreachable within the cap).
   void routeDistances(const Candidate& from, const Column& to, double cap, double* out);
