@@ -20,6 +20,8 @@ void pushVertex(geo::MeshData& m, const glm::dvec2& en, double up, const uint8_t
 
 glm::dvec2 leftOf(glm::dvec2 d) { return {-d.y, d.x}; }
 
+constexpr double kRibbonEndOverlap = 0.5;  // metres
+
 }  // namespace
 
 double streetLift(const graph::HalfEdge& e) {
@@ -53,10 +55,16 @@ void appendHalfStreet(const graph::StreetGraph& g, uint32_t h, geo::MeshData& ou
     // hairpins do not throw spikes across the block.
     m = ml < 1e-6 ? n0 : m / ml;
     const double c = std::max(0.5, glm::dot(m, n0));
+    // The ends reach kRibbonEndOverlap past the street's end points, so the
+    // ribbons of two streets that meet at an angle overlap at the junction
+    // instead of leaving a seam that the street beneath shows through.
+    glm::dvec2 at = p[i];
+    const glm::dvec2 end_dir = i == 0 ? -d1 : d0;
+    if ((i == 0 || i + 1 == n) && glm::length(end_dir) > 1e-9) at += glm::normalize(end_dir) * kRibbonEndOverlap;
     // The inner edge reaches 15 cm past the centre line so the two halves of a
     // street overlap instead of leaving pixel cracks where they meet.
-    pushVertex(out, p[i] - m * (0.15 / c), lift, col);
-    pushVertex(out, p[i] + m * (half / c), lift, col);
+    pushVertex(out, at - m * (0.15 / c), lift, col);
+    pushVertex(out, at + m * (half / c), lift, col);
     ++emitted;
   }
   for (uint32_t i = 0; i + 1 < emitted; ++i) {

@@ -34,7 +34,9 @@ struct BlockMeshStats {
 };
 
 // Half-width street ribbon on the left of half-edge h (the side of its face),
-// with mitred joints. Tunnels get no ribbon: they are under the block.
+// with mitred joints, at streetLift(e); its ends reach half a metre past the
+// street's end points, so that streets meeting at an angle overlap. Tunnels
+// get no ribbon: they are under the block.
 void appendHalfStreet(const graph::StreetGraph& g, uint32_t h, geo::MeshData& out);
 
 // Ground polygon of face f: all of its boundary half-edges as constraints,

@@ -3,11 +3,14 @@
 // there, never rows of one grey through the other.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <vector>
 
 #include "bake/block_mesh.h"
 #include "bake/capture.h"
+
+#include <glm/geometric.hpp>
 
 namespace blvd::bake {
 namespace {
@@ -91,6 +94,53 @@ TEST(StreetRibbons, TheMajorRoadCoversTheMinorOneWhereTheyOverlap) {
   }
   EXPECT_GT(covered, size_t(kRes) * kRes / 8) << "the secondary's ribbon should fill much of the view";
   EXPECT_EQ(wrong, 0u) << "of " << covered << " pixels of the secondary's ribbon, these show the residential street";
+}
+
+// Whether ground point (east, north) lies under a triangle of `m` (glTF:
+// x east, z south).
+bool covers(const geo::MeshData& m, double east, double north) {
+  auto at = [&](uint32_t i) { return glm::dvec2(m.positions[3 * i], -m.positions[3 * i + 2]); };
+  const glm::dvec2 q(east, north);
+  for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+    const glm::dvec2 a = at(m.indices[t]), b = at(m.indices[t + 1]), c = at(m.indices[t + 2]);
+    auto side = [&](glm::dvec2 u, glm::dvec2 v) { return (v.x - u.x) * (q.y - u.y) - (v.y - u.y) * (q.x - u.x); };
+    const double s0 = side(a, b), s1 = side(b, c), s2 = side(c, a);
+    if ((s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0)) return true;
+  }
+  return false;
+}
+
+// Two streets meeting at a node with a 10° turn, each ribbon ending square
+// to its own last segment: without the ends reaching past the node, a wedge
+// on the outer side of the turn is left open and what lies beneath (a minor
+// street, the ground) shows through it as a line across the road.
+TEST(StreetRibbons, TwoStreetsMeetingAtAnAngleLeaveNoSeam) {
+  graph::StreetGraph g;
+  const double turn = 10.0 * 3.14159265358979 / 180.0;
+  g.points = {{0.0, -50.0}, {0.0, 0.0}, {0.0, 0.0}, {50.0 * std::sin(turn), 50.0 * std::cos(turn)}};
+  for (uint32_t k = 0; k < 2; ++k) {
+    graph::HalfEdge e;
+    e.pts_begin = 2 * k;
+    e.pts_count = 2;
+    e.length = 50.0f;
+    e.width = 8.0f;
+    e.road_class = graph::RoadClass::Primary;
+    g.halfedges.push_back(e);
+  }
+  geo::MeshData both;
+  appendHalfStreet(g, 0, both);
+  appendHalfStreet(g, 1, both);
+  // The ribbons lie on the left of the streets, which turn right: the
+  // wedge between the two square ends opens on the left, between the
+  // directions west (-cos a, sin a) for a from 0 to the turn.
+  size_t open = 0, tried = 0;
+  for (double r = 0.2; r <= 3.9; r += 0.1)
+    for (int k = 0; k <= 16; ++k) {
+      const double a = turn * k / 16;
+      ++tried;
+      open += !covers(both, -r * std::cos(a), r * std::sin(a));
+    }
+  EXPECT_EQ(open, 0u) << "of " << tried << " points around the junction's outer corner";
 }
 
 }  // namespace
