@@ -22,10 +22,13 @@ glm::dvec2 leftOf(glm::dvec2 d) { return {-d.y, d.x}; }
 
 constexpr double kRibbonEndOverlap = 0.5;  // metres
 
+// Secondary and up: drawn darker, and above the others where they overlap.
+bool isMajor(const graph::HalfEdge& e) { return e.road_class <= graph::RoadClass::Secondary; }
+
 }  // namespace
 
 double streetLift(const graph::HalfEdge& e) {
-  const int rank = (e.road_class <= graph::RoadClass::Secondary ? 1 : 0) + (e.flags & graph::kBridge ? 2 : 0);
+  const int rank = (isMajor(e) ? 1 : 0) + (e.flags & graph::kBridge ? 2 : 0);
   return kStreetLift + rank * kStreetRankLift;
 }
 
@@ -34,7 +37,7 @@ void appendHalfStreet(const graph::StreetGraph& g, uint32_t h, geo::MeshData& ou
   if (e.flags & graph::kTunnel) return;
   static const uint8_t asphalt[4] = {88, 90, 96, 255};
   static const uint8_t major[4] = {78, 80, 88, 255};
-  const uint8_t* col = e.road_class <= graph::RoadClass::Secondary ? major : asphalt;
+  const uint8_t* col = isMajor(e) ? major : asphalt;
   const glm::dvec2* p = &g.points[e.pts_begin];
   const size_t n = e.pts_count;
   const double half = 0.5 * e.width;

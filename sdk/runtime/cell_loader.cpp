@@ -496,7 +496,7 @@ CellLoader::Step CellLoader::decodeImpostors(Staging& s, std::string& err) {
 }
 
 bool CellLoader::decodeCell(Staging& s) {
-  s.arena.reset();  // the slot was free: release() / give_back() uncounted its bytes
+  s.arena.reset();  // the slot was free: release() / giveBack() uncounted its bytes
   s.mesh_count = 0;
   s.uploaded = 0;
   s.error[0] = 0;

@@ -160,9 +160,10 @@ size_t MapMatcher::nearestSegments(double px, double py, double r) {
   return touched;
 }
 
-// Candidate `c` for cell h with emission log-likelihood log_e into the
-// column's K best (sorted, ties to the lower cell id). Which listed segment it
-// came from is stashed in arc_m and lateral_m until placeCandidates.
+// Cell h with emission log-likelihood log_e into the column's `count`
+// kept, the K best (sorted, ties to the lower cell id). The listed half-edge
+// its segment came from, and whether h is its twin, are stashed in arc_m and
+// lateral_m until placeCandidates.
 void MapMatcher::keepCandidate(Column& col, uint32_t& count, uint32_t h, double log_e, uint32_t listed, bool reversed,
                                double heading) {
   const uint32_t K = d_.max_candidates;

@@ -7,10 +7,11 @@
 #include <cstdlib>
 #include <vector>
 
+#include <glm/vec2.hpp>
+
 #include "bake/block_mesh.h"
 #include "bake/capture.h"
-
-#include <glm/geometric.hpp>
+#include "core/math.h"
 
 namespace blvd::bake {
 namespace {
@@ -116,7 +117,7 @@ bool covers(const geo::MeshData& m, double east, double north) {
 // street, the ground) shows through it as a line across the road.
 TEST(StreetRibbons, TwoStreetsMeetingAtAnAngleLeaveNoSeam) {
   graph::StreetGraph g;
-  const double turn = 10.0 * 3.14159265358979 / 180.0;
+  const double turn = 10.0 * core::kDegToRad;
   g.points = {{0.0, -50.0}, {0.0, 0.0}, {0.0, 0.0}, {50.0 * std::sin(turn), 50.0 * std::cos(turn)}};
   for (uint32_t k = 0; k < 2; ++k) {
     graph::HalfEdge e;
